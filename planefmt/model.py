@@ -1,0 +1,201 @@
+"""The in-memory model of a .pln file: small frozen records holding numpy arrays.
+
+Conventions used throughout planefmt:
+
+* A plane triplet is ``(nu, phi, h)``: ``nu`` in [0, pi] radians is the angle
+  of the outward unit normal ``omega`` from +z, ``phi`` in [0, 2*pi) radians
+  the angle of its xy-projection from +x, ``h`` the signed distance in model
+  units, so that the plane is ``omega . x = h`` and the solid side (the closed
+  negative half-space) is ``omega . x <= h``.
+* Triplet arrays are ``float64`` of shape ``(n, 3)``.
+* Transforms are 4x4 ``float64`` row-major affine matrices acting on column
+  vectors ``(x, y, z, 1)``: object-local coordinates to the parent's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import IntEnum
+
+import numpy as np
+
+
+class Coding(IntEnum):
+    """How plane triplets are stored in PLNS chunks (spec §7)."""
+
+    FLOAT32 = 0
+    FLOAT64 = 1
+    QUANTIZED = 2
+
+
+class Units(IntEnum):
+    """Length unit of coordinates and ``h`` (spec §5)."""
+
+    UNSPECIFIED = 0
+    METRE = 1
+    CENTIMETRE = 2
+    MILLIMETRE = 3
+    MICROMETRE = 4
+    KILOMETRE = 5
+    INCH = 6
+    FOOT = 7
+
+
+class GroupKind(IntEnum):
+    """Part group kinds of version 1.0 (spec §8.2)."""
+
+    CONVEX = 0
+    CELLS = 1
+    BSP = 2
+    PSEUDO_CONVEX = 3
+    PSEUDO_CONCAVE = 4
+
+
+#: BSP tree leaf tokens (spec §8.4); every smaller token is a split plane.
+BSP_IN = 0xFFFFFFFE
+BSP_OUT = 0xFFFFFFFF
+BSP_MAX_SPLIT = 0xFFFFFFEF
+
+#: Sentinel for "no parent" in object records.
+NO_PARENT = 0xFFFFFFFF
+
+
+@dataclass(frozen=True)
+class Quantization:
+    """Bit widths and the ``h`` range of the quantized coding (spec §7.3)."""
+
+    bits_nu: int
+    bits_phi: int
+    bits_h: int
+    h_min: float
+    h_max: float
+
+    @property
+    def bits_per_plane(self) -> int:
+        return self.bits_nu + self.bits_phi + self.bits_h
+
+    def steps(self) -> tuple[float, float, float]:
+        """Quantization step of nu (rad), phi (rad) and h (model units)."""
+        h_step = (self.h_max - self.h_min) / ((1 << self.bits_h) - 1)
+        return (math.pi / ((1 << self.bits_nu) - 1),
+                2.0 * math.pi / (1 << self.bits_phi),
+                h_step)
+
+
+@dataclass(frozen=True)
+class Header:
+    """The PHDR chunk (spec §5). Counts are ``None`` where the writer did not know them."""
+
+    version: tuple[int, int] = (1, 0)
+    lossy: bool = False
+    coding: Coding = Coding.FLOAT64
+    quantization: Quantization | None = None
+    units: Units = Units.UNSPECIFIED
+    bbox: np.ndarray | None = None  # (2, 3) float64: min corner, max corner
+    tolerance: float = math.nan  # requested, relative to the bbox diagonal
+    error_bound: float = math.nan  # verified two-sided Hausdorff / bbox diagonal
+    plane_count: int | None = None
+    object_count: int | None = None
+    group_count: int | None = None
+    extra: bytes = b""  # trailing PHDR bytes of a newer minor version, kept verbatim
+
+    @property
+    def diagonal(self) -> float:
+        """Length of the bounding-box diagonal in model units (NaN if no bbox)."""
+        if self.bbox is None:
+            return math.nan
+        return float(np.linalg.norm(self.bbox[1] - self.bbox[0]))
+
+
+@dataclass(frozen=True)
+class ObjectRecord:
+    """An OBJT chunk: a named node of the scene (spec §8.1)."""
+
+    index: int
+    name: str
+    parent: int | None = None
+    transform: np.ndarray | None = None  # (4, 4) float64, local -> parent
+
+
+@dataclass(frozen=True)
+class PlaneBlock:
+    """A PLNS chunk: planes ``first .. first+len(triplets)-1`` of the plane table."""
+
+    first: int
+    triplets: np.ndarray  # (n, 3) float64, dequantized where quantized
+
+
+@dataclass(frozen=True)
+class PartGroup:
+    """A GRUP chunk (spec §8.2).
+
+    ``refs`` are indices into the file's plane table; ``bounding[i]`` is True
+    where ``refs[i]`` is a bounding or cut plane rather than a face plane.
+    For CELLS groups, ``cells`` holds one uint32 array per convex cell whose
+    entries are ``2 * local + complement`` (``local`` indexes ``refs``;
+    ``complement`` 1 means the half-space ``omega . x >= h``). For BSP groups,
+    ``tree`` holds the preorder token stream of spec §8.4. ``planes`` holds the
+    referenced triplets when the reader resolved them.
+    """
+
+    index: int
+    object: int
+    kind: int
+    refs: np.ndarray  # (m,) uint32
+    bounding: np.ndarray  # (m,) bool
+    cells: tuple[np.ndarray, ...] | None = None
+    tree: np.ndarray | None = None
+    planes: np.ndarray | None = field(default=None, compare=False)
+
+
+@dataclass(frozen=True)
+class Colours:
+    """A cOLR chunk: one RGBA8 colour per reference of a part group (spec §8.5)."""
+
+    group: int
+    rgba: np.ndarray  # (m, 4) uint8
+
+
+@dataclass(frozen=True)
+class UnknownChunk:
+    """An ancillary chunk this implementation does not interpret, kept verbatim."""
+
+    type: bytes
+    payload: bytes
+    offset: int | None = None
+
+
+Record = ObjectRecord | PlaneBlock | PartGroup | Colours | UnknownChunk
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """A triangle mesh: the geometry converters and the codec exchange.
+
+    ``vertices`` (n, 3) float64 in model units; ``faces`` (m, 3) int64 indices,
+    counter-clockwise seen from outside (right-hand rule gives the outward
+    normal); ``face_colours`` (m, 4) uint8 RGBA or None.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    face_colours: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class Node:
+    """A scene node: a name, its parent node index, a local transform, an optional mesh."""
+
+    name: str
+    parent: int | None = None
+    transform: np.ndarray | None = None  # (4, 4) float64, local -> parent
+    mesh: Mesh | None = None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Nodes in an order where every parent precedes its children."""
+
+    nodes: tuple[Node, ...]
+    units: Units = Units.UNSPECIFIED

@@ -1,0 +1,158 @@
+"""Plane triplet payloads: float32 / float64 records and the quantized bit stream (spec §7).
+
+Everything here is vectorized: a PLNS payload is viewed with
+``numpy.frombuffer`` and never parsed element by element.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .errors import FormatError, PlnError
+from .model import Coding, Quantization
+
+TWO_PI = 2.0 * math.pi
+#: float32 nearest to pi and 2*pi; both round *up*, so float32 ranges end there.
+PI_F32 = float(np.float32(math.pi))
+TWO_PI_F32 = float(np.float32(TWO_PI))
+
+MAX_BITS = 32
+
+
+def check_quantization(q: Quantization) -> None:
+    """Raise ``VersionError``-coded ``PlnError`` if widths or the h range are invalid (spec §7.3)."""
+    for name, bits in (("nu", q.bits_nu), ("phi", q.bits_phi), ("h", q.bits_h)):
+        if not 1 <= bits <= MAX_BITS:
+            raise PlnError(f"bits_{name} = {bits} is outside 1..{MAX_BITS}", code="UNSUPPORTED_CODING")
+    if not (math.isfinite(q.h_min) and math.isfinite(q.h_max)) or q.h_min > q.h_max:
+        raise PlnError(f"invalid h range [{q.h_min}, {q.h_max}]", code="BAD_HEADER_VALUE")
+
+
+def check_triplets(triplets: np.ndarray, coding: Coding) -> None:
+    """Raise ``PlnError(BAD_TRIPLET)`` unless every triplet is finite and in range (spec §7.1)."""
+    t = np.asarray(triplets)
+    if t.ndim != 2 or t.shape[1] != 3:
+        raise PlnError(f"triplets must have shape (n, 3), not {t.shape}", code="BAD_TRIPLET")
+    finite = np.isfinite(t).all(axis=1)
+    nu_max, phi_end = (PI_F32, TWO_PI_F32) if coding == Coding.FLOAT32 else (math.pi, TWO_PI)
+    ok = finite & (t[:, 0] >= 0) & (t[:, 0] <= nu_max) & (t[:, 1] >= 0) & (t[:, 1] < phi_end)
+    if not ok.all():
+        i = int(np.flatnonzero(~ok)[0])
+        raise PlnError(f"plane {i}: triplet {tuple(float(v) for v in t[i])} is not finite or out of range",
+                       code="BAD_TRIPLET")
+
+
+def quantize(triplets: np.ndarray, q: Quantization) -> np.ndarray:
+    """Integer codes ``(n, 3)`` uint64 of triplets, by the rounding rule of spec §7.3.
+
+    Round half up (``floor(x + 0.5)``) in float64; phi wraps modulo ``2**bits_phi``;
+    at the poles (nu code 0 or maximum) the phi code is 0. Triplets must be in range.
+    """
+    t = np.asarray(triplets, dtype=np.float64)
+    m_nu = float((1 << q.bits_nu) - 1)
+    m_phi = 1 << q.bits_phi
+    m_h = float((1 << q.bits_h) - 1)
+    codes = np.empty(t.shape, dtype=np.uint64)
+    qn = np.clip(np.floor(t[:, 0] / math.pi * m_nu + 0.5), 0, m_nu)
+    qp = np.floor(t[:, 1] / TWO_PI * m_phi + 0.5) % m_phi
+    qp[(qn == 0) | (qn == m_nu)] = 0
+    span = q.h_max - q.h_min
+    if span > 0:
+        qh = np.clip(np.floor((t[:, 2] - q.h_min) / span * m_h + 0.5), 0, m_h)
+    else:
+        qh = np.zeros(len(t))
+    codes[:, 0] = qn
+    codes[:, 1] = qp
+    codes[:, 2] = qh
+    return codes
+
+
+def dequantize(codes: np.ndarray, q: Quantization) -> np.ndarray:
+    """Triplets ``(n, 3)`` float64 from integer codes (spec §7.3)."""
+    c = np.asarray(codes, dtype=np.float64)
+    out = np.empty(c.shape, dtype=np.float64)
+    out[:, 0] = c[:, 0] * (math.pi / ((1 << q.bits_nu) - 1))
+    out[:, 1] = c[:, 1] * (TWO_PI / (1 << q.bits_phi))
+    out[:, 2] = q.h_min + c[:, 2] * ((q.h_max - q.h_min) / ((1 << q.bits_h) - 1))
+    return out
+
+
+def roundtrip(triplets: np.ndarray, coding: Coding, q: Quantization | None = None) -> np.ndarray:
+    """The triplets a reader gets back after writing ``triplets`` with this coding."""
+    return decode_payload(encode_payload(triplets, coding, q), len(triplets), coding, q)
+
+
+def payload_size(count: int, coding: Coding, q: Quantization | None) -> int:
+    """Exact byte size of the uncompressed triplet data of ``count`` planes."""
+    if coding == Coding.FLOAT32:
+        return 12 * count
+    if coding == Coding.FLOAT64:
+        return 24 * count
+    if coding == Coding.QUANTIZED and q is not None:
+        return (count * q.bits_per_plane + 7) // 8
+    raise PlnError(f"unsupported triplet coding {int(coding)}", code="UNSUPPORTED_CODING")
+
+
+def _widths(q: Quantization) -> tuple[int, int, int]:
+    return (q.bits_nu, q.bits_phi, q.bits_h)
+
+
+def encode_payload(triplets: np.ndarray, coding: Coding, q: Quantization | None = None) -> bytes:
+    """Uncompressed PLNS triplet data for ``triplets`` (validated first)."""
+    t = np.asarray(triplets, dtype=np.float64)
+    check_triplets(t, Coding.FLOAT64 if coding == Coding.QUANTIZED else coding)
+    if coding == Coding.FLOAT64:
+        return t.astype("<f8").tobytes()
+    if coding == Coding.FLOAT32:
+        t32 = t.astype("<f4")
+        # phi just below 2*pi can round up to float32(2*pi): the same direction as 0.
+        t32[t32[:, 1] >= np.float32(TWO_PI_F32), 1] = 0
+        return t32.tobytes()
+    if coding == Coding.QUANTIZED and q is not None:
+        codes = quantize(t, q)
+        bits = np.concatenate(
+            [((codes[:, c, None] >> np.arange(w, dtype=np.uint64)) & 1).astype(np.uint8)
+             for c, w in enumerate(_widths(q))], axis=1)
+        return np.packbits(bits.ravel(), bitorder="little").tobytes()
+    raise PlnError(f"unsupported triplet coding {int(coding)}", code="UNSUPPORTED_CODING")
+
+
+def decode_payload(data: bytes, count: int, coding: Coding, q: Quantization | None = None) -> np.ndarray:
+    """Triplets ``(count, 3)`` float64 from uncompressed PLNS triplet data.
+
+    Raises ``FormatError`` on a size mismatch or non-zero padding bits and
+    ``PlnError(BAD_TRIPLET)`` on out-of-range float triplets.
+    """
+    expected = payload_size(count, coding, q)
+    if len(data) != expected:
+        raise FormatError(f"triplet data is {len(data)} bytes, {count} planes need {expected}",
+                          code="SIZE_MISMATCH")
+    if coding == Coding.FLOAT64:
+        t = np.frombuffer(data, dtype="<f8").reshape(count, 3).astype(np.float64)
+        check_triplets(t, coding)
+        return t
+    if coding == Coding.FLOAT32:
+        t = np.frombuffer(data, dtype="<f4").reshape(count, 3).astype(np.float64)
+        check_triplets(t, coding)
+        return t
+    assert q is not None
+    per = q.bits_per_plane
+    raw = np.frombuffer(data, dtype=np.uint8)
+    bits = np.unpackbits(raw, bitorder="little")
+    if bits[count * per:].any():
+        raise FormatError("non-zero padding bits after the last quantized triplet", code="BAD_PAYLOAD")
+    bits = bits[: count * per].reshape(count, per)
+    codes = np.empty((count, 3), dtype=np.uint64)
+    start = 0
+    for c, w in enumerate(_widths(q)):
+        weights = np.left_shift(np.uint64(1), np.arange(w, dtype=np.uint64))
+        codes[:, c] = bits[:, start:start + w].astype(np.uint64) @ weights
+        start += w
+    return dequantize(codes, q)
+
+
+def half_steps(q: Quantization) -> np.ndarray:
+    """Largest error per component ``(nu, phi, h)`` of quantize-then-dequantize."""
+    return np.array(q.steps()) / 2.0
