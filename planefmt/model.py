@@ -146,6 +146,7 @@ class PartGroup:
     bounding: np.ndarray  # (m,) bool
     cells: tuple[np.ndarray, ...] | None = None
     tree: np.ndarray | None = None
+    extra: bytes = b""  # kind-specific bytes of a kind this reader does not know
     planes: np.ndarray | None = field(default=None, compare=False)
 
 

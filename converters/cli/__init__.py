@@ -1,0 +1,58 @@
+"""The ``pln`` command line: ``main(argv) -> exit code``, one module per subcommand.
+
+Exit codes: 0 ok, 1 findings (validation errors or warnings), 2 bad input or
+usage. Bad input gives one line on stderr, ``pln: FILE: chunk X at byte N:
+reason``, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+
+from planefmt.errors import PlnError
+
+#: Subcommand modules of this package; each defines ``add_parser(subparsers)``.
+SUBCOMMANDS = ("info", "convert", "validate", "preview")
+
+EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="pln", description="Read, write and convert .pln plane meshes.")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name in SUBCOMMANDS:
+        try:
+            module = importlib.import_module(f"{__name__}.{name}")
+        except ModuleNotFoundError as exc:
+            if exc.name != f"{__name__}.{name}":
+                raise
+            continue
+        module.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:
+        return EXIT_OK if exc.code in (0, None) else EXIT_BAD_INPUT
+    try:
+        return args.func(args)
+    except PlnError as exc:
+        print(f"pln: {exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except KeyboardInterrupt:
+        print("pln: interrupted", file=sys.stderr)
+        return 130
+    except BrokenPipeError:
+        return EXIT_OK
+    except OSError as exc:
+        print(f"pln: {exc.filename or ''}: {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,112 @@
+"""``pln info FILE``: header, objects, part groups by kind and bytes per chunk type."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections import Counter
+
+from planefmt import errors, reader
+from planefmt.model import GroupKind, ObjectRecord, PartGroup
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("info", help="describe a .pln file", description=__doc__)
+    p.add_argument("file", help="a .pln file, or - for standard input")
+    p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.set_defaults(func=run)
+
+
+def describe(source: str) -> dict:
+    """Everything ``pln info`` shows, as plain JSON-ready data (memory bounded by one chunk)."""
+    objects: list[dict] = []
+    kinds: Counter[str] = Counter()
+    planes_by_kind: Counter[str] = Counter()
+    bounding = 0
+    with reader.open(source, retain_planes=False) as r:
+        for rec in r:
+            if isinstance(rec, ObjectRecord):
+                objects.append({"index": rec.index, "name": rec.name, "parent": rec.parent,
+                                "transform": None if rec.transform is None else rec.transform.tolist(),
+                                "groups": 0})
+            elif isinstance(rec, PartGroup):
+                kind = GroupKind(rec.kind).name.lower() if rec.kind in GroupKind._value2member_map_ \
+                    else f"kind{rec.kind}"
+                kinds[kind] += 1
+                planes_by_kind[kind] += len(rec.refs)
+                bounding += int(rec.bounding.sum())
+                objects[rec.object]["groups"] += 1
+        h = r.header
+        q = h.quantization
+        return {
+            "file": r.name,
+            "version": f"{h.version[0]}.{h.version[1]}",
+            "lossy": h.lossy,
+            "coding": h.coding.name.lower(),
+            "quantization": None if q is None else {
+                "bits_nu": q.bits_nu, "bits_phi": q.bits_phi, "bits_h": q.bits_h,
+                "h_min": q.h_min, "h_max": q.h_max},
+            "units": h.units.name.lower(),
+            "bbox": None if h.bbox is None else h.bbox.tolist(),
+            "tolerance": _num(h.tolerance),
+            "error_bound": _num(h.error_bound),
+            "counts_in_header": h.plane_count is not None,
+            "planes": r.plane_count,
+            "objects": objects,
+            "groups": {"total": r.group_count, "by_kind": dict(kinds),
+                       "plane_refs_by_kind": dict(planes_by_kind), "bounding_refs": bounding},
+            "chunks": {name: {"count": r.chunk_counts[name], "bytes": r.chunk_stats[name]}
+                       for name in r.chunk_stats},
+            "file_bytes": sum(r.chunk_stats.values()) + 8,
+            "findings": [{"code": c, "severity": errors.CODES[c].severity, "message": m}
+                         for c, m in r.findings],
+        }
+
+
+def _num(v: float) -> float | None:
+    return None if math.isnan(v) else v
+
+
+def run(args: argparse.Namespace) -> int:
+    info = describe(args.file)
+    if args.json:
+        json.dump(info, sys.stdout, indent=2)
+        sys.stdout.write("\n")
+    else:
+        sys.stdout.write(render(info))
+    serious = any(f["severity"] in ("error", "warning") for f in info["findings"])
+    return 1 if serious else 0
+
+
+def render(info: dict) -> str:
+    q = info["quantization"]
+    coding = info["coding"] + ("" if q is None else f" (bits nu/phi/h {q['bits_nu']}/{q['bits_phi']}/{q['bits_h']}, "
+                                                   f"h in [{q['h_min']:.6g}, {q['h_max']:.6g}])")
+    tol = "-" if info["tolerance"] is None else f"{info['tolerance']:.3g}"
+    bound = "not measured" if info["error_bound"] is None else f"{info['error_bound']:.3g}"
+    lines = [
+        f"file:        {info['file']} ({info['file_bytes']} bytes)",
+        f"version:     {info['version']}   {'lossy' if info['lossy'] else 'lossless'}",
+        f"coding:      {coding}",
+        f"units:       {info['units']}",
+        f"bbox:        {info['bbox'] if info['bbox'] is not None else '-'}",
+        f"error:       requested {tol}, verified {bound} (fraction of the bbox diagonal)",
+        f"planes:      {info['planes']}",
+        f"objects:     {len(info['objects'])}",
+    ]
+    for o in info["objects"]:
+        parent = "" if o["parent"] is None else f", parent {o['parent']}"
+        xf = ", transform" if o["transform"] is not None else ""
+        lines.append(f"  [{o['index']}] {o['name'] or '(unnamed)'}: {o['groups']} groups{parent}{xf}")
+    g = info["groups"]
+    lines.append(f"groups:      {g['total']}")
+    for kind, n in sorted(g["by_kind"].items()):
+        lines.append(f"  {kind:<15} {n:>8} groups {g['plane_refs_by_kind'][kind]:>10} plane refs")
+    lines.append("chunks:")
+    for name, c in sorted(info["chunks"].items(), key=lambda kv: -kv[1]["bytes"]):
+        lines.append(f"  {name}  {c['count']:>8} x  {c['bytes']:>12} bytes")
+    for f in info["findings"]:
+        lines.append(f"{f['severity']}: {f['code']}: {f['message']}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,23 @@
+"""planefmt: the reference implementation of the .pln format, 3D meshes stored as planes.
+
+Conventions: a plane is the triplet (nu, phi, h) of spec/pln-1.md: nu in
+[0, pi] and phi in [0, 2*pi) in radians give the outward unit normal omega,
+h the signed distance in model units; the solid lies where omega . x <= h.
+"""
+
+from .chunks import Limits, chunk_bytes
+from .errors import (CODES, ChecksumError, ConversionError, FormatError, GeometryError, LimitError,
+                     PlnError, TruncatedError, VersionError)
+from .model import (Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup, PlaneBlock,
+                    Quantization, Scene, UnknownChunk, Units)
+from .reader import Reader, open
+from .writer import Writer
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "CODES", "ChecksumError", "Coding", "Colours", "ConversionError", "FormatError", "GeometryError",
+    "GroupKind", "Header", "Limits", "LimitError", "Mesh", "Node", "ObjectRecord", "PartGroup",
+    "PlaneBlock", "PlnError", "Quantization", "Reader", "Scene", "TruncatedError", "UnknownChunk",
+    "Units", "VersionError", "Writer", "chunk_bytes", "open",
+]

@@ -1,0 +1,344 @@
+"""Chunk payloads <-> model records (spec §5-§8), with every check the spec requires.
+
+Decoders take a payload (already framed and CRC-checked) and raise
+``PlnError`` subclasses without location; the reader adds file, chunk and
+offset. Encoders take model records and return payload bytes.
+"""
+
+from __future__ import annotations
+
+import math
+import zlib
+
+import construct as cs
+import numpy as np
+
+from . import quantize, schema
+from .chunks import Limits
+from .errors import FormatError, LimitError, PlnError, VersionError
+from .model import (BSP_IN, BSP_MAX_SPLIT, NO_PARENT, Coding, Colours, GroupKind, Header,
+                    ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
+
+VERSION = (1, 0)
+KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
+
+
+def _parse(struct: cs.Construct, payload: bytes, what: str):
+    try:
+        return struct.parse(payload)
+    except (cs.ConstructError, ValueError, OverflowError) as exc:
+        raise FormatError(f"{what} payload is malformed ({type(exc).__name__})", code="BAD_PAYLOAD") from None
+
+
+# spec §5 Header ------------------------------------------------------------------------------
+
+def encode_header(h: Header) -> bytes:
+    q = h.quantization
+    flags = (schema.FLAG_LOSSY if h.lossy else 0)
+    counts = (h.plane_count, h.object_count, h.group_count)
+    if all(c is not None for c in counts):
+        flags |= schema.FLAG_COUNTS_KNOWN
+    if h.bbox is not None:
+        flags |= schema.FLAG_BBOX_KNOWN
+    bbox = np.zeros((2, 3)) if h.bbox is None else np.asarray(h.bbox, dtype=np.float64)
+    return schema.Header.build(dict(
+        version_major=h.version[0], version_minor=h.version[1], flags=flags, coding=int(h.coding),
+        bits_nu=q.bits_nu if q else 0, bits_phi=q.bits_phi if q else 0, bits_h=q.bits_h if q else 0,
+        units=int(h.units), reserved=b"\0\0\0",
+        h_min=q.h_min if q else 0.0, h_max=q.h_max if q else 0.0,
+        bbox_min=list(bbox[0]), bbox_max=list(bbox[1]),
+        tolerance=h.tolerance, error_bound=h.error_bound,
+        plane_count=h.plane_count or 0, object_count=h.object_count or 0, group_count=h.group_count or 0,
+        extra=h.extra,
+    ))
+
+
+def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
+    """The header and non-fatal findings (code, message)."""
+    if len(payload) < 2:
+        raise FormatError("PHDR is too short to hold a version", code="BAD_PAYLOAD")
+    major, minor = payload[0], payload[1]
+    if major != VERSION[0]:
+        raise VersionError(f"major version {major} is not supported (this reader reads 1.x)")
+    if len(payload) < schema.HEADER_SIZE:
+        raise FormatError(f"PHDR is {len(payload)} bytes, version 1 needs {schema.HEADER_SIZE}",
+                          code="BAD_PAYLOAD")
+    findings = []
+    if minor > VERSION[1]:
+        findings.append(("NEWER_MINOR_VERSION", f"file is version 1.{minor}; read as 1.{VERSION[1]}"))
+    r = _parse(schema.Header, payload, "PHDR")
+    if r.coding not in (0, 1, 2):
+        raise VersionError(f"triplet coding {r.coding} is not supported", code="UNSUPPORTED_CODING")
+    coding = Coding(r.coding)
+    q = None
+    if coding == Coding.QUANTIZED:
+        q = Quantization(r.bits_nu, r.bits_phi, r.bits_h, r.h_min, r.h_max)
+        quantize.check_quantization(q)
+    units = Units(r.units) if r.units in Units._value2member_map_ else None
+    if units is None:
+        raise FormatError(f"unknown units code {r.units}", code="BAD_HEADER_VALUE")
+    bbox = None
+    if r.flags & schema.FLAG_BBOX_KNOWN:
+        bbox = np.array([r.bbox_min, r.bbox_max], dtype=np.float64)
+        if not np.isfinite(bbox).all() or (bbox[0] > bbox[1]).any():
+            raise FormatError("bounding box is not finite or min > max", code="BAD_HEADER_VALUE")
+    for name in ("tolerance", "error_bound"):
+        v = getattr(r, name)
+        if not (math.isnan(v) or (math.isfinite(v) and v >= 0)):
+            raise FormatError(f"{name} must be NaN or a finite value >= 0, not {v}", code="BAD_HEADER_VALUE")
+    known = bool(r.flags & schema.FLAG_COUNTS_KNOWN)
+    header = Header(
+        version=(major, minor), lossy=bool(r.flags & schema.FLAG_LOSSY), coding=coding, quantization=q,
+        units=units, bbox=bbox, tolerance=r.tolerance, error_bound=r.error_bound,
+        plane_count=r.plane_count if known else None, object_count=r.object_count if known else None,
+        group_count=r.group_count if known else None, extra=bytes(r.extra),
+    )
+    return header, findings
+
+
+# spec §6 Compression -------------------------------------------------------------------------
+
+def pack(data: bytes, compress: bool) -> tuple[int, bytes]:
+    """(compression method, stored bytes): deflate only where it saves bytes."""
+    if compress:
+        z = zlib.compress(data, 9)
+        if len(z) < len(data):
+            return schema.COMPRESSION_ZLIB, z
+    return schema.COMPRESSION_NONE, data
+
+
+def unpack(method: int, stored: bytes, raw_size: int, limits: Limits) -> bytes:
+    """The raw bytes of a stored payload, with the deflate-bomb caps of spec §10.3."""
+    if raw_size > limits.max_raw_size:
+        raise LimitError(f"declared raw size {raw_size} exceeds the limit {limits.max_raw_size}")
+    if method == schema.COMPRESSION_NONE:
+        if len(stored) != raw_size:
+            raise FormatError(f"raw size {raw_size} != stored size {len(stored)}", code="SIZE_MISMATCH")
+        return stored
+    if method != schema.COMPRESSION_ZLIB:
+        raise FormatError(f"unknown compression method {method}", code="BAD_COMPRESSION")
+    if raw_size > max(len(stored), 1) * limits.max_compression_ratio:
+        raise LimitError(f"declared raw size {raw_size} is over {limits.max_compression_ratio}x "
+                         f"the {len(stored)} stored bytes")
+    d = zlib.decompressobj()
+    try:
+        raw = d.decompress(stored, raw_size + 1)
+    except zlib.error as exc:
+        raise FormatError(f"corrupt deflate stream ({exc})", code="BAD_COMPRESSION") from None
+    if len(raw) != raw_size or not d.eof or d.unconsumed_tail or d.unused_data:
+        raise FormatError(f"deflate stream does not inflate to exactly {raw_size} bytes",
+                          code="SIZE_MISMATCH")
+    return raw
+
+
+# spec §7 Plane table -------------------------------------------------------------------------
+
+def encode_planes(first: int, triplets: np.ndarray, header: Header, compress: bool) -> bytes:
+    raw = quantize.encode_payload(triplets, header.coding, header.quantization)
+    method, stored = pack(raw, compress)
+    return schema.PlaneBlock.build(dict(first=first, count=len(triplets), compression=method,
+                                        reserved=b"\0\0\0", raw_size=len(raw), data=stored))
+
+
+def decode_planes(payload: bytes, header: Header, expected_first: int, limits: Limits) -> PlaneBlock:
+    if len(payload) < schema.PLANE_BLOCK_HEAD:
+        raise FormatError("PLNS payload is shorter than its 20-byte head", code="BAD_PAYLOAD")
+    r = _parse(schema.PlaneBlock, payload, "PLNS")
+    if r.first != expected_first:
+        raise FormatError(f"block starts at plane {r.first}, the table has {expected_first}",
+                          code="PLANE_INDEX_MISMATCH")
+    if r.first + r.count > limits.max_planes:
+        raise LimitError(f"plane table would exceed {limits.max_planes} planes")
+    expected = quantize.payload_size(r.count, header.coding, header.quantization)
+    if r.raw_size != expected:
+        raise FormatError(f"raw size {r.raw_size} != {expected} bytes for {r.count} planes",
+                          code="SIZE_MISMATCH")
+    raw = unpack(r.compression, bytes(r.data), r.raw_size, limits)
+    triplets = quantize.decode_payload(raw, r.count, header.coding, header.quantization)
+    return PlaneBlock(first=r.first, triplets=triplets)
+
+
+# spec §8.1 Objects ---------------------------------------------------------------------------
+
+def encode_object(o: ObjectRecord) -> bytes:
+    name = o.name.encode("utf-8")
+    if len(name) > 0xFFFF:
+        raise PlnError(f"object name is {len(name)} bytes, at most 65535", code="BAD_OBJECT")
+    t = None if o.transform is None else np.asarray(o.transform, dtype="<f8").reshape(4, 4).tobytes()
+    return schema.Object.build(dict(
+        index=o.index, parent=NO_PARENT if o.parent is None else o.parent,
+        flags=schema.OBJECT_HAS_TRANSFORM if t is not None else 0, reserved=b"\0",
+        name_length=len(name), name=name, transform=t, extra=b""))
+
+
+def decode_object(payload: bytes, expected_index: int) -> ObjectRecord:
+    r = _parse(schema.Object, payload, "OBJT")
+    if r.index != expected_index:
+        raise FormatError(f"object index {r.index}, expected {expected_index}", code="BAD_OBJECT")
+    parent = None if r.parent == NO_PARENT else r.parent
+    if parent is not None and parent >= r.index:
+        raise FormatError(f"parent {parent} of object {r.index} is not an earlier object", code="BAD_OBJECT")
+    try:
+        name = bytes(r.name).decode("utf-8")
+    except UnicodeDecodeError:
+        raise FormatError("object name is not valid UTF-8", code="BAD_OBJECT") from None
+    transform = None
+    if r.transform is not None:
+        transform = np.frombuffer(r.transform, dtype="<f8").reshape(4, 4).astype(np.float64)
+        if not np.isfinite(transform).all() or not np.array_equal(transform[3], [0, 0, 0, 1]):
+            raise FormatError("transform is not a finite affine matrix (last row 0 0 0 1)", code="BAD_OBJECT")
+    return ObjectRecord(index=r.index, name=name, parent=parent, transform=transform)
+
+
+# spec §8.2-§8.4 Part groups ------------------------------------------------------------------
+
+def encode_group(g: PartGroup, compress: bool) -> bytes:
+    refs = np.asarray(g.refs, dtype="<u4")
+    roles = np.packbits(np.asarray(g.bounding, dtype=bool), bitorder="little").tobytes()
+    extra = g.extra
+    if g.kind == GroupKind.CELLS:
+        cells = g.cells or ()
+        sizes = np.array([len(c) for c in cells], dtype="<u4")
+        entries = np.concatenate([np.asarray(c, dtype="<u4") for c in cells]) if cells else np.zeros(0, "<u4")
+        extra = schema.CellsExtra.build(dict(cell_count=len(cells), sizes=sizes.tobytes(),
+                                             entries=entries.astype("<u4").tobytes()))
+    elif g.kind == GroupKind.BSP:
+        tokens = np.asarray(g.tree, dtype="<u4")
+        extra = schema.TreeExtra.build(dict(token_count=len(tokens), tokens=tokens.tobytes()))
+    body = schema.GroupBody.build(dict(ref_count=len(refs), refs=refs.tobytes(), roles=roles, extra=extra))
+    method, stored = pack(body, compress)
+    return schema.GroupHead.build(dict(index=g.index, object=g.object, kind=int(g.kind), compression=method,
+                                       reserved=b"\0\0", raw_size=len(body), body=stored))
+
+
+def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: int,
+                 minor: int, limits: Limits) -> tuple[PartGroup, list[tuple[str, str]]]:
+    """A part group, checked against the objects and planes defined so far."""
+    if len(payload) < schema.GROUP_HEAD:
+        raise FormatError("GRUP payload is shorter than its 16-byte head", code="BAD_PAYLOAD")
+    head = _parse(schema.GroupHead, payload, "GRUP")
+    if head.index != expected_index:
+        raise FormatError(f"group index {head.index}, expected {expected_index}", code="GROUP_INDEX_MISMATCH")
+    if head.object >= objects:
+        raise FormatError(f"group {head.index} names object {head.object}, only {objects} defined",
+                          code="BAD_OBJECT_REFERENCE")
+    findings = []
+    if head.kind not in KNOWN_KINDS:
+        if minor <= VERSION[1]:
+            raise FormatError(f"unknown part group kind {head.kind} in a version 1.{minor} file",
+                              code="UNKNOWN_GROUP_KIND")
+        findings.append(("SKIPPED_GROUP_KIND", f"group {head.index} has kind {head.kind} of a newer minor version"))
+    body = unpack(head.compression, bytes(head.body), head.raw_size, limits)
+    if len(body) < 4:
+        raise FormatError("group body is shorter than its reference count", code="BAD_PAYLOAD")
+    count = int.from_bytes(body[:4], "little")
+    if count > limits.max_refs_per_group:
+        raise LimitError(f"group declares {count} references, the limit is {limits.max_refs_per_group}")
+    b = _parse(schema.GroupBody, body, "GRUP body")
+    refs = np.frombuffer(b.refs, dtype="<u4").astype(np.uint32)
+    if count == 0:
+        raise FormatError(f"group {head.index} references no planes", code="BAD_GROUP_STRUCTURE")
+    if refs.max() >= planes:
+        raise FormatError(f"group {head.index} references plane {int(refs.max())}, only {planes} defined",
+                          code="BAD_PLANE_REFERENCE")
+    role_bits = np.unpackbits(np.frombuffer(b.roles, dtype=np.uint8), bitorder="little")
+    if role_bits[count:].any():
+        raise FormatError("non-zero padding bits after the role bits", code="BAD_PAYLOAD")
+    bounding = role_bits[:count].astype(bool)
+    extra = bytes(b.extra)
+    cells = tree = None
+    if head.kind == GroupKind.CELLS:
+        cells = _decode_cells(extra, count)
+        extra = b""
+    elif head.kind == GroupKind.BSP:
+        tree = _decode_tree(extra, count)
+        extra = b""
+    elif head.kind in KNOWN_KINDS and extra:
+        raise FormatError(f"{len(extra)} unexpected bytes after the role bits", code="BAD_PAYLOAD")
+    group = PartGroup(index=head.index, object=head.object, kind=head.kind, refs=refs, bounding=bounding,
+                      cells=cells, tree=tree, extra=extra)
+    return group, findings
+
+
+def _decode_cells(extra: bytes, count: int) -> tuple[np.ndarray, ...]:
+    c = _parse(schema.CellsExtra, extra, "CELLS")
+    sizes = np.frombuffer(c.sizes, dtype="<u4").astype(np.int64)
+    if c.cell_count == 0 or (sizes == 0).any():
+        raise FormatError("a CELLS group needs at least one cell and no empty cell", code="BAD_GROUP_STRUCTURE")
+    if len(c.entries) != 4 * int(sizes.sum()):
+        raise FormatError("cell entries do not match the cell sizes", code="BAD_GROUP_STRUCTURE")
+    entries = np.frombuffer(c.entries, dtype="<u4").astype(np.uint32)
+    if (entries >> 1).max() >= count:
+        raise FormatError("a cell entry refers past the group's references", code="BAD_GROUP_STRUCTURE")
+    return tuple(np.split(entries, np.cumsum(sizes)[:-1]))
+
+
+def _decode_tree(extra: bytes, count: int) -> np.ndarray:
+    t = _parse(schema.TreeExtra, extra, "BSP")
+    if len(extra) != 4 + 4 * t.token_count:
+        raise FormatError("bytes follow the BSP token stream", code="BAD_GROUP_STRUCTURE")
+    tokens = np.frombuffer(t.tokens, dtype="<u4").astype(np.uint32)
+    check_tree(tokens, count)
+    return tokens
+
+
+def check_tree(tokens: np.ndarray, count: int) -> None:
+    """Raise unless ``tokens`` is one complete preorder BSP tree over ``count`` references."""
+    if len(tokens) == 0:
+        raise FormatError("empty BSP token stream", code="BAD_GROUP_STRUCTURE")
+    leaf = tokens >= BSP_IN
+    bad = ~leaf & ((tokens > BSP_MAX_SPLIT) | (tokens >= count))
+    if bad.any():
+        raise FormatError(f"BSP token {int(tokens[np.flatnonzero(bad)[0]])} is not a leaf or a reference",
+                          code="BAD_GROUP_STRUCTURE")
+    # Open slots after each token: a split fills one slot and opens two, a leaf fills one.
+    open_slots = 1 + np.cumsum(np.where(leaf, -1, 1))
+    if (open_slots[:-1] <= 0).any() or open_slots[-1] != 0:
+        raise FormatError("BSP token stream is not exactly one complete tree", code="BAD_GROUP_STRUCTURE")
+
+
+# spec §8.5 Colours ---------------------------------------------------------------------------
+
+def encode_colours(c: Colours) -> bytes:
+    rgba = np.ascontiguousarray(c.rgba, dtype=np.uint8).reshape(-1, 4)
+    return schema.Colours.build(dict(group=c.group, count=len(rgba), rgba=rgba.tobytes()))
+
+
+def decode_colours(payload: bytes, group_refs: dict[int, int]) -> Colours:
+    r = _parse(schema.Colours, payload, "cOLR")
+    if len(payload) != 8 + 4 * r.count:
+        raise FormatError("cOLR size does not match its count", code="BAD_COLOURS")
+    if r.group not in group_refs or group_refs[r.group] != r.count:
+        raise FormatError(f"cOLR for group {r.group} does not match a preceding group's references",
+                          code="BAD_COLOURS")
+    return Colours(group=r.group, rgba=np.frombuffer(r.rgba, dtype=np.uint8).reshape(-1, 4).copy())
+
+
+# spec §8.6 Index and §4.4 End ----------------------------------------------------------------
+
+def encode_index(entries: np.ndarray) -> bytes:
+    return schema.Index.build(dict(count=len(entries), entries=entries.astype(schema.INDEX_ENTRY_DTYPE).tobytes()))
+
+
+def decode_index(payload: bytes, index_offset: int) -> np.ndarray:
+    r = _parse(schema.Index, payload, "iNDX")
+    if len(payload) != 4 + 16 * r.count:
+        raise FormatError("iNDX size does not match its count", code="BAD_INDEX")
+    entries = np.frombuffer(r.entries, dtype=schema.INDEX_ENTRY_DTYPE)
+    offsets = entries["offset"]
+    if len(entries) and ((offsets < 8 + 8 + schema.HEADER_SIZE + 4).any() or (offsets >= index_offset).any()
+                         or (np.diff(offsets.astype(np.int64)) <= 0).any()):
+        raise FormatError("index offsets are outside the chunk area or not increasing", code="BAD_INDEX")
+    if not np.isin(entries["type"], [schema.OBJT, schema.PLNS, schema.GRUP]).all():
+        raise FormatError("index entry of a chunk type other than OBJT, PLNS, GRUP", code="BAD_INDEX")
+    return entries
+
+
+def encode_end(index_offset: int) -> bytes:
+    return schema.End.build(dict(index_offset=index_offset))
+
+
+def decode_end(payload: bytes) -> int:
+    if len(payload) != schema.END_SIZE:
+        raise FormatError(f"PEND payload is {len(payload)} bytes, not {schema.END_SIZE}", code="BAD_PAYLOAD")
+    return schema.End.parse(payload).index_offset
