@@ -10,11 +10,11 @@ from __future__ import annotations
 import io
 import os
 import stat
-import zlib
 from dataclasses import dataclass
 from typing import BinaryIO
 
 from . import schema
+from .crc import crc32
 from .errors import ChecksumError, FormatError, LimitError, TruncatedError
 
 #: Payloads are read in blocks of this size so that a declared length never
@@ -38,7 +38,7 @@ def chunk_bytes(ctype: bytes, payload: bytes) -> bytes:
     """Frame ``payload`` as one chunk: type, length, payload, CRC-32 (spec §4.1)."""
     if len(ctype) != 4:
         raise ValueError("chunk type must be 4 bytes")
-    crc = zlib.crc32(payload, zlib.crc32(ctype))
+    crc = crc32(payload, crc32(ctype))
     return ctype + len(payload).to_bytes(4, "little") + payload + crc.to_bytes(4, "little")
 
 
@@ -107,6 +107,23 @@ class ChunkStream:
         if left is not None and n > left:
             raise TruncatedError(f"{what} needs {n} bytes but only {left} remain",
                                  file=self.file, chunk=chunk, offset=self.offset)
+        if left is not None:
+            # The size was checked against the file: safe to allocate once and fill in place.
+            buf = bytearray(n)
+            view = memoryview(buf)
+            got = 0
+            while got < n:
+                k = self.fp.readinto(view[got:]) if hasattr(self.fp, "readinto") else None
+                if k is None:
+                    block = self.fp.read(n - got)
+                    k = len(block)
+                    view[got:got + k] = block
+                if not k:
+                    raise TruncatedError(f"file ends after {got} of {n} bytes of {what}",
+                                         file=self.file, chunk=chunk, offset=self.offset)
+                got += k
+            self.offset += n
+            return bytes(buf) if n <= 64 else buf
         parts = []
         got = 0
         while got < n:
@@ -151,7 +168,7 @@ class ChunkStream:
                              file=self.file, chunk=name, offset=start)
         payload = self.read_exact(length, chunk=name, what=f"a {length}-byte payload")
         tail = self.read_exact(4, chunk=name, what="the CRC")
-        crc = zlib.crc32(payload, zlib.crc32(ctype))
+        crc = crc32(payload, crc32(ctype))
         if crc != int.from_bytes(tail, "little"):
             raise ChecksumError(f"CRC mismatch (stored {int.from_bytes(tail, 'little'):08x}, computed {crc:08x})",
                                 file=self.file, chunk=name, offset=start)

@@ -32,10 +32,7 @@ class Reader:
         self._own = isinstance(source, (str, os.PathLike))
         if self._own:
             self.name = name or os.fspath(source)
-            try:
-                self._fp: BinaryIO = builtin_open(source, "rb")
-            except OSError as exc:
-                raise PlnError(f"cannot open: {exc.strerror}", code="TRUNCATED", file=self.name) from None
+            self._fp: BinaryIO = builtin_open(source, "rb")
         else:
             self._fp = source
             self.name = name or getattr(source, "name", None) or "<stream>"
@@ -167,7 +164,7 @@ class Reader:
             raise FormatError("a second PHDR chunk", code="DUPLICATE_HEADER")
         if is_ancillary(t):
             self.findings.append(("UNKNOWN_ANCILLARY_CHUNK", f"skipped chunk {raw.name} at byte {raw.offset}"))
-            return UnknownChunk(type=t, payload=raw.payload, offset=raw.offset)
+            return UnknownChunk(type=t, payload=bytes(raw.payload), offset=raw.offset)
         raise FormatError(f"unknown critical chunk {raw.name}", code="UNKNOWN_CRITICAL_CHUNK")
 
     def _finish(self, raw: RawChunk) -> None:

@@ -143,7 +143,8 @@ def encode_planes(first: int, triplets: np.ndarray, header: Header, compress: bo
 def decode_planes(payload: bytes, header: Header, expected_first: int, limits: Limits) -> PlaneBlock:
     if len(payload) < schema.PLANE_BLOCK_HEAD:
         raise FormatError("PLNS payload is shorter than its 20-byte head", code="BAD_PAYLOAD")
-    r = _parse(schema.PlaneBlock, payload, "PLNS")
+    # Only the 20-byte head goes through construct: the data stays a zero-copy view.
+    r = _parse(schema.PlaneBlock, bytes(payload[:schema.PLANE_BLOCK_HEAD]), "PLNS")
     if r.first != expected_first:
         raise FormatError(f"block starts at plane {r.first}, the table has {expected_first}",
                           code="PLANE_INDEX_MISMATCH")
@@ -153,7 +154,7 @@ def decode_planes(payload: bytes, header: Header, expected_first: int, limits: L
     if r.raw_size != expected:
         raise FormatError(f"raw size {r.raw_size} != {expected} bytes for {r.count} planes",
                           code="SIZE_MISMATCH")
-    raw = unpack(r.compression, bytes(r.data), r.raw_size, limits)
+    raw = unpack(r.compression, memoryview(payload)[schema.PLANE_BLOCK_HEAD:], r.raw_size, limits)
     triplets = quantize.decode_payload(raw, r.count, header.coding, header.quantization)
     return PlaneBlock(first=r.first, triplets=triplets)
 

@@ -68,6 +68,11 @@ class Writer:
     def plane_count(self) -> int:
         return self._planes
 
+    @property
+    def bytes_written(self) -> int:
+        """Bytes of .pln data emitted so far, signature included."""
+        return self._pos
+
     def _emit_raw(self, data: bytes) -> None:
         view = memoryview(data)
         while view:

@@ -1,0 +1,75 @@
+"""``pln info``: pipes, JSON, exit codes, one-line errors."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+
+import planefmt
+from planefmt.model import Coding, GroupKind, Header
+
+PLN = [sys.executable, "-m", "planefmt_converters.cli"]
+
+
+def make_file(path, **header):
+    t = np.column_stack([np.radians([[90, 0], [90, 90], [90, 180], [90, 270], [0, 0], [180, 0]]),
+                         [1, 1, 0, 0, 1, 0]])
+    with planefmt.Writer(path, Header(coding=Coding.FLOAT32, **header)) as w:
+        o = w.add_object("cube")
+        w.add_object("child", parent=o, transform=np.eye(4))
+        w.add_planes(t)
+        w.add_group(o, GroupKind.CONVEX, np.arange(6))
+        w.add_group(1, GroupKind.PSEUDO_CONVEX, np.arange(6), np.array([0, 0, 0, 0, 1, 1], bool))
+    return path
+
+
+def test_info_reads_a_pipe_and_json_parses(tmp_path):
+    path = make_file(tmp_path / "cube.pln")
+    with open(path, "rb") as f:
+        p = subprocess.run([*PLN, "info", "-", "--json"], stdin=f, capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    info = json.loads(p.stdout)
+    assert info["planes"] == 6 and info["groups"]["total"] == 2
+    assert info["groups"]["by_kind"] == {"convex": 1, "pseudo_convex": 1}
+    assert info["groups"]["bounding_refs"] == 2
+    assert [o["name"] for o in info["objects"]] == ["cube", "child"] and info["objects"][1]["parent"] == 0
+    assert info["chunks"]["PLNS"]["bytes"] == 12 + 20 + 72
+    assert info["file_bytes"] == path.stat().st_size
+    p = subprocess.run([*PLN, "info", str(path)], capture_output=True, text=True)
+    assert p.returncode == 0 and "pseudo_convex" in p.stdout and "PLNS" in p.stdout
+
+
+def test_info_bad_input_is_one_line_and_exit_2(tmp_path):
+    path = make_file(tmp_path / "cube.pln")
+    data = bytearray(path.read_bytes())
+    pos = data.index(b"GRUP")
+    data[pos + 20] ^= 0x40
+    bad = tmp_path / "bad.pln"
+    bad.write_bytes(bytes(data))
+    p = subprocess.run([*PLN, "info", str(bad)], capture_output=True, text=True)
+    assert p.returncode == 2
+    assert p.stderr == f"pln: {bad}: chunk GRUP at byte {pos}: " + p.stderr.split(": ", 4)[-1]
+    assert p.stderr.count("\n") == 1 and "CRC mismatch" in p.stderr and "Traceback" not in p.stderr
+    for content in (b"", b"hello world\n", path.read_bytes()[:50]):
+        bad.write_bytes(content)
+        p = subprocess.run([*PLN, "info", str(bad)], capture_output=True, text=True)
+        assert p.returncode == 2 and p.stderr.startswith(f"pln: {bad}: ") and p.stderr.count("\n") == 1
+    p = subprocess.run([*PLN, "info", str(tmp_path / "missing.pln")], capture_output=True, text=True)
+    assert p.returncode == 2 and p.stderr.count("\n") == 1 and "Traceback" not in p.stderr
+    p = subprocess.run([*PLN, "info"], capture_output=True, text=True)
+    assert p.returncode == 2
+
+
+def test_info_exit_1_on_warnings(tmp_path):
+    path = tmp_path / "newer.pln"
+    t = np.array([[0.0, 0.0, 1.0]])
+    with planefmt.Writer(path, Header(version=(1, 1))) as w:
+        w.add_object("a")
+        w.add_planes(t)
+        w.add_group(0, 77, [0])
+    p = subprocess.run([*PLN, "info", str(path), "--json"], capture_output=True, text=True)
+    assert p.returncode == 1
+    assert {f["code"] for f in json.loads(p.stdout)["findings"]} == {"NEWER_MINOR_VERSION", "SKIPPED_GROUP_KIND"}
