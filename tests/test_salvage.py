@@ -1,0 +1,73 @@
+"""Salvage: recover every intact part group around a damaged chunk (issue 7)."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+import planefmt
+from planefmt.model import GroupKind, Header, PartGroup
+from planefmt.salvage import salvage
+
+CUBE = np.column_stack([np.radians([[90, 0], [90, 90], [90, 180], [90, 270], [0, 0], [180, 0]]),
+                        [1, 1, 0, 0, 1, 0]])
+
+
+def ten_groups() -> bytes:
+    sink = io.BytesIO()
+    with planefmt.Writer(sink, Header()) as w:
+        for k in range(10):
+            o = w.add_object(f"part{k}")
+            first = w.add_planes(CUBE + [0, 0, k])
+            w.add_group(o, GroupKind.CONVEX, np.arange(first, first + 6))
+    return sink.getvalue()
+
+
+def grup_offsets(data: bytes) -> list[int]:
+    with planefmt.open(io.BytesIO(data)) as r:
+        entries = r.index()
+    return [int(e["offset"]) for e in entries if e["type"] == b"GRUP"]
+
+
+def test_corrupted_group_in_the_middle_is_reported_and_the_rest_recovered():
+    data = bytearray(ten_groups())
+    pos = grup_offsets(bytes(data))[4]
+    data[pos + 30] ^= 0xFF
+    with pytest.raises(planefmt.ChecksumError):
+        with planefmt.open(io.BytesIO(bytes(data))) as r:
+            list(r)
+    got = salvage(io.BytesIO(bytes(data)))
+    assert [g.index for g in got.part_groups] == [0, 1, 2, 3, 5, 6, 7, 8, 9]
+    assert any(loss.code == "CRC_MISMATCH" and loss.offset == pos for loss in got.losses)
+    assert any("part group 4 lost" in loss.message for loss in got.losses)
+    assert all(np.isfinite(g.planes).all() for g in got.part_groups)
+
+
+def test_corrupted_length_resynchronizes_on_the_next_chunk():
+    data = bytearray(ten_groups())
+    pos = grup_offsets(bytes(data))[2]
+    data[pos + 4:pos + 8] = (0x7FFF0000).to_bytes(4, "little")  # length now points far past the end
+    got = salvage(io.BytesIO(bytes(data)))
+    assert [g.index for g in got.part_groups] == [0, 1, 3, 4, 5, 6, 7, 8, 9]
+    assert got.losses
+
+
+def test_lost_plane_block_loses_only_the_groups_that_use_it():
+    data = bytearray(ten_groups())
+    with planefmt.open(io.BytesIO(bytes(data))) as r:
+        plns = [int(e["offset"]) for e in r.index() if e["type"] == b"PLNS"]
+    data[plns[6] + 25] ^= 0x01
+    got = salvage(io.BytesIO(bytes(data)))
+    assert [g.index for g in got.part_groups] == [0, 1, 2, 3, 4, 5, 7, 8, 9]
+    assert any(loss.code == "BAD_PLANE_REFERENCE" and "GRUP" in loss.message for loss in got.losses)
+
+
+def test_truncated_file_keeps_everything_before_the_cut():
+    data = ten_groups()
+    cut = grup_offsets(data)[7] + 10
+    got = salvage(io.BytesIO(data[:cut]))
+    assert [g.index for g in got.part_groups] == list(range(7))
+    assert any(loss.code == "TRUNCATED" for loss in got.losses)
+    assert isinstance(got.part_groups[0], PartGroup)
