@@ -71,3 +71,23 @@ def test_truncated_file_keeps_everything_before_the_cut():
     assert [g.index for g in got.part_groups] == list(range(7))
     assert any(loss.code == "TRUNCATED" for loss in got.losses)
     assert isinstance(got.part_groups[0], PartGroup)
+
+
+def test_cli_info_salvage_lists_losses_and_exits_1(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    data = bytearray(ten_groups())
+    pos = grup_offsets(bytes(data))[4]
+    data[pos + 30] ^= 0xFF
+    path = tmp_path / "damaged.pln"
+    path.write_bytes(bytes(data))
+    cmd = [sys.executable, "-m", "planefmt_converters.cli", "info"]
+    plain = subprocess.run([*cmd, str(path)], capture_output=True, text=True)
+    assert plain.returncode == 2 and "CRC mismatch" in plain.stderr
+    p = subprocess.run([*cmd, str(path), "--salvage", "--json"], capture_output=True, text=True)
+    assert p.returncode == 1, p.stderr
+    info = json.loads(p.stdout)
+    assert info["groups"]["total"] == 9
+    assert {loss["code"] for loss in info["losses"]} >= {"CRC_MISMATCH"}

@@ -8,61 +8,96 @@ import math
 import sys
 from collections import Counter
 
-from planefmt import errors, reader
-from planefmt.model import GroupKind, ObjectRecord, PartGroup
+from planefmt import errors, reader, salvage
+from planefmt.model import GroupKind, ObjectRecord, PartGroup, PlaneBlock
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("info", help="describe a .pln file", description=__doc__)
     p.add_argument("file", help="a .pln file, or - for standard input")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--salvage", action="store_true",
+                   help="recover every intact part group of a damaged file and list what was lost")
     p.set_defaults(func=run)
+
+
+class _Summary:
+    """Counts gathered from records as they stream past."""
+
+    def __init__(self) -> None:
+        self.objects: dict[int, dict] = {}
+        self.kinds: Counter[str] = Counter()
+        self.planes_by_kind: Counter[str] = Counter()
+        self.bounding = 0
+        self.planes = 0
+        self.groups = 0
+
+    def add(self, rec) -> None:
+        if isinstance(rec, ObjectRecord):
+            self.objects[rec.index] = {
+                "index": rec.index, "name": rec.name, "parent": rec.parent,
+                "transform": None if rec.transform is None else rec.transform.tolist(), "groups": 0}
+        elif isinstance(rec, PlaneBlock):
+            self.planes += len(rec.triplets)
+        elif isinstance(rec, PartGroup):
+            kind = GroupKind(rec.kind).name.lower() if rec.kind in GroupKind._value2member_map_ \
+                else f"kind{rec.kind}"
+            self.kinds[kind] += 1
+            self.planes_by_kind[kind] += len(rec.refs)
+            self.bounding += int(rec.bounding.sum())
+            self.groups += 1
+            if rec.object in self.objects:
+                self.objects[rec.object]["groups"] += 1
+
+
+def describe_salvaged(source: str) -> dict:
+    """Like :func:`describe` for a damaged file: what salvage recovered, and the losses."""
+    got = salvage.salvage(sys.stdin.buffer if source == "-" else source)
+    summary = _Summary()
+    for rec in got.records:
+        summary.add(rec)
+    if got.header is None:
+        raise errors.FormatError("no intact header: nothing to salvage", code="MISSING_HEADER", file=source)
+    info = _render_dict(source, got.header, summary, chunks={}, file_bytes=None, findings=[])
+    info["losses"] = [{"code": x.code, "message": x.message, "offset": x.offset} for x in got.losses]
+    return info
 
 
 def describe(source: str) -> dict:
     """Everything ``pln info`` shows, as plain JSON-ready data (memory bounded by one chunk)."""
-    objects: list[dict] = []
-    kinds: Counter[str] = Counter()
-    planes_by_kind: Counter[str] = Counter()
-    bounding = 0
+    summary = _Summary()
     with reader.open(source, retain_planes=False) as r:
         for rec in r:
-            if isinstance(rec, ObjectRecord):
-                objects.append({"index": rec.index, "name": rec.name, "parent": rec.parent,
-                                "transform": None if rec.transform is None else rec.transform.tolist(),
-                                "groups": 0})
-            elif isinstance(rec, PartGroup):
-                kind = GroupKind(rec.kind).name.lower() if rec.kind in GroupKind._value2member_map_ \
-                    else f"kind{rec.kind}"
-                kinds[kind] += 1
-                planes_by_kind[kind] += len(rec.refs)
-                bounding += int(rec.bounding.sum())
-                objects[rec.object]["groups"] += 1
-        h = r.header
-        q = h.quantization
-        return {
-            "file": r.name,
-            "version": f"{h.version[0]}.{h.version[1]}",
-            "lossy": h.lossy,
-            "coding": h.coding.name.lower(),
-            "quantization": None if q is None else {
-                "bits_nu": q.bits_nu, "bits_phi": q.bits_phi, "bits_h": q.bits_h,
-                "h_min": q.h_min, "h_max": q.h_max},
-            "units": h.units.name.lower(),
-            "bbox": None if h.bbox is None else h.bbox.tolist(),
-            "tolerance": _num(h.tolerance),
-            "error_bound": _num(h.error_bound),
-            "counts_in_header": h.plane_count is not None,
-            "planes": r.plane_count,
-            "objects": objects,
-            "groups": {"total": r.group_count, "by_kind": dict(kinds),
-                       "plane_refs_by_kind": dict(planes_by_kind), "bounding_refs": bounding},
-            "chunks": {name: {"count": r.chunk_counts[name], "bytes": r.chunk_stats[name]}
-                       for name in r.chunk_stats},
-            "file_bytes": sum(r.chunk_stats.values()) + 8,
-            "findings": [{"code": c, "severity": errors.CODES[c].severity, "message": m}
-                         for c, m in r.findings],
-        }
+            summary.add(rec)
+        chunks = {name: {"count": r.chunk_counts[name], "bytes": r.chunk_stats[name]} for name in r.chunk_stats}
+        findings = [{"code": c, "severity": errors.CODES[c].severity, "message": m} for c, m in r.findings]
+        return _render_dict(r.name, r.header, summary, chunks, sum(r.chunk_stats.values()) + 8, findings)
+
+
+def _render_dict(name: str, h, summary: _Summary, chunks: dict, file_bytes: int | None,
+                 findings: list[dict]) -> dict:
+    q = h.quantization
+    return {
+        "file": name,
+        "version": f"{h.version[0]}.{h.version[1]}",
+        "lossy": h.lossy,
+        "coding": h.coding.name.lower(),
+        "quantization": None if q is None else {
+            "bits_nu": q.bits_nu, "bits_phi": q.bits_phi, "bits_h": q.bits_h,
+            "h_min": q.h_min, "h_max": q.h_max},
+        "units": h.units.name.lower(),
+        "bbox": None if h.bbox is None else h.bbox.tolist(),
+        "tolerance": _num(h.tolerance),
+        "error_bound": _num(h.error_bound),
+        "counts_in_header": h.plane_count is not None,
+        "planes": summary.planes,
+        "objects": [summary.objects[k] for k in sorted(summary.objects)],
+        "groups": {"total": summary.groups, "by_kind": dict(summary.kinds),
+                   "plane_refs_by_kind": dict(summary.planes_by_kind), "bounding_refs": summary.bounding},
+        "chunks": chunks,
+        "file_bytes": file_bytes,
+        "findings": findings,
+    }
 
 
 def _num(v: float) -> float | None:
@@ -70,13 +105,13 @@ def _num(v: float) -> float | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    info = describe(args.file)
+    info = describe_salvaged(args.file) if args.salvage else describe(args.file)
     if args.json:
         json.dump(info, sys.stdout, indent=2)
         sys.stdout.write("\n")
     else:
         sys.stdout.write(render(info))
-    serious = any(f["severity"] in ("error", "warning") for f in info["findings"])
+    serious = any(f["severity"] in ("error", "warning") for f in info["findings"]) or info.get("losses")
     return 1 if serious else 0
 
 
@@ -86,8 +121,9 @@ def render(info: dict) -> str:
                                                    f"h in [{q['h_min']:.6g}, {q['h_max']:.6g}])")
     tol = "-" if info["tolerance"] is None else f"{info['tolerance']:.3g}"
     bound = "not measured" if info["error_bound"] is None else f"{info['error_bound']:.3g}"
+    size = "" if info["file_bytes"] is None else f" ({info['file_bytes']} bytes)"
     lines = [
-        f"file:        {info['file']} ({info['file_bytes']} bytes)",
+        f"file:        {info['file']}{size}",
         f"version:     {info['version']}   {'lossy' if info['lossy'] else 'lossless'}",
         f"coding:      {coding}",
         f"units:       {info['units']}",
@@ -109,4 +145,7 @@ def render(info: dict) -> str:
         lines.append(f"  {name}  {c['count']:>8} x  {c['bytes']:>12} bytes")
     for f in info["findings"]:
         lines.append(f"{f['severity']}: {f['code']}: {f['message']}")
+    for loss in info.get("losses", []):
+        at = "" if loss["offset"] is None else f" at byte {loss['offset']}"
+        lines.append(f"lost{at}: {loss['code']}: {loss['message']}")
     return "\n".join(lines) + "\n"
