@@ -1,0 +1,37 @@
+"""Replay every input the fuzzer ever found (fuzz/regressions/) and a short fuzzing run."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "fuzz"))
+
+REGRESSIONS = sorted(p for p in (ROOT / "fuzz" / "regressions").iterdir() if p.name != ".keep")
+
+
+@pytest.mark.parametrize("path", REGRESSIONS, ids=[p.name for p in REGRESSIONS])
+def test_regression_input_raises_only_pln_errors(path):
+    from fuzz_pln import exercise
+
+    exercise(path.read_bytes())
+
+
+def test_short_fuzzing_run(tmp_path):
+    """A CI-sized libFuzzer run: every crash, >2 s input or >256 MB RSS fails the test."""
+    pytest.importorskip("atheris")
+    corpus = tmp_path / "corpus"
+    subprocess.run([sys.executable, str(ROOT / "fuzz" / "seeds.py"), str(corpus)], check=True)
+    runs = int(os.environ.get("PLN_FUZZ_RUNS", "20000"))
+    p = subprocess.run(
+        [sys.executable, str(ROOT / "fuzz" / "fuzz_pln.py"), f"-runs={runs}", "-timeout=2", "-rss_limit_mb=256",
+         "-max_len=4096", f"-artifact_prefix={tmp_path}/", "-print_final_stats=1", str(corpus)],
+        capture_output=True, text=True, timeout=600)
+    tail = "\n".join(p.stderr.splitlines()[-25:])
+    assert p.returncode == 0, f"fuzzer found a crash; input saved under {tmp_path}:\n{tail}"
+    assert "Done" in p.stderr and f"Done {runs} runs" in p.stderr, tail
