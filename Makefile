@@ -11,6 +11,8 @@ $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e '.[test]'
+	# Khronos glTF-Validator (npm, pinned by tools/validators/package-lock.json) for the converter tests
+	if command -v npm >/dev/null; then tools/install_validators.sh; fi
 	touch $(STAMP)
 
 setup: $(STAMP)

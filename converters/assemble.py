@@ -1,0 +1,131 @@
+"""Building model meshes from raw arrays, and placing scene nodes in world space.
+
+Every reader funnels its triangles through :func:`build_mesh`, so all formats
+agree on what a :class:`planefmt.model.Mesh` holds: finite float64 vertices,
+each distinct position stored once (exact comparison only), every vertex used
+by a face, and no face that repeats a vertex. The codec relies on the shared
+vertices: it sees connectivity only through equal indices.
+
+The flat formats (OBJ, PLY, STL, OFF) hold one mesh in one frame, so their
+writers call :func:`flatten` to bake the scene's transforms into one mesh.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planefmt.errors import ConversionError
+from planefmt.model import Mesh, Scene
+
+#: Face colour given to uncoloured meshes when a flattened scene mixes
+#: coloured and uncoloured ones (opaque white: the colour a viewer assumes).
+DEFAULT_COLOUR = np.array([255, 255, 255, 255], dtype=np.uint8)
+
+
+def build_mesh(
+    vertices: np.ndarray,
+    faces: np.ndarray,
+    face_colours: np.ndarray | None = None,
+    *,
+    what: str = "mesh",
+    file: str | None = None,
+) -> tuple[Mesh | None, int]:
+    """Clean raw triangles into a :class:`Mesh`.
+
+    ``vertices`` (n, 3) and ``faces`` (m, 3) as read; ``face_colours`` (m, 4)
+    uint8 or None. Returns ``(mesh, degenerate)`` where ``degenerate`` counts
+    the faces removed because they repeat a vertex after merging, and
+    ``mesh`` is None when no face is left. ``what`` names the mesh (node or
+    prim path) in error messages.
+
+    Raises :class:`ConversionError` for non-finite coordinates or face indices
+    outside the vertex array.
+    """
+    vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
+    faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    if not np.isfinite(vertices).all():
+        raise ConversionError(f"{what}: vertex coordinates are NaN or infinite", file=file)
+    if len(faces) and (faces.min() < 0 or faces.max() >= len(vertices)):
+        raise ConversionError(
+            f"{what}: face index outside the {len(vertices)} vertices", file=file)
+    if face_colours is not None:
+        face_colours = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)
+        if len(face_colours) != len(faces):
+            raise ConversionError(
+                f"{what}: {len(face_colours)} face colours for {len(faces)} faces", file=file)
+
+    # Adding 0.0 turns -0.0 into +0.0, so that the two zeros merge.
+    merged, remap = _merge_exact(vertices + 0.0)
+    faces = remap[faces]
+    keep = ((faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2])
+            & (faces[:, 2] != faces[:, 0]))
+    degenerate = int(len(faces) - np.count_nonzero(keep))
+    faces = faces[keep]
+    if face_colours is not None:
+        face_colours = face_colours[keep]
+    if len(faces) == 0:
+        return None, degenerate
+
+    # Drop vertices no face uses (points, loose vertices, merged leftovers),
+    # keeping the survivors in their original order.
+    used = np.zeros(len(merged), dtype=bool)
+    used[faces.ravel()] = True
+    new_index = np.cumsum(used) - 1
+    return Mesh(vertices=merged[used], faces=new_index[faces],
+                face_colours=face_colours), degenerate
+
+
+def _merge_exact(vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Merge rows with identical coordinates; first occurrences keep their order."""
+    if len(vertices) == 0:
+        return vertices, np.zeros(0, dtype=np.int64)
+    _, first, inverse = np.unique(vertices, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)
+    rank = np.empty_like(order)
+    rank[order] = np.arange(len(order))
+    return vertices[first[order]], rank[inverse.reshape(-1)]
+
+
+def world_transforms(scene: Scene) -> list[np.ndarray]:
+    """Local-to-world 4x4 matrix of every node (parents precede children)."""
+    world: list[np.ndarray] = []
+    for node in scene.nodes:
+        local = np.eye(4) if node.transform is None else np.asarray(node.transform, np.float64)
+        world.append(local if node.parent is None else world[node.parent] @ local)
+    return world
+
+
+def transform_mesh(mesh: Mesh, matrix: np.ndarray) -> Mesh:
+    """``mesh`` with ``matrix`` applied; winding flipped if the matrix mirrors.
+
+    A mirroring transform turns counter-clockwise faces clockwise, so the
+    faces are reversed to keep them counter-clockwise seen from outside.
+    """
+    vertices = mesh.vertices @ matrix[:3, :3].T + matrix[:3, 3]
+    faces = mesh.faces[:, ::-1] if np.linalg.det(matrix[:3, :3]) < 0 else mesh.faces
+    return Mesh(vertices=vertices, faces=np.ascontiguousarray(faces),
+                face_colours=mesh.face_colours)
+
+
+def flatten(scene: Scene) -> Mesh:
+    """All meshes of ``scene`` in world coordinates, concatenated into one mesh.
+
+    Vertices are not merged across nodes: separate objects stay separate
+    components. Raises :class:`ConversionError` when the scene has no mesh.
+    """
+    placed = [transform_mesh(node.mesh, matrix)
+              for node, matrix in zip(scene.nodes, world_transforms(scene))
+              if node.mesh is not None]
+    if not placed:
+        raise ConversionError("the scene holds no mesh")
+    offsets = np.cumsum([0] + [len(m.vertices) for m in placed[:-1]])
+    vertices = np.concatenate([m.vertices for m in placed])
+    faces = np.concatenate([m.faces + off for m, off in zip(placed, offsets)])
+    colours = None
+    if any(m.face_colours is not None for m in placed):
+        colours = np.concatenate([
+            m.face_colours if m.face_colours is not None
+            else np.broadcast_to(DEFAULT_COLOUR, (len(m.faces), 4))
+            for m in placed])
+    return Mesh(vertices=vertices, faces=faces, face_colours=colours)
+

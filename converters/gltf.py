@@ -1,0 +1,123 @@
+"""glTF 2.0 (``.gltf`` + ``.bin``, and binary ``.glb``) through trimesh.
+
+Reading keeps trimesh's scene graph: every node (with or without a mesh)
+with its name, parent and local matrix. trimesh splits a mesh of several
+primitives into one child node per primitive. glTF's unit is the metre.
+A material's plain base colour becomes the face colour; textures, UVs,
+normals and other material properties are reported as dropped.
+
+Writing keeps node names (repeated names too), hierarchy, transforms and
+instancing (nodes sharing one :class:`Mesh` share one glTF mesh). glTF has
+no face colours, so a coloured mesh is written with three vertices of its
+own per face carrying the face's ``COLOR_0``; the reader merges them back.
+Positions are float32. The ``.gltf`` writer puts all binary data in one
+``<stem>.bin`` beside the JSON.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+from urllib.parse import quote
+
+import numpy as np
+
+from planefmt.errors import ConversionError
+from planefmt.model import Scene, Units
+
+from .atomic import atomic_paths, write_bytes
+from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
+
+_GLB_MAGIC = b"glTF"
+
+
+def sniff_glb(head: bytes, size: int) -> bool:
+    """Binary glTF starts with ``glTF``."""
+    return head.startswith(_GLB_MAGIC)
+
+
+def sniff_gltf(head: bytes, size: int) -> bool:
+    """A JSON object mentioning glTF's required ``asset`` property early on."""
+    text = head.lstrip(b"\xef\xbb\xbf \t\r\n")
+    return text.startswith(b"{") and b'"asset"' in text
+
+
+def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
+    """Read a ``.glb`` file into ``(scene, dropped)``."""
+    return read_scene(path, "glb", "binary glTF", units=Units.METRE,
+                      reversed_siblings=True)
+
+
+def read_gltf(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
+    """Read a ``.gltf`` file (and the buffers and images it refers to) into ``(scene, dropped)``."""
+    return read_scene(path, "gltf", "glTF", units=Units.METRE, reversed_siblings=True)
+
+
+def write_glb(scene: Scene, path: str | os.PathLike[str]) -> list[str]:
+    """Write ``scene`` as one ``.glb`` file; returns what glTF could not hold."""
+    file = os.fspath(path)
+    data, notes = _export(scene, file, binary=True)
+    try:
+        write_bytes(file, data)
+    except OSError as exc:
+        raise ConversionError(f"cannot write glTF: {exc.strerror or exc}", file=file) from exc
+    return notes
+
+
+def write_gltf(scene: Scene, path: str | os.PathLike[str]) -> list[str]:
+    """Write ``scene`` as ``<stem>.gltf`` plus ``<stem>.bin``; returns what glTF could not hold."""
+    target = Path(path)
+    files, notes = _export(scene, os.fspath(target), binary=False)
+    tree = json.loads(files.pop("model.gltf"))
+    sidecar = target.with_suffix(".bin")
+    outputs: dict[Path, bytes] = {}
+    if files:
+        (buffer,) = files.values()  # merge_buffers: exactly one .bin
+        tree["buffers"][0]["uri"] = quote(sidecar.name)
+        outputs[sidecar] = buffer
+    # the sidecar first: the .gltf never appears before the data it points to
+    outputs[target] = json.dumps(tree, separators=(",", ":")).encode("utf-8")
+    try:
+        with atomic_paths(list(outputs)) as temps:
+            for temp, data in zip(temps, outputs.values()):
+                temp.write_bytes(data)
+    except OSError as exc:
+        raise ConversionError(f"cannot write glTF: {exc.strerror or exc}",
+                              file=str(target)) from exc
+    return notes
+
+
+def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:
+    """trimesh's glTF export of ``scene`` with the node names restored, and the notes."""
+    exchange = require_trimesh("glTF").exchange.gltf
+    notes = []
+    if scene.units not in (Units.METRE, Units.UNSPECIFIED):
+        notes.append(f"units ({scene.units.name.lower()}; glTF is in metres, "
+                     "coordinates written unscaled)")
+    if any(node.mesh is not None and (node.mesh.vertices.astype(np.float32)
+                                      != node.mesh.vertices).any() for node in scene.nodes):
+        notes.append("coordinates rounded to float32")
+    try:
+        tm_scene, names = to_trimesh_scene(scene)
+
+        def restore_names(tree: dict[str, Any]) -> None:
+            for node in tree.get("nodes", []):
+                name = names.get(node.get("name"))
+                if name:
+                    node["name"] = name
+                elif name is not None:
+                    del node["name"]  # an unnamed node stays unnamed
+
+        if binary:
+            result = exchange.export_glb(tm_scene, include_normals=False,
+                                         tree_postprocessor=restore_names)
+        else:
+            result = exchange.export_gltf(tm_scene, include_normals=False, merge_buffers=True,
+                                          tree_postprocessor=restore_names)
+    except ConversionError as exc:
+        raise exc.located(file=file)
+    except Exception as exc:  # noqa: BLE001 - trimesh raises anything
+        raise ConversionError(f"cannot write glTF: {type(exc).__name__}: {exc}", file=file) from exc
+    return result, notes

@@ -1,0 +1,54 @@
+"""Wavefront OBJ through trimesh.
+
+Reading keeps each object trimesh separates (by material) as a node;
+polygons are triangulated by trimesh. Normals, UVs and materials are
+reported as dropped. Writing flattens the scene into one mesh in world
+coordinates; OBJ has no face colours. Coordinates are written with 17
+decimals, enough to round-trip float64 at model scales.
+"""
+
+from __future__ import annotations
+
+import os
+from functools import partial
+
+from planefmt.model import Scene
+
+from .trimesh_bridge import read_scene, require_trimesh, write_flat
+
+#: First words of OBJ statements (geometry, grouping, display, free-form).
+_KEYWORDS = frozenset(
+    b"v vt vn vp f l p o g s mg usemtl mtllib maplib usemap lod bevel c_interp d_interp "
+    b"shadow_obj trace_obj cstype deg bmat step curv curv2 surf parm trim hole scrv sp end "
+    b"con ctech stech".split())
+
+
+def sniff(head: bytes, size: int) -> bool:
+    """Text whose statements all start with OBJ keywords, with at least one ``v``."""
+    if b"\0" in head:
+        return False
+    lines = head.splitlines()
+    if size > len(head):
+        lines = lines[:-1]  # the last line may be cut short
+    vertices = False
+    for line in lines:
+        words = line.split(None, 1)
+        if not words or words[0].startswith(b"#"):
+            continue
+        if words[0] not in _KEYWORDS:
+            return False
+        vertices = vertices or words[0] == b"v"
+    return vertices
+
+
+def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
+    """Read an OBJ file into ``(scene, dropped)``."""
+    return read_scene(path, "obj", "OBJ")
+
+
+def write(scene: Scene, path: str | os.PathLike[str]) -> list[str]:
+    """Write ``scene`` as one OBJ mesh; returns what OBJ could not hold."""
+    exchange = require_trimesh("OBJ").exchange.obj
+    export = partial(exchange.export_obj, include_normals=False, include_color=False,
+                     include_texture=False, write_texture=False, digits=17, header=None)
+    return write_flat(scene, path, what="OBJ", export=export, colours=False, float32=False)

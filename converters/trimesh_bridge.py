@@ -1,0 +1,262 @@
+"""trimesh scenes and meshes to and from the planefmt model.
+
+The OBJ, PLY, STL, OFF and glTF modules parse and serialise through trimesh;
+this module holds what they share: loading a file into a trimesh scene and
+walking its scene graph into model nodes, turning a trimesh geometry into a
+clean :class:`Mesh` with face colours, and the reverse for the writers.
+
+trimesh is imported on first use, so that a missing trimesh fails only the
+formats that need it.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from planefmt.errors import ConversionError
+from planefmt.model import Mesh, Node, Scene, Units
+
+from .assemble import build_mesh, flatten
+from .atomic import write_bytes
+
+if TYPE_CHECKING:
+    import trimesh
+
+
+def require_trimesh(what: str) -> ModuleType:
+    """Import trimesh, or explain which format needs it."""
+    try:
+        import trimesh
+    except ImportError as exc:
+        raise ConversionError(f"{what} support needs trimesh (pip install trimesh): {exc}") from exc
+    return trimesh
+
+
+def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
+               units: Units = Units.UNSPECIFIED,
+               reversed_siblings: bool = False) -> tuple[Scene, list[str]]:
+    """Read ``path`` as ``file_type`` through trimesh into ``(scene, dropped)``.
+
+    ``what`` names the format in messages ("binary glTF"). Any trimesh
+    failure becomes a :class:`ConversionError`; so does a file with no
+    triangle. ``reversed_siblings``: trimesh's graph lists each node's
+    children in reverse file order (see :func:`scene_from_trimesh`).
+    """
+    tm = require_trimesh(what)
+    file = os.fspath(path)
+    try:
+        # process=False: trimesh would merge vertices by position *and*
+        # attributes (UV seams stay split); build_mesh merges by position only.
+        loaded = tm.load_scene(file, file_type=file_type, process=False)
+    except MemoryError:
+        raise  # not a property of the file
+    except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input
+        raise ConversionError(f"cannot read as {what}: {_describe(exc)}", file=file) from exc
+    scene, dropped = scene_from_trimesh(loaded, units, file, reversed_siblings)
+    if not any(node.mesh is not None for node in scene.nodes):
+        raise ConversionError(f"no triangle mesh found in this {what} file", file=file)
+    return scene, dropped
+
+
+def _describe(exc: BaseException) -> str:
+    """A one-line reason for a third-party exception."""
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
+
+
+def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
+                       reversed_siblings: bool = False) -> tuple[Scene, list[str]]:
+    """Walk a trimesh scene graph into model nodes (depth first, parents first).
+
+    Every graph node except trimesh's synthetic base frame becomes a node,
+    with or without a mesh, so the hierarchy survives. Geometry shared by
+    several nodes (instancing) becomes one shared :class:`Mesh`. With
+    ``reversed_siblings`` each node's children are taken in reverse graph
+    order: trimesh 5's glTF loader builds the graph popping a stack, which
+    reverses the file's sibling order (the round-trip tests watch this).
+    """
+    graph = loaded.graph
+    children = graph.transforms.children
+    dropped: set[str] = set()
+    degenerate = 0
+    meshes: dict[str, Mesh | None] = {}
+    nodes: list[Node] = []
+
+    def pushed_order(node: str) -> list[str]:
+        # the stack pops the last pushed first: push in reverse of the wanted order
+        found = list(children.get(node, []))
+        return found if reversed_siblings else found[::-1]
+
+    stack: list[tuple[str, str, int | None]] = [
+        (child, graph.base_frame, None) for child in pushed_order(graph.base_frame)]
+    while stack:
+        name, parent_name, parent = stack.pop()
+        matrix, geometry_name = graph.get(frame_to=name, frame_from=parent_name)
+        mesh = None
+        if geometry_name is not None:
+            if geometry_name not in meshes:
+                mesh, notes, removed = mesh_from_trimesh(
+                    loaded.geometry[geometry_name], what=name, file=file)
+                meshes[geometry_name] = mesh
+                dropped.update(notes)
+                degenerate += removed
+            mesh = meshes[geometry_name]
+        matrix = np.asarray(matrix, dtype=np.float64)
+        nodes.append(Node(name=str(name), parent=parent,
+                          transform=None if np.array_equal(matrix, np.eye(4)) else matrix,
+                          mesh=mesh))
+        index = len(nodes) - 1
+        stack.extend((child, name, index) for child in pushed_order(name))
+    notes = sorted(dropped)
+    if degenerate:
+        notes.append(f"{degenerate} degenerate faces")
+    return Scene(nodes=tuple(nodes), units=units), notes
+
+
+def mesh_from_trimesh(geometry: Any, *, what: str,
+                      file: str | None) -> tuple[Mesh | None, set[str], int]:
+    """Convert one trimesh geometry: ``(mesh or None, dropped notes, degenerate faces)``."""
+    if not hasattr(geometry, "faces") or len(geometry.faces) == 0:
+        return None, {"non-triangle geometry (points, lines)"}, 0
+    faces = np.asarray(geometry.faces, dtype=np.int64)
+    colours, notes = _face_colours(geometry, faces)
+    if "vertex_normals" in geometry._cache:  # trimesh keeps normals read from a file there
+        notes.add("vertex normals")
+    extra = sorted(key for key in getattr(geometry, "vertex_attributes", {}) if key != "color")
+    if extra:
+        notes.add(f"vertex attributes ({', '.join(extra)})")
+    # STL's per-face uint16 "attribute" arrives as a face attribute, nearly always zero
+    extra = sorted(key for key, value in getattr(geometry, "face_attributes", {}).items()
+                   if np.any(np.asarray(value) != 0))
+    if extra:
+        notes.add(f"face attributes ({', '.join(extra)})")
+    mesh, degenerate = build_mesh(geometry.vertices, faces, colours, what=what, file=file)
+    return mesh, notes, degenerate
+
+
+def _face_colours(geometry: Any, faces: np.ndarray) -> tuple[np.ndarray | None, set[str]]:
+    """Per-face RGBA of a trimesh geometry, and what of its appearance is lost.
+
+    Face colours are kept; vertex colours only where each face's three
+    vertices agree (that is how the glTF writer stores face colours); a
+    material's plain base colour becomes a uniform face colour.
+    """
+    visual = geometry.visual
+    notes: set[str] = set()
+    if visual.kind == "face":
+        return np.asarray(visual.face_colors, dtype=np.uint8), notes
+    if visual.kind == "vertex":
+        corner = np.asarray(visual.vertex_colors, dtype=np.uint8)[faces]
+        if (corner == corner[:, :1]).all():
+            return corner[:, 0], notes
+        notes.add("vertex colours")
+        return None, notes
+    uv = getattr(visual, "uv", None)
+    if uv is not None and len(uv):
+        notes.add("UVs")
+    if "color" in getattr(visual, "vertex_attributes", {}):
+        notes.add("vertex colours")
+    material = getattr(visual, "material", None)
+    if material is None:
+        return None, notes
+    textures = [getattr(material, key, None) for key in (
+        "image", "baseColorTexture", "normalTexture", "emissiveTexture",
+        "metallicRoughnessTexture", "occlusionTexture")]
+    if any(texture is not None for texture in textures):
+        notes.add("textures")
+    base = getattr(material, "baseColorFactor", None)
+    if base is not None and getattr(material, "baseColorTexture", None) is None:
+        notes.add("materials (base colour kept as face colour)")
+        return np.broadcast_to(np.asarray(base, dtype=np.uint8), (len(faces), 4)).copy(), notes
+    notes.add("materials")
+    return None, notes
+
+
+def to_trimesh(mesh: Mesh, *, colours_per_vertex: bool = False) -> "trimesh.Trimesh":
+    """A trimesh mesh for ``mesh``; face colours as trimesh face colours.
+
+    With ``colours_per_vertex`` each face gets its own three vertices carrying
+    the face's colour: formats without face colours (glTF) keep them exactly
+    that way, and :func:`build_mesh` merges the copies again on reading.
+    """
+    tm = require_trimesh("mesh export")
+    if mesh.face_colours is None:
+        return tm.Trimesh(vertices=mesh.vertices, faces=mesh.faces, process=False)
+    if colours_per_vertex:
+        return tm.Trimesh(vertices=mesh.vertices[mesh.faces].reshape(-1, 3),
+                          faces=np.arange(3 * len(mesh.faces)).reshape(-1, 3),
+                          vertex_colors=np.repeat(mesh.face_colours, 3, axis=0),
+                          process=False)
+    return tm.Trimesh(vertices=mesh.vertices, faces=mesh.faces,
+                      face_colors=mesh.face_colours, process=False)
+
+
+def to_trimesh_scene(scene: Scene) -> tuple["trimesh.Scene", dict[str, str]]:
+    """A trimesh scene with the nodes, hierarchy and transforms of ``scene``.
+
+    trimesh needs unique node names, so nodes are keyed by index; the
+    returned map from key to the node's own name lets the glTF writer put the
+    original (possibly repeated) names back into the exported file. Meshes
+    shared by several nodes are exported once and instanced.
+    """
+    tm = require_trimesh("glTF export")
+    out = tm.Scene()
+    names: dict[str, str] = {}
+    geometry_keys: dict[int, str] = {}
+    for index, node in enumerate(scene.nodes):
+        key = f"node{index}"
+        names[key] = node.name
+        geometry = None
+        if node.mesh is not None:
+            geometry = geometry_keys.get(id(node.mesh))
+            if geometry is None:
+                geometry = node.name or key
+                if geometry in out.geometry:
+                    geometry = f"{geometry}_{index}"
+                out.geometry[geometry] = to_trimesh(node.mesh, colours_per_vertex=True)
+                geometry_keys[id(node.mesh)] = geometry
+        parent = out.graph.base_frame if node.parent is None else f"node{node.parent}"
+        matrix = np.eye(4) if node.transform is None else np.asarray(node.transform, np.float64)
+        out.graph.update(frame_from=parent, frame_to=key, matrix=matrix, geometry=geometry)
+    return out, names
+
+
+def write_flat(scene: Scene, path: str | os.PathLike[str], *, what: str,
+               export: Callable[["trimesh.Trimesh"], bytes | str],
+               colours: bool, float32: bool) -> list[str]:
+    """Write ``scene`` flattened into one world-space mesh with ``export``, atomically.
+
+    For the single-mesh formats. ``colours`` says whether the format keeps
+    face colours, ``float32`` whether it stores coordinates as float32.
+    Returns the notes on what the format could not hold.
+    """
+    file = os.fspath(path)
+    try:
+        mesh = flatten(scene)
+    except ConversionError as exc:
+        raise exc.located(file=file)
+    notes = []
+    if len(scene.nodes) > 1:
+        notes.append(f"scene hierarchy and node names "
+                     f"({len(scene.nodes)} nodes merged into one mesh)")
+    if scene.units != Units.UNSPECIFIED:
+        notes.append(f"units ({scene.units.name.lower()})")
+    if mesh.face_colours is not None and not colours:
+        notes.append("face colours")
+        mesh = Mesh(vertices=mesh.vertices, faces=mesh.faces)
+    if float32 and (mesh.vertices.astype(np.float32) != mesh.vertices).any():
+        notes.append("coordinates rounded to float32")
+    try:
+        data = export(to_trimesh(mesh))
+    except Exception as exc:  # noqa: BLE001 - trimesh raises anything
+        raise ConversionError(f"cannot write {what}: {_describe(exc)}", file=file) from exc
+    try:
+        write_bytes(file, data.encode("utf-8") if isinstance(data, str) else data)
+    except OSError as exc:
+        raise ConversionError(f"cannot write {what}: {exc.strerror or exc}", file=file) from exc
+    return notes
