@@ -45,7 +45,7 @@ from typing import Any
 from planefmt.errors import ConversionError, PlnError
 from planefmt.model import Scene
 
-from . import gltf, obj, off, ply, stl, usd
+from . import gltf, obj, off, pln, ply, stl, usd
 
 ENTRY_POINT_GROUP = "planefmt.converters"
 
@@ -75,6 +75,7 @@ class Format:
 
 #: The built-in formats, in detection order.
 BUILTIN: tuple[Format, ...] = (
+    Format("pln", (".pln",), pln.sniff, pln.read, pln.write, "planes (this library's format)"),
     Format("glb", (".glb",), gltf.sniff_glb, gltf.read_glb, gltf.write_glb, "binary glTF 2.0"),
     Format("usdc", (".usdc", ".usd"), usd.sniff_usdc, usd.read, usd.write, "USD crate (binary)"),
     Format("usdz", (".usdz",), usd.sniff_usdz, usd.read, usd.write, "USD zip package"),

@@ -46,7 +46,7 @@ _CATALOGUE = [
     Code("BAD_COMPRESSION", "error", "unknown compression method or corrupt deflate stream"),
     Code("SIZE_MISMATCH", "error", "a payload's size disagrees with its declared count or raw size"),
     Code("LIMIT_EXCEEDED", "error", "a declared size exceeds the reader's configured limits"),
-    Code("BAD_TRIPLET", "error", "a plane triplet is NaN, infinite or outside its range"),
+    Code("BAD_TRIPLET", "error", "a plane triplet is NaN, infinite or outside its range (float or quantized)"),
     Code("PLANE_INDEX_MISMATCH", "error", "a PLNS block does not continue the plane table"),
     Code("BAD_PLANE_REFERENCE", "error", "a part group references a plane not yet defined"),
     Code("BAD_OBJECT", "error", "an object record is malformed (index, parent, name or transform)"),

@@ -78,7 +78,7 @@ class Quantization:
     def steps(self) -> tuple[float, float, float]:
         """Quantization step of nu (rad), phi (rad) and h (model units)."""
         h_step = (self.h_max - self.h_min) / ((1 << self.bits_h) - 1)
-        return (math.pi / ((1 << self.bits_nu) - 1),
+        return (math.pi / (1 << (self.bits_nu - 1)),
                 2.0 * math.pi / (1 << self.bits_phi),
                 h_step)
 

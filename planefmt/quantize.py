@@ -52,11 +52,12 @@ def check_triplets(triplets: np.ndarray, coding: Coding) -> None:
 def quantize(triplets: np.ndarray, q: Quantization) -> np.ndarray:
     """Integer codes ``(n, 3)`` uint64 of triplets, by the rounding rule of spec §7.3.
 
-    Round half up (``floor(x + 0.5)``) in float64; phi wraps modulo ``2**bits_phi``;
-    at the poles (nu code 0 or maximum) the phi code is 0. Triplets must be in range.
+    Round half up (``floor(x + 0.5)``) in float64; nu codes run 0..2**(bits_nu-1) so
+    that the poles and the equator are exact; phi wraps modulo ``2**bits_phi``; at
+    the poles the phi code is 0. Triplets must be in range.
     """
     t = np.asarray(triplets, dtype=np.float64)
-    m_nu = float((1 << q.bits_nu) - 1)
+    m_nu = float(1 << (q.bits_nu - 1))
     m_phi = 1 << q.bits_phi
     m_h = float((1 << q.bits_h) - 1)
     codes = np.empty(t.shape, dtype=np.uint64)
@@ -78,7 +79,7 @@ def dequantize(codes: np.ndarray, q: Quantization) -> np.ndarray:
     """Triplets ``(n, 3)`` float64 from integer codes (spec §7.3)."""
     c = np.asarray(codes, dtype=np.float64)
     out = np.empty(c.shape, dtype=np.float64, order="F")
-    out[:, 0] = c[:, 0] * (math.pi / ((1 << q.bits_nu) - 1))
+    out[:, 0] = c[:, 0] * (math.pi / (1 << (q.bits_nu - 1)))
     out[:, 1] = c[:, 1] * (TWO_PI / (1 << q.bits_phi))
     out[:, 2] = q.h_min + c[:, 2] * ((q.h_max - q.h_min) / ((1 << q.bits_h) - 1))
     return out
@@ -142,7 +143,12 @@ def decode_payload(data: bytes, count: int, coding: Coding, q: Quantization | No
         check_triplets(t, coding)
         return t
     assert q is not None
-    return dequantize(unpack_codes(np.frombuffer(data, dtype=np.uint8), count, _widths(q)), q)
+    codes = unpack_codes(np.frombuffer(data, dtype=np.uint8), count, _widths(q))
+    if count and codes[:, 0].max() > (1 << (q.bits_nu - 1)):
+        i = int(np.argmax(codes[:, 0]))
+        raise PlnError(f"plane {i}: nu code {int(codes[i, 0])} exceeds 2^(bits_nu-1) = {1 << (q.bits_nu - 1)}",
+                       code="BAD_TRIPLET")
+    return dequantize(codes, q)
 
 
 def unpack_codes(raw: np.ndarray, count: int, widths: tuple[int, ...]) -> np.ndarray:

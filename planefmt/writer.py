@@ -23,6 +23,15 @@ from .errors import PlnError
 from .model import (Colours, GroupKind, Header, ObjectRecord, PartGroup, PlaneBlock, Record,
                     UnknownChunk)
 
+def _read_umask() -> int:
+    # os.umask can only be read by setting it: done once at import, not per file (threads).
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+_NEW_FILE_MODE = 0o666 & ~_read_umask()
+
 #: Planes per PLNS chunk: bounds the memory a streaming reader needs per chunk.
 BLOCK_PLANES = 1 << 16
 
@@ -46,6 +55,12 @@ class Writer:
             self._path = Path(target)
             fd, self._tmp = tempfile.mkstemp(prefix=f".{self._path.name}.", suffix=".tmp",
                                              dir=self._path.parent or ".")
+            # mkstemp makes 0600 files; give the output the mode open() would (or the target's own).
+            try:
+                mode = self._path.stat().st_mode & 0o7777
+            except FileNotFoundError:
+                mode = _NEW_FILE_MODE
+            os.fchmod(fd, mode)
             self._fp: BinaryIO = os.fdopen(fd, "wb")
         else:
             self._fp = target

@@ -139,9 +139,22 @@ def test_quantize_poles_and_phi_wrap_exact():
     t = np.array([[0.0, 1.0, 0.5], [math.pi, 2.0, 0.5], [1.0, 2 * math.pi - 1e-9, 0.5]])
     codes = quantize.quantize(t, q)
     assert codes[0, 1] == 0 and codes[1, 1] == 0  # poles: phi code 0
-    assert codes[1, 0] == 255 and codes[2, 1] == 0  # nu = pi is the top code; phi wraps to 0
+    assert codes[1, 0] == 128 and codes[2, 1] == 0  # nu = pi is code 2^(bits-1); phi wraps to 0
     back = quantize.dequantize(codes, q)
     assert back[1, 0] == math.pi and back[2, 1] == 0.0
+    # The equator and the axis azimuths are exact: axis-aligned CAD faces lose nothing.
+    axes = np.array([[math.pi / 2, 0, 0.5], [math.pi / 2, math.pi / 2, 0.5], [math.pi / 2, math.pi, 0.5],
+                     [math.pi / 2, 1.5 * math.pi, 0.5], [math.pi / 4, 0, 0.5]])
+    assert np.array_equal(quantize.dequantize(quantize.quantize(axes, q), q)[:, :2], axes[:, :2])
+
+
+def test_quantized_nu_code_out_of_range_is_an_error():
+    q = Quantization(3, 2, 3, 0.0, 1.0)
+    bits = [1, 0, 1] + [0, 0] + [0, 0, 0]  # nu code 5 > 2^(3-1) = 4
+    payload = np.packbits(np.array(bits, np.uint8), bitorder="little").tobytes()
+    with pytest.raises(planefmt.PlnError) as e:
+        quantize.decode_payload(payload, 1, Coding.QUANTIZED, q)
+    assert e.value.code == "BAD_TRIPLET"
 
 
 def test_cube_float32_payload_is_72_bytes_and_counts_are_patched():

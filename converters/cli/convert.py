@@ -1,0 +1,189 @@
+"""``pln convert``: between any two supported formats, .pln on either side.
+
+    pln convert IN OUT [--tolerance T] [--bits N] [--lossy --delta D --tau A]
+    pln convert A B C -d OUTDIR --to glb [--jobs N]
+
+``-`` reads standard input (format detected from the content) or writes
+standard output (``--to`` names the format). Outputs are written atomically:
+an error, Ctrl-C or SIGTERM leaves nothing under the target name, and the
+input is never touched.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import signal
+import sys
+import tempfile
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+from planefmt.errors import PlnError
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("convert", help="convert between mesh formats and .pln", description=__doc__,
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("paths", nargs="+", metavar="PATH", help="IN OUT, or several inputs with -d")
+    p.add_argument("-d", "--outdir", help="batch: write each input into this folder")
+    p.add_argument("--to", help="output format name (glb, gltf, obj, ply, stl, off, usda, usdc, usdz, pln)")
+    p.add_argument("--from", dest="from_", help="input format name instead of detecting it")
+    p.add_argument("--jobs", type=int, default=1, help="batch: convert this many files at once")
+    g = p.add_argument_group(".pln output")
+    g.add_argument("--tolerance", type=float, default=1e-6,
+                   help="largest error allowed, a fraction of the bbox diagonal (default 1e-6)")
+    g.add_argument("--bits", type=int, help="force quantized coding with this many bits per component")
+    g.add_argument("--coding", choices=["float32", "float64", "quantized"], help="force a triplet coding")
+    g.add_argument("--compress", action="store_true", help="deflate plane and group payloads")
+    g.add_argument("--lossy", action="store_true", help="allow the paper's lossy options below")
+    g.add_argument("--delta", type=float, help="lossy: drop planes of faces under delta x total area")
+    g.add_argument("--tau", type=float, help="lossy: merge neighbour planes whose normals differ < tau radians")
+    p.set_defaults(func=run)
+
+
+class _Usage(PlnError):
+    """A usage mistake: reported like bad input (one line, exit 2)."""
+
+
+def _pln_options(args: argparse.Namespace) -> dict:
+    if (args.delta is not None or args.tau is not None) and not args.lossy:
+        raise _Usage("--delta and --tau change the geometry: add --lossy to allow it", code="CONVERSION_FAILED")
+    from planefmt.model import Coding
+
+    opts = {"tolerance": args.tolerance, "compress": args.compress}
+    if args.bits is not None:
+        opts["bits"] = args.bits
+    if args.coding:
+        opts["coding"] = Coding[args.coding.upper()]
+    if args.lossy:
+        opts["delta"], opts["tau"] = args.delta, args.tau
+    return opts
+
+
+def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict) -> list[str]:
+    """Convert one file; returns warning lines (what was dropped). Raises PlnError on bad input."""
+    from planefmt_converters import registry
+
+    scene, dropped = registry.read(src, from_)
+    fmt = registry.get(to) if to else registry.for_extension(dst, writable=True)
+    if fmt is None:
+        raise _Usage(f"cannot tell the output format from {dst!r}: name it with --to", code="UNKNOWN_FORMAT")
+    notes = registry.write(scene, dst, fmt.name, **(pln_opts if fmt.name == "pln" else {}))
+    warnings = []
+    if dropped:
+        warnings.append(f"{src}: dropped {', '.join(dropped)} (planes cannot carry them)")
+    if notes:
+        warnings.append(f"{dst}: not kept by {fmt.name}: {', '.join(notes)}")
+    return warnings
+
+
+def _batch_job(job: tuple) -> tuple[str, list[str] | None, str | None]:
+    src, dst, to, from_, opts = job
+    try:
+        return src, convert_one(src, dst, to, from_, opts), None
+    except PlnError as exc:
+        return src, None, str(exc)
+
+
+def run(args: argparse.Namespace) -> int:
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        opts = _pln_options(args)
+        if args.outdir:
+            return _run_batch(args, opts)
+        if len(args.paths) != 2:
+            raise _Usage("give IN OUT, or several inputs with -d OUTDIR --to FORMAT", code="CONVERSION_FAILED")
+        return _run_single(args.paths[0], args.paths[1], args, opts)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _terminate(signum, frame) -> None:
+    # Turn SIGTERM into an exception so every atomic writer on the stack discards its temporary file.
+    raise KeyboardInterrupt
+
+
+def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int:
+    with tempfile.TemporaryDirectory(prefix="pln-") as tmp:
+        if src == "-":
+            src = os.path.join(tmp, "stdin")
+            with open(src, "wb") as f:
+                shutil.copyfileobj(sys.stdin.buffer, f)
+        to_stdout = dst == "-"
+        if to_stdout:
+            if not args.to:
+                raise _Usage("writing to standard output needs --to FORMAT", code="UNKNOWN_FORMAT")
+            from planefmt_converters import registry
+
+            dst = os.path.join(tmp, "stdout" + registry.get(args.to).extensions[0])
+        for line in convert_one(src, dst, args.to, args.from_, opts):
+            print(f"pln: warning: {line}", file=sys.stderr)
+        if to_stdout:
+            with open(dst, "rb") as f:
+                shutil.copyfileobj(f, sys.stdout.buffer)
+            sys.stdout.buffer.flush()
+    return 0
+
+
+def _run_batch(args: argparse.Namespace, opts: dict) -> int:
+    if not args.to:
+        raise _Usage("batch conversion needs --to FORMAT", code="UNKNOWN_FORMAT")
+    from planefmt_converters import registry
+
+    ext = registry.get(args.to).extensions[0]
+    outdir = Path(args.outdir)
+    outdir.mkdir(parents=True, exist_ok=True)
+    jobs = [(src, str(outdir / (Path(src).stem + ext)), args.to, args.from_, opts) for src in args.paths]
+    failed = 0
+    progress = _Progress(len(jobs))
+    if args.jobs > 1:
+        with ProcessPoolExecutor(args.jobs) as pool:
+            results = pool.map(_batch_job, jobs)
+            for result in results:
+                failed += _report(result, progress)
+    else:
+        for job in jobs:
+            failed += _report(_batch_job(job), progress)
+    progress.done()
+    return 2 if failed else 0
+
+
+def _report(result: tuple, progress: "_Progress") -> int:
+    src, warnings, error = result
+    progress.step(src)
+    if error:
+        progress.clear()
+        print(f"pln: {error}", file=sys.stderr)
+        return 1
+    for line in warnings or []:
+        progress.clear()
+        print(f"pln: warning: {line}", file=sys.stderr)
+    return 0
+
+
+class _Progress:
+    """A one-line progress bar on stderr, shown only when stderr is a terminal."""
+
+    def __init__(self, total: int) -> None:
+        self.total = total
+        self.count = 0
+        self.enabled = sys.stderr.isatty()
+
+    def step(self, label: str) -> None:
+        self.count += 1
+        if self.enabled:
+            width = 30
+            filled = width * self.count // self.total
+            sys.stderr.write(f"\r[{'#' * filled}{'.' * (width - filled)}] {self.count}/{self.total} "
+                             f"{Path(label).name[:40]:<40}")
+            sys.stderr.flush()
+
+    def clear(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\r" + " " * 80 + "\r")
+
+    def done(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\n")
