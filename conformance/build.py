@@ -1,0 +1,154 @@
+"""Building blocks of the golden files: chunk layouts, the spec's triplet decoding, expected JSON.
+
+Broken files are chunk layouts, lists of ``(type, payload)``, made from
+planefmt's payload encoders, given one defect, and framed with planefmt's
+``chunk_bytes`` so that every CRC is computed, never typed. The expected
+plane values are derived here from the spec's formulas (§7.1, §7.3), not
+read back through planefmt, so that the suite checks planefmt's reader
+rather than echoing it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+
+from planefmt import chunk_bytes, records, schema
+from planefmt.model import Coding, Header, Quantization, Units
+
+Layout = list[tuple[bytes, bytes]]
+
+#: The cube of spec §12 as (nu, phi, h): faces x = 1, y = 1, x = 0, y = 0, z = 1, z = 0.
+CUBE = np.array([
+    [math.pi / 2, 0.0, 1.0],
+    [math.pi / 2, math.pi / 2, 1.0],
+    [math.pi / 2, math.pi, 0.0],
+    [math.pi / 2, 1.5 * math.pi, 0.0],
+    [0.0, 0.0, 1.0],
+    [math.pi, 0.0, 0.0],
+])
+
+#: The header of spec §12 (the writer fills in the counts).
+SPEC_HEADER = Header(coding=Coding.FLOAT32, units=Units.METRE, bbox=np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]),
+                     tolerance=1e-6, error_bound=0.0)
+
+
+def box(lo, hi) -> np.ndarray:
+    """Triplets of the six faces of the box ``lo <= x <= hi``, in the order of ``CUBE``."""
+    t = CUBE.copy()
+    t[:, 2] = [hi[0], hi[1], -lo[0], -lo[1], hi[2], -lo[2]]
+    return t
+
+
+def frame(layout: Layout, signature: bytes = schema.SIGNATURE) -> bytes:
+    return signature + b"".join(chunk_bytes(t, p) for t, p in layout)
+
+
+def offsets(layout: Layout) -> list[int]:
+    """Byte offset of each chunk of ``layout`` in the framed file."""
+    out, pos = [], len(schema.SIGNATURE)
+    for _, payload in layout:
+        out.append(pos)
+        pos += 12 + len(payload)
+    return out
+
+
+def index_payload(layout: Layout) -> bytes:
+    """The iNDX payload listing the OBJT, PLNS and GRUP chunks of ``layout`` (spec §8.6).
+
+    Ordinals are read from the payloads themselves (object index, first plane,
+    group index), so a layout with a defect in those fields keeps an index that
+    agrees with its chunks.
+    """
+    entries = [(off, t, int.from_bytes(p[:4], "little")) for off, (t, p) in zip(offsets(layout), layout)
+               if t in (schema.OBJT, schema.PLNS, schema.GRUP)]
+    return records.encode_index(np.array(entries, dtype=schema.INDEX_ENTRY_DTYPE))
+
+
+def finish(layout: Layout, index: bool = True) -> Layout:
+    """``layout`` followed by its iNDX (optional) and PEND chunks."""
+    if not index:
+        return layout + [(schema.PEND, records.encode_end(0))]
+    at = offsets(layout + [(b"", b"")])[-1]
+    return layout + [(schema.INDX, index_payload(layout)), (schema.PEND, records.encode_end(at))]
+
+
+# -- spec §7: what a reader decodes ----------------------------------------------------------
+
+def stored_planes(triplets: np.ndarray, coding: int, q: Quantization | None) -> np.ndarray:
+    """The triplets a conforming reader decodes after a writer stored ``triplets``."""
+    t = np.asarray(triplets, dtype=np.float64).reshape(-1, 3)
+    if coding == Coding.FLOAT64:
+        return t.copy()
+    if coding == Coding.FLOAT32:
+        t32 = t.astype(np.float32)
+        t32[t32[:, 1] >= np.float32(2 * math.pi), 1] = 0  # §7.1: phi rounded up to 2 pi is stored as 0
+        return t32.astype(np.float64)
+    # §7.3, written out as the spec states it: binary64, round(x) = floor(x + 0.5).
+    m_nu, n_phi, m_h = 2.0 ** (q.bits_nu - 1), 2.0 ** q.bits_phi, 2.0 ** q.bits_h - 1
+    out = np.empty_like(t)
+    for row, (nu, phi, h) in zip(out, t):
+        q_nu = min(max(math.floor(nu / math.pi * m_nu + 0.5), 0), m_nu)
+        q_phi = math.floor(phi / (2 * math.pi) * n_phi + 0.5) % n_phi
+        if q_nu in (0, m_nu):
+            q_phi = 0
+        q_h = 0
+        if q.h_max != q.h_min:
+            q_h = min(max(math.floor((h - q.h_min) / (q.h_max - q.h_min) * m_h + 0.5), 0), m_h)
+        row[:] = (q_nu * (math.pi / m_nu), q_phi * (2 * math.pi / n_phi),
+                  q.h_min + q_h * ((q.h_max - q.h_min) / m_h))
+    return out
+
+
+def world_matrices(objects: list[tuple[int | None, np.ndarray | None]]) -> list[np.ndarray]:
+    """World matrix of each object from ``(parent, local transform)`` pairs (spec §8.1)."""
+    out: list[np.ndarray] = []
+    for parent, m in objects:
+        local = np.eye(4) if m is None else np.asarray(m, dtype=np.float64)
+        out.append(local if parent is None else out[parent] @ local)
+    return out
+
+
+# -- expected JSON ---------------------------------------------------------------------------
+
+def rounded(x):
+    """Geometry floats to 9 decimals: Qhull's last bits vary between machines, the files must not."""
+    if isinstance(x, (list, tuple, np.ndarray)):
+        return [rounded(v) for v in x]
+    return None if x is None else round(float(x), 9) + 0.0  # + 0.0 turns -0.0 into 0.0
+
+
+def optional_float(x: float) -> float | None:
+    """JSON has no NaN: the contract writes NaN (not given / not measured) as null."""
+    return None if math.isnan(x) else float(x)
+
+
+def header_json(h: Header, counts: tuple[int, int, int] | None) -> dict:
+    q = h.quantization
+    return {
+        "version": list(h.version),
+        "lossy": h.lossy,
+        "coding": int(h.coding),
+        "bits": [q.bits_nu, q.bits_phi, q.bits_h] if q else [0, 0, 0],
+        "h_range": [q.h_min, q.h_max] if q else [0.0, 0.0],
+        "units": int(h.units),
+        "bbox": None if h.bbox is None else np.asarray(h.bbox, dtype=np.float64).tolist(),
+        "tolerance": optional_float(h.tolerance),
+        "error_bound": optional_float(h.error_bound),
+        "counts": None if counts is None else dict(zip(("planes", "objects", "groups"), counts)),
+    }
+
+
+def dumps(obj, indent: int = 0) -> str:
+    """JSON with one line per innermost list: readable, and diffable line by line."""
+    pad, inner = " " * indent, " " * (indent + 1)
+    if isinstance(obj, dict):
+        if not obj:
+            return "{}"
+        items = [f"{inner}{json.dumps(k)}: {dumps(v, indent + 1)}" for k, v in obj.items()]
+        return "{\n" + ",\n".join(items) + "\n" + pad + "}"
+    if isinstance(obj, list) and any(isinstance(v, (dict, list)) for v in obj):
+        return "[\n" + ",\n".join(inner + dumps(v, indent + 1) for v in obj) + "\n" + pad + "]"
+    return json.dumps(obj, allow_nan=False, ensure_ascii=False)

@@ -1,0 +1,795 @@
+"""The broken golden files: each is a valid file with exactly one defect, and the error it must raise.
+
+Most start from the cube of spec §12 (``cube()``), assembled chunk by chunk
+from planefmt's payload encoders; the defect is made in a payload before it
+is framed (so its CRC is right and the reader gets as far as the defect), or
+in the framed bytes where the framing itself is the defect. Offsets in the
+cube: PHDR 8, OBJT 128, PLNS 156, GRUP 260, iNDX 317, PEND 381, end 401.
+
+``also`` lists other codes a conforming reader may give where the spec does
+not decide between two (see README.md, "Ambiguities").
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import re
+import zlib
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from planefmt import records, schema
+from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization
+
+from . import reference
+from .build import CUBE, SPEC_HEADER, Layout, box, finish, frame, offsets
+from .cases_valid import IN, L_CELLS, L_PLANES, L_TREE, OUT
+
+
+@dataclass(frozen=True)
+class BrokenCase:
+    name: str
+    error: str
+    description: str
+    level: str  # "container" or "geometry"
+    also: tuple[str, ...]
+    make: Callable[[], bytes]
+
+
+CASES: list[BrokenCase] = []
+
+
+def case(name: str, error: str, description: str, *, level: str = "container", also: tuple[str, ...] = ()):
+    def register(make: Callable[[], bytes]) -> Callable[[], bytes]:
+        CASES.append(BrokenCase(name, error, description, level, also, make))
+        return make
+    return register
+
+
+# -- the cube of spec §12 and its parts --------------------------------------------------------
+
+def header(**fields) -> bytes:
+    """A PHDR payload: spec §12's header with counts 6 / 1 / 1, fields replaced."""
+    h = dataclasses.replace(SPEC_HEADER, plane_count=6, object_count=1, group_count=1)
+    return records.encode_header(dataclasses.replace(h, **fields))
+
+
+def objt(index: int = 0, name: str = "cube", parent: int | None = None, transform=None) -> bytes:
+    return records.encode_object(ObjectRecord(index, name, parent, transform))
+
+
+def plns(triplets=CUBE, first: int = 0, head: Header = SPEC_HEADER) -> bytes:
+    return records.encode_planes(first, np.asarray(triplets), head, False)
+
+
+def plns_raw(data: bytes, count: int = 6, *, first: int = 0, compression: int = 0,
+             raw_size: int | None = None) -> bytes:
+    """A PLNS payload around triplet data the encoder would refuse to write."""
+    return schema.PlaneBlock.build(dict(first=first, count=count, compression=compression, reserved=b"\0\0\0",
+                                        raw_size=len(data) if raw_size is None else raw_size, data=data))
+
+
+def grup(refs=range(6), *, index: int = 0, obj: int = 0, kind: int = 0, bounding=None, cells=None,
+         tree=None, extra: bytes = b"") -> bytes:
+    refs = np.array(list(refs), dtype=np.uint32)
+    roles = np.zeros(len(refs), bool) if bounding is None else np.array(bounding, bool)
+    cells = None if cells is None else tuple(np.array(c, dtype=np.uint32) for c in cells)
+    tree = None if tree is None else np.array(tree, dtype=np.uint32)
+    return records.encode_group(PartGroup(index, obj, kind, refs, roles, cells, tree, extra), False)
+
+
+def grup_raw(body: bytes, *, kind: int = 0, compression: int = 0, raw_size: int | None = None) -> bytes:
+    """A GRUP payload around a body the encoder would refuse to write."""
+    return schema.GroupHead.build(dict(index=0, object=0, kind=kind, compression=compression, reserved=b"\0\0",
+                                       raw_size=len(body) if raw_size is None else raw_size, body=body))
+
+
+def body(refs=range(6), roles: bytes | None = None, extra: bytes = b"") -> bytes:
+    refs = np.array(list(refs), dtype="<u4")
+    roles = bytes((len(refs) + 7) // 8) if roles is None else roles
+    return schema.GroupBody.build(dict(ref_count=len(refs), refs=refs.tobytes(), roles=roles, extra=extra))
+
+
+def cube(**parts: bytes) -> Layout:
+    """The chunks of the spec §12 cube before iNDX; ``PHDR=``, ``OBJT=``, ... replace one payload."""
+    default = {"PHDR": header(), "OBJT": objt(), "PLNS": plns(), "GRUP": grup()}
+    default.update(parts)
+    return [(t.encode(), p) for t, p in default.items()]
+
+
+def file(layout: Layout, index: bool = True) -> bytes:
+    return frame(finish(layout, index))
+
+
+CUBE_FILE = file(cube())
+PHDR_AT, OBJT_AT, PLNS_AT, GRUP_AT, INDX_AT, PEND_AT = offsets(finish(cube()))
+
+
+def patched(data: bytes, at: int, new: bytes) -> bytes:
+    return data[:at] + new + data[at + len(new):]
+
+
+def f32_bits(bits: int) -> float:
+    return float(np.frombuffer(bits.to_bytes(4, "little"), "<f4")[0])
+
+
+def geometry_defect(code: str, kind: int, triplets, bounding=None, cells=None, tree=None) -> None:
+    """Check, with the reference decoder, that the planes really have the stated defect."""
+    bounding = np.zeros(len(triplets), bool) if bounding is None else np.array(bounding, bool)
+    try:
+        reference.summary(kind, np.asarray(triplets), bounding, cells, tree)
+    except reference.Defect as exc:
+        if exc.code == code:
+            return
+        raise AssertionError(f"expected {code}, the reference says {exc.code}") from None
+    raise AssertionError(f"expected {code}, the reference decodes the group")
+
+
+# -- signature (spec §3) -----------------------------------------------------------------------
+
+@case("xsig_foreign", "BAD_SIGNATURE", "a PNG signature in front of the cube's chunks")
+def _():
+    return b"\x89PNG\r\n\x1a\n" + CUBE_FILE[8:]
+
+
+@case("xsig_crlf_to_lf", "TEXT_MODE_DAMAGE", "the cube after a CR LF -> LF conversion (DOS to Unix text mode)",
+      also=("BAD_SIGNATURE",))
+def _():
+    return CUBE_FILE.replace(b"\r\n", b"\n")
+
+
+@case("xsig_lf_to_crlf", "TEXT_MODE_DAMAGE", "the cube after a LF -> CR LF conversion (Unix to DOS text mode)",
+      also=("BAD_SIGNATURE",))
+def _():
+    return re.sub(rb"(?<!\r)\n", b"\r\n", CUBE_FILE)
+
+
+@case("xsig_high_bit", "TEXT_MODE_DAMAGE", "the cube with the 8th bit of every byte stripped (7-bit transfer)",
+      also=("BAD_SIGNATURE",))
+def _():
+    return bytes(b & 0x7F for b in CUBE_FILE)
+
+
+@case("xsig_empty", "TRUNCATED", "an empty file")
+def _():
+    return b""
+
+
+@case("xsig_short", "TRUNCATED", "the first 5 bytes of the signature only")
+def _():
+    return CUBE_FILE[:5]
+
+
+# -- truncation (spec §4.1, §4.3) --------------------------------------------------------------
+
+@case("xtrunc_head", "TRUNCATED", "ends inside the 8-byte head of the OBJT chunk")
+def _():
+    return CUBE_FILE[:OBJT_AT + 3]
+
+
+@case("xtrunc_phdr", "TRUNCATED", "ends inside the PHDR payload")
+def _():
+    return CUBE_FILE[:PHDR_AT + 8 + 50]
+
+
+@case("xtrunc_objt", "TRUNCATED", "ends inside the OBJT payload")
+def _():
+    return CUBE_FILE[:OBJT_AT + 8 + 6]
+
+
+@case("xtrunc_plns", "TRUNCATED", "ends inside the PLNS payload")
+def _():
+    return CUBE_FILE[:PLNS_AT + 8 + 40]
+
+
+@case("xtrunc_grup", "TRUNCATED", "ends inside the GRUP payload")
+def _():
+    return CUBE_FILE[:GRUP_AT + 8 + 20]
+
+
+@case("xtrunc_indx", "TRUNCATED", "ends inside the iNDX payload")
+def _():
+    return CUBE_FILE[:INDX_AT + 8 + 30]
+
+
+@case("xtrunc_pend", "TRUNCATED", "ends inside the CRC of PEND (2 bytes missing)")
+def _():
+    return CUBE_FILE[:-2]
+
+
+@case("xtrunc_no_pend", "TRUNCATED", "ends cleanly after the iNDX chunk: PEND is missing")
+def _():
+    return CUBE_FILE[:PEND_AT]
+
+
+# -- CRC (spec §4.1) ---------------------------------------------------------------------------
+
+@case("xcrc_phdr", "CRC_MISMATCH", "one bit of the PHDR payload (bbox) flipped after framing")
+def _():
+    at = PHDR_AT + 8 + 60
+    return patched(CUBE_FILE, at, bytes([CUBE_FILE[at] ^ 0x01]))
+
+
+@case("xcrc_plns", "CRC_MISMATCH", "one bit of the PLNS triplet data flipped after framing")
+def _():
+    at = PLNS_AT + 8 + 20 + 5
+    return patched(CUBE_FILE, at, bytes([CUBE_FILE[at] ^ 0x10]))
+
+
+@case("xcrc_ancillary", "CRC_MISMATCH", "an unknown ancillary chunk whose CRC is wrong: every CRC is checked")
+def _():
+    layout = cube()
+    layout.insert(2, (b"nOTE", b"damaged"))
+    data = file(layout)
+    crc = offsets(layout)[2] + 8 + len(b"damaged")
+    return patched(data, crc, bytes([data[crc] ^ 0xFF]))
+
+
+# -- chunk framing and types (spec §4.1, §4.2) --------------------------------------------------
+
+@case("xchunk_unknown_critical", "UNKNOWN_CRITICAL_CHUNK", "a critical chunk PMAT no version 1 reader knows")
+def _():
+    layout = cube()
+    return file(layout[:2] + [(b"PMAT", b"\0" * 16)] + layout[2:])
+
+
+@case("xchunk_type_digit", "BAD_CHUNK_TYPE", "the OBJT tag written OB1T: a digit is not a letter")
+def _():
+    layout = cube()
+    layout[1] = (b"OB1T", layout[1][1])
+    return file(layout)
+
+
+@case("xchunk_type_bracket", "BAD_CHUNK_TYPE",
+      "the PLNS tag written PL[S: '[' (0x5B) is next to 'Z' but not a letter")
+def _():
+    layout = cube()
+    layout[2] = (b"PL[S", layout[2][1])
+    return file(layout)
+
+
+@case("xchunk_beyond_eof", "TRUNCATED", "the GRUP length says 1045 bytes, 1000 more than the file holds")
+def _():
+    return patched(CUBE_FILE, GRUP_AT + 4, (45 + 1000).to_bytes(4, "little"))
+
+
+@case("xchunk_too_long", "CHUNK_TOO_LONG", "the OBJT length is 2^31, above the 2^31-1 maximum",
+      also=("LIMIT_EXCEEDED", "TRUNCATED"))
+def _():
+    return patched(CUBE_FILE, OBJT_AT + 4, (1 << 31).to_bytes(4, "little"))
+
+
+# -- chunk order (spec §4.3) -------------------------------------------------------------------
+
+@case("xorder_no_header", "MISSING_HEADER", "the file starts with OBJT: no PHDR")
+def _():
+    return file(cube()[1:])
+
+
+@case("xorder_two_headers", "DUPLICATE_HEADER", "PHDR twice")
+def _():
+    layout = cube()
+    return file(layout[:1] + layout)
+
+
+@case("xorder_two_ends", "TRAILING_DATA", "PEND twice: the second is data after the end")
+def _():
+    return CUBE_FILE + CUBE_FILE[PEND_AT:]
+
+
+@case("xorder_trailing", "TRAILING_DATA", "a newline after PEND")
+def _():
+    return CUBE_FILE + b"\n"
+
+
+# -- header (spec §5) --------------------------------------------------------------------------
+
+@case("xhdr_major2", "UNSUPPORTED_VERSION", "version 2.0")
+def _():
+    return file(cube(PHDR=header(version=(2, 0))))
+
+
+@case("xhdr_major0", "UNSUPPORTED_VERSION", "version 0.9")
+def _():
+    return file(cube(PHDR=header(version=(0, 9))))
+
+
+@case("xhdr_coding7", "UNSUPPORTED_CODING", "triplet coding 7")
+def _():
+    return file(cube(PHDR=header(coding=7)))
+
+
+def _quantized_cube(bits, h_range=(0.0, 1.0)) -> bytes:
+    q = Quantization(*bits, *h_range)
+    planes = plns(head=Header(coding=Coding.QUANTIZED, quantization=Quantization(16, 16, 16, 0.0, 1.0)))
+    return file(cube(PHDR=header(coding=Coding.QUANTIZED, quantization=q), PLNS=planes))
+
+
+@case("xhdr_bits0", "UNSUPPORTED_CODING", "quantized coding with bits_nu = 0")
+def _():
+    return _quantized_cube((0, 16, 16))
+
+
+@case("xhdr_bits33", "UNSUPPORTED_CODING", "quantized coding with bits_phi = 33")
+def _():
+    return _quantized_cube((16, 33, 16))
+
+
+@case("xhdr_h_reversed", "BAD_HEADER_VALUE", "quantized coding with h_min 1 > h_max 0")
+def _():
+    return _quantized_cube((16, 16, 16), (1.0, 0.0))
+
+
+@case("xhdr_h_infinite", "BAD_HEADER_VALUE", "quantized coding with h_max = +inf")
+def _():
+    return _quantized_cube((16, 16, 16), (0.0, math.inf))
+
+
+@case("xhdr_units", "BAD_HEADER_VALUE", "units code 8, one past foot")
+def _():
+    return file(cube(PHDR=header(units=8)))
+
+
+@case("xhdr_bbox_reversed", "BAD_HEADER_VALUE", "BBOX_KNOWN with bbox_min.y 1 > bbox_max.y 0")
+def _():
+    return file(cube(PHDR=header(bbox=np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 1.0]]))))
+
+
+@case("xhdr_tolerance", "BAD_HEADER_VALUE", "tolerance -1e-6: neither NaN nor >= 0")
+def _():
+    return file(cube(PHDR=header(tolerance=-1e-6)))
+
+
+@case("xhdr_short", "BAD_PAYLOAD", "a PHDR payload of 100 bytes, under the 108 of version 1.0")
+def _():
+    return file(cube(PHDR=header()[:100]))
+
+
+@case("xhdr_counts", "COUNT_MISMATCH", "COUNTS_KNOWN with plane_count 7; the file holds 6 planes")
+def _():
+    return file(cube(PHDR=header(plane_count=7)))
+
+
+# -- plane table (spec §6, §7) -----------------------------------------------------------------
+
+@case("xplns_first", "PLANE_INDEX_MISMATCH", "the only PLNS block says first = 1")
+def _():
+    return file(cube(PLNS=plns(first=1)))
+
+
+@case("xplns_nan", "BAD_TRIPLET", "float32 nu of the first plane is NaN")
+def _():
+    t = CUBE.astype(np.float32)
+    t[0, 0] = np.nan
+    return file(cube(PLNS=plns_raw(t.tobytes())))
+
+
+@case("xplns_inf_h", "BAD_TRIPLET", "float64 h of the first plane is +inf")
+def _():
+    t = CUBE.copy()
+    t[0, 2] = math.inf
+    return file(cube(PHDR=header(coding=Coding.FLOAT64), PLNS=plns_raw(t.astype("<f8").tobytes())))
+
+
+@case("xplns_nu_above_pi", "BAD_TRIPLET",
+      "float32 nu = 0x40490FDC, the float after float32(pi) 0x40490FDB which is the largest allowed")
+def _():
+    t = CUBE.astype(np.float32)
+    t[5, 0] = f32_bits(0x40490FDC)
+    return file(cube(PLNS=plns_raw(t.tobytes())))
+
+
+@case("xplns_phi_2pi", "BAD_TRIPLET", "float32 phi = 0x40C90FDB, float32(2 pi): phi must be below it")
+def _():
+    t = CUBE.astype(np.float32)
+    t[0, 1] = f32_bits(0x40C90FDB)
+    return file(cube(PLNS=plns_raw(t.tobytes())))
+
+
+@case("xplns_nu_above_pi_f64", "BAD_TRIPLET", "float64 nu = nextafter(pi, 4), just above float64 pi")
+def _():
+    t = CUBE.copy()
+    t[5, 0] = math.nextafter(math.pi, 4.0)
+    return file(cube(PHDR=header(coding=Coding.FLOAT64), PLNS=plns_raw(t.astype("<f8").tobytes())))
+
+
+@case("xplns_padding", "BAD_PAYLOAD", "quantized 7/9/5: 6 records fill 126 bits, and a padding bit is set")
+def _():
+    q = Quantization(7, 9, 5, 0.0, 1.0)
+    head = Header(coding=Coding.QUANTIZED, quantization=q)
+    payload = bytearray(plns(head=head))
+    payload[-1] |= 0x80
+    return file(cube(PHDR=header(coding=Coding.QUANTIZED, quantization=q), PLNS=bytes(payload)))
+
+
+@case("xplns_nu_code", "BAD_TRIPLET", "quantized 16/16/16: a nu code 32769, above M_nu = 2^15 (§7.3)")
+def _():
+    q = Quantization(16, 16, 16, 0.0, 1.0)
+    payload = bytearray(plns(head=Header(coding=Coding.QUANTIZED, quantization=q)))
+    payload[20:22] = (32769).to_bytes(2, "little")  # 48-bit records: record 0's nu is bytes 0-1 of the data
+    return file(cube(PHDR=header(coding=Coding.QUANTIZED, quantization=q), PLNS=bytes(payload)))
+
+
+@case("xplns_raw_size", "SIZE_MISMATCH", "PLNS raw_size 84 where 6 float32 planes take 72")
+def _():
+    return file(cube(PLNS=plns_raw(CUBE.astype("<f4").tobytes(), raw_size=84)))
+
+
+@case("xplns_stored_size", "SIZE_MISMATCH",
+      "uncompressed PLNS data of 76 bytes with raw_size 72 (§6: must be equal)", also=("BAD_PAYLOAD",))
+def _():
+    return file(cube(PLNS=plns_raw(CUBE.astype("<f4").tobytes() + b"\0" * 4, raw_size=72)))
+
+
+@case("xplns_method2", "BAD_COMPRESSION", "PLNS compression method 2")
+def _():
+    return file(cube(PLNS=plns_raw(CUBE.astype("<f4").tobytes(), compression=2)))
+
+
+@case("xplns_zlib_header", "BAD_COMPRESSION", "a zlib stream whose header check bits are wrong")
+def _():
+    z = bytearray(zlib.compress(CUBE.astype("<f4").tobytes(), 9))
+    z[1] ^= 0x01
+    return file(cube(PLNS=plns_raw(bytes(z), compression=1, raw_size=72)))
+
+
+@case("xplns_zlib_short", "SIZE_MISMATCH", "a zlib stream that inflates to 60 bytes, raw_size 72")
+def _():
+    z = zlib.compress(CUBE.astype("<f4").tobytes()[:60], 9)
+    return file(cube(PLNS=plns_raw(z, compression=1, raw_size=72)))
+
+
+@case("xplns_zlib_long", "SIZE_MISMATCH", "a zlib stream that inflates to 84 bytes, raw_size 72")
+def _():
+    z = zlib.compress(CUBE.astype("<f4").tobytes() + b"\0" * 12, 9)
+    return file(cube(PLNS=plns_raw(z, compression=1, raw_size=72)))
+
+
+@case("xplns_zlib_unused", "SIZE_MISMATCH", "two bytes follow the end of the zlib stream")
+def _():
+    z = zlib.compress(CUBE.astype("<f4").tobytes(), 9) + b"\0\0"
+    return file(cube(PLNS=plns_raw(z, compression=1, raw_size=72)))
+
+
+@case("xgrup_deflate_bomb", "LIMIT_EXCEEDED", "a deflated GRUP body declaring raw_size 2^32-1 (a deflate bomb)",
+      also=("SIZE_MISMATCH",))
+def _():
+    return file(cube(GRUP=grup_raw(zlib.compress(body(), 9), compression=1, raw_size=0xFFFFFFFF)))
+
+
+# -- objects (spec §8.1) -----------------------------------------------------------------------
+
+@case("xobjt_index", "BAD_OBJECT", "the first OBJT has index 1")
+def _():
+    return file(cube(OBJT=objt(index=1)))
+
+
+@case("xobjt_parent_self", "BAD_OBJECT", "object 0 names itself as parent")
+def _():
+    return file(cube(OBJT=objt(parent=0)))
+
+
+@case("xobjt_parent_later", "BAD_OBJECT", "object 0 names object 1, defined after it, as parent")
+def _():
+    layout = cube(PHDR=header(object_count=2), OBJT=objt(parent=1))
+    return file(layout[:2] + [(schema.OBJT, objt(index=1, name="later"))] + layout[2:])
+
+
+@case("xobjt_name_utf8", "BAD_OBJECT", "object name b'cub\\xe9' (Latin-1), not UTF-8")
+def _():
+    name = b"cub\xe9"
+    return file(cube(OBJT=schema.Object.build(dict(index=0, parent=0xFFFFFFFF, flags=0, reserved=b"\0",
+                                                   name_length=len(name), name=name, transform=None, extra=b""))))
+
+
+@case("xobjt_transform_row", "BAD_OBJECT", "a transform whose last row is 0 0 0 2")
+def _():
+    m = np.eye(4)
+    m[3, 3] = 2.0
+    return file(cube(OBJT=objt(transform=m)))
+
+
+@case("xobjt_transform_nan", "BAD_OBJECT", "a transform with a NaN translation")
+def _():
+    m = np.eye(4)
+    m[0, 3] = math.nan
+    return file(cube(OBJT=objt(transform=m)))
+
+
+@case("xobjt_no_transform", "BAD_PAYLOAD", "HAS_TRANSFORM set but the payload ends after the name",
+      also=("BAD_OBJECT",))
+def _():
+    payload = bytearray(objt())
+    payload[8] = schema.OBJECT_HAS_TRANSFORM
+    return file(cube(OBJT=bytes(payload)))
+
+
+# -- part groups (spec §8.2) -------------------------------------------------------------------
+
+@case("xgrup_plane_range", "BAD_PLANE_REFERENCE", "a reference to plane 6 of a 6-plane table")
+def _():
+    return file(cube(GRUP=grup([0, 1, 2, 3, 4, 6])))
+
+
+@case("xgrup_plane_forward", "BAD_PLANE_REFERENCE", "GRUP before the PLNS chunk that holds its planes")
+def _():
+    phdr, o, p, g = cube()
+    return file([phdr, o, g, p])
+
+
+@case("xgrup_object_range", "BAD_OBJECT_REFERENCE", "a group of object 1; only object 0 exists")
+def _():
+    return file(cube(GRUP=grup(obj=1)))
+
+
+@case("xgrup_object_forward", "BAD_OBJECT_REFERENCE", "GRUP before the OBJT of its object")
+def _():
+    phdr, o, p, g = cube()
+    return file([phdr, p, g, o])
+
+
+@case("xgrup_index", "GROUP_INDEX_MISMATCH", "the first group has index 1")
+def _():
+    return file(cube(GRUP=grup(index=1)))
+
+
+@case("xgrup_kind5", "UNKNOWN_GROUP_KIND", "group kind 5 (the first unknown) in a version 1.0 file")
+def _():
+    return file(cube(GRUP=grup(kind=5)))
+
+
+@case("xgrup_no_refs", "BAD_GROUP_STRUCTURE", "a group with ref_count 0")
+def _():
+    return file(cube(GRUP=grup_raw(body(refs=[]))))
+
+
+@case("xgrup_role_padding", "BAD_PAYLOAD", "6 role bits, and padding bit 7 of the role byte set")
+def _():
+    return file(cube(GRUP=grup_raw(body(roles=b"\x80"))))
+
+
+@case("xgrup_kind_data", "BAD_PAYLOAD", "a convex group with 4 bytes of kind data (kinds 0, 3, 4 have none)")
+def _():
+    return file(cube(GRUP=grup_raw(body(extra=b"\0\0\0\0"))))
+
+
+@case("xgrup_body_short", "BAD_PAYLOAD", "ref_count 6 but the body ends inside the fifth reference")
+def _():
+    return file(cube(GRUP=grup_raw(body()[:22])))
+
+
+@case("xgrup_head_short", "BAD_PAYLOAD", "a GRUP payload of 12 bytes, under its 16-byte head")
+def _():
+    return file(cube(GRUP=grup()[:12]))
+
+
+@case("xgrup_skipped_kind_ref", "BAD_PLANE_REFERENCE",
+      "version 1.1, a group of unknown kind 9 referencing plane 6 of 6: its common body is still checked")
+def _():
+    return file(cube(PHDR=header(version=(1, 1)), GRUP=grup([0, 1, 2, 3, 4, 6], kind=9)))
+
+
+# -- cells (spec §8.3) and trees (spec §8.4) ---------------------------------------------------
+
+L_ROLES = [False] * 8 + [True]  # the cut plane x = y
+
+
+def group_file(triplets, group: bytes, name: str = "cube") -> bytes:
+    """A float64 file of one object, the planes ``triplets`` and one GRUP payload."""
+    head = dataclasses.replace(SPEC_HEADER, coding=Coding.FLOAT64)
+    return file(cube(PHDR=header(coding=Coding.FLOAT64, plane_count=len(triplets)), OBJT=objt(name=name),
+                     PLNS=plns(triplets, head=head), GRUP=group))
+
+
+def l_file(group: bytes, planes=L_PLANES) -> bytes:
+    """The L of the valid cases cells_l / bsp_l with another GRUP payload."""
+    return group_file(planes, group, "L")
+
+
+def cells_body(counts, entries, refs=range(9)) -> bytes:
+    extra = (len(counts).to_bytes(4, "little") + np.array(counts, "<u4").tobytes()
+             + np.array(entries, "<u4").tobytes())
+    return body(refs, roles=b"\x00\x01", extra=extra)
+
+
+@case("xcells_entry_range", "BAD_GROUP_STRUCTURE", "a cell entry 18 = 2*9: local reference 9 of 9")
+def _():
+    return l_file(grup(range(9), kind=1, bounding=L_ROLES, cells=((0, 2, 4, 17, 12, 18), L_CELLS[1])))
+
+
+@case("xcells_none", "BAD_GROUP_STRUCTURE", "a cells group with cell_count 0")
+def _():
+    return l_file(grup_raw(cells_body([], []), kind=1))
+
+
+@case("xcells_empty_cell", "BAD_GROUP_STRUCTURE", "a cell of size 0")
+def _():
+    return l_file(grup_raw(cells_body([6, 0, 6], L_CELLS[0] + L_CELLS[1]), kind=1))
+
+
+@case("xcells_extra", "BAD_GROUP_STRUCTURE", "one entry more than the cell sizes account for",
+      also=("BAD_PAYLOAD",))
+def _():
+    return l_file(grup_raw(cells_body([6, 6], L_CELLS[0] + L_CELLS[1] + (0,)), kind=1))
+
+
+@case("xbsp_incomplete", "BAD_GROUP_STRUCTURE", "the token stream of bsp_l without its last OUT leaf")
+def _():
+    return l_file(grup(range(8), kind=2, tree=L_TREE[:-1]), L_PLANES[:8])
+
+
+@case("xbsp_extra_leaf", "BAD_GROUP_STRUCTURE", "a complete tree followed by one more IN leaf")
+def _():
+    return l_file(grup(range(8), kind=2, tree=L_TREE + (IN,)), L_PLANES[:8])
+
+
+@case("xbsp_reserved", "BAD_GROUP_STRUCTURE", "an OUT leaf replaced by the reserved token 0xFFFFFFF0")
+def _():
+    return l_file(grup(range(8), kind=2, tree=L_TREE[:-1] + (0xFFFFFFF0,)), L_PLANES[:8])
+
+
+@case("xbsp_split_range", "BAD_GROUP_STRUCTURE", "a split on local reference 8 of 8")
+def _():
+    return l_file(grup(range(8), kind=2, tree=(8,) + L_TREE[1:]), L_PLANES[:8])
+
+
+@case("xbsp_empty", "BAD_GROUP_STRUCTURE", "token_count 0: no tree at all")
+def _():
+    return l_file(grup_raw(body(range(8), extra=b"\0\0\0\0"), kind=2), L_PLANES[:8])
+
+
+@case("xbsp_trailing", "BAD_GROUP_STRUCTURE", "4 bytes after the token stream: the tokens must fill the body",
+      also=("BAD_PAYLOAD",))
+def _():
+    tokens = len(L_TREE).to_bytes(4, "little") + np.array(L_TREE, "<u4").tobytes()
+    return l_file(grup_raw(body(range(8), extra=tokens + b"\0\0\0\0"), kind=2), L_PLANES[:8])
+
+
+# -- colours (spec §8.5) -----------------------------------------------------------------------
+
+def colr(group: int = 0, count: int = 6) -> bytes:
+    return records.encode_colours(Colours(group, np.full((count, 4), 200, dtype=np.uint8)))
+
+
+@case("xcolr_no_group", "BAD_COLOURS", "cOLR for group 1; the file has only group 0")
+def _():
+    return file(cube() + [(schema.COLR, colr(group=1))])
+
+
+@case("xcolr_before_group", "BAD_COLOURS", "cOLR for group 0 placed before that group's GRUP")
+def _():
+    layout = cube()
+    return file(layout[:3] + [(schema.COLR, colr())] + layout[3:])
+
+
+@case("xcolr_count", "BAD_COLOURS", "5 colours for a group of 6 references")
+def _():
+    return file(cube() + [(schema.COLR, colr(count=5))])
+
+
+# -- index and end (spec §4.4, §8.6) -----------------------------------------------------------
+
+def with_index(entries: list[tuple[int, bytes, int]], layout: Layout | None = None,
+               index_offset: int | None = None) -> bytes:
+    """The cube with the iNDX entries replaced (and PEND pointing at the iNDX unless told)."""
+    layout = cube() if layout is None else layout
+    at = offsets(layout + [(b"", b"")])[-1]
+    payload = records.encode_index(np.array(entries, dtype=schema.INDEX_ENTRY_DTYPE))
+    return frame(layout + [(schema.INDX, payload),
+                           (schema.PEND, records.encode_end(at if index_offset is None else index_offset))])
+
+
+GOOD_ENTRIES = [(OBJT_AT, schema.OBJT, 0), (PLNS_AT, schema.PLNS, 0), (GRUP_AT, schema.GRUP, 0)]
+
+
+@case("xindx_outside", "BAD_INDEX", "the GRUP entry points at byte 10000, beyond the end of the file")
+def _():
+    return with_index(GOOD_ENTRIES[:2] + [(10000, schema.GRUP, 0)])
+
+
+@case("xindx_type", "BAD_INDEX", "the entry of the PLNS chunk says OBJT")
+def _():
+    return with_index([GOOD_ENTRIES[0], (PLNS_AT, schema.OBJT, 0), GOOD_ENTRIES[2]])
+
+
+@case("xindx_mid_chunk", "BAD_INDEX", "the OBJT entry points 4 bytes into the OBJT chunk")
+def _():
+    return with_index([(OBJT_AT + 4, schema.OBJT, 0)] + GOOD_ENTRIES[1:])
+
+
+@case("xindx_ordinal", "BAD_INDEX", "the GRUP entry gives ordinal 1 for group 0")
+def _():
+    return with_index(GOOD_ENTRIES[:2] + [(GRUP_AT, schema.GRUP, 1)])
+
+
+@case("xindx_missing", "BAD_INDEX", "the index has no entry for the PLNS chunk")
+def _():
+    return with_index([GOOD_ENTRIES[0], GOOD_ENTRIES[2]])
+
+
+@case("xindx_count", "BAD_INDEX", "iNDX count 2 with 3 entries present", also=("BAD_PAYLOAD",))
+def _():
+    layout = finish(cube())
+    payload = bytearray(layout[-2][1])
+    payload[0] = 2
+    layout[-2] = (schema.INDX, bytes(payload))
+    return frame(layout)
+
+
+@case("xpend_offset", "BAD_INDEX", "PEND index_offset points at the GRUP chunk, not the iNDX")
+def _():
+    return with_index(GOOD_ENTRIES, index_offset=GRUP_AT)
+
+
+@case("xpend_no_index", "BAD_INDEX", "PEND index_offset 317 (where PEND itself is) in a file without iNDX")
+def _():
+    return frame(cube() + [(schema.PEND, records.encode_end(INDX_AT))])
+
+
+@case("xpend_payload", "BAD_PAYLOAD", "a PEND payload of 12 bytes instead of 8")
+def _():
+    return frame(finish(cube(), index=False)[:-1] + [(schema.PEND, bytes(12))])
+
+
+# -- geometry (spec §8.2): only decoders of geometry see these ---------------------------------
+
+def geometry_case(name: str, error: str, description: str, *, also: tuple[str, ...] = ()):
+    return case(name, error, description, level="geometry", also=also)
+
+
+def _convex(error: str, triplets) -> bytes:
+    geometry_defect(error, 0, triplets)
+    return group_file(triplets, grup(range(len(triplets))))
+
+
+@geometry_case("xgeom_empty", "EMPTY_POLYTOPE", "a convex group with x <= 0 and x >= 1")
+def _():
+    return _convex("EMPTY_POLYTOPE", box((1, 0, 0), (0, 1, 1)))
+
+
+@geometry_case("xgeom_flat", "EMPTY_POLYTOPE", "a convex group with x <= 0 and x >= 0: not empty, but no interior")
+def _():
+    return _convex("EMPTY_POLYTOPE", box((0, 0, 0), (0, 1, 1)))
+
+
+@geometry_case("xgeom_unbounded3", "UNBOUNDED_POLYTOPE", "a convex group of 3 planes, x <= 1, y <= 1, z <= 1")
+def _():
+    return _convex("UNBOUNDED_POLYTOPE", CUBE[[0, 1, 4]])
+
+
+@geometry_case("xgeom_unbounded5", "UNBOUNDED_POLYTOPE", "a convex group of the cube's planes but z <= 1: "
+               "a square shaft open upwards")
+def _():
+    return _convex("UNBOUNDED_POLYTOPE", CUBE[[0, 1, 2, 3, 5]])
+
+
+@geometry_case("xgeom_patch_unbounded", "UNBOUNDED_POLYTOPE", "a pseudo-convex patch (kind 3) of the five faces "
+               "of an open box with no bounding plane over the opening")
+def _():
+    t = CUBE[[0, 1, 2, 3, 5]]
+    geometry_defect("UNBOUNDED_POLYTOPE", 3, t)
+    return group_file(t, grup(range(5), kind=3))
+
+
+@geometry_case("xgeom_cells_unbounded", "UNBOUNDED_POLYTOPE", "a cells group whose second cell lacks y <= 2",
+               also=("BAD_GROUP_STRUCTURE",))
+def _():
+    cells = (L_CELLS[0], (6, 10, 16, 12, 14))
+    geometry_defect("UNBOUNDED_POLYTOPE", 1, L_PLANES, L_ROLES, cells)
+    return l_file(grup(range(9), kind=1, bounding=L_ROLES, cells=cells))
+
+
+@geometry_case("xgeom_bsp_unbounded", "UNBOUNDED_POLYTOPE", "a tree whose IN leaf is the half-space z <= 1",
+               also=("BAD_GROUP_STRUCTURE",))
+def _():
+    geometry_defect("UNBOUNDED_POLYTOPE", 2, L_PLANES[:8], None, None, (6, IN, OUT))
+    return l_file(grup(range(8), kind=2, tree=(6, IN, OUT)), L_PLANES[:8])
+
+
+@geometry_case("xgeom_cells_overlap", "BAD_GROUP_STRUCTURE", "a cells group whose two cells are the same prism: "
+               "cell interiors must be disjoint")
+def _():
+    return l_file(grup(range(9), kind=1, bounding=L_ROLES, cells=(L_CELLS[0], L_CELLS[0])))

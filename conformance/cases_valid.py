@@ -1,0 +1,403 @@
+"""The valid golden files: what each holds, how it is written, and what a reader must report.
+
+A case is a list of operations (objects, plane blocks, groups, colours, raw
+ancillary chunks) replayed through ``planefmt.Writer``. The same operations
+are also assembled chunk by chunk from the payload encoders, and the two
+must agree byte for byte: that keeps the broken files, which are assembled
+the same way, honest. The one case the writer cannot produce (version 1.1
+features) is assembled only.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import io
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+import planefmt
+from planefmt import records, schema
+from planefmt.model import (Coding, Colours, GroupKind, Header, ObjectRecord, PartGroup, Quantization,
+                            Units)
+
+from . import reference
+from .build import (CUBE, SPEC_HEADER, box, finish, frame, header_json, rounded, stored_planes,
+                    world_matrices)
+
+#: Relative tolerance of geometry comparisons (see README.md).
+GEOMETRY_TOLERANCE = 1e-6
+
+KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
+
+
+@dataclass(frozen=True)
+class Obj:
+    name: str
+    parent: int | None = None
+    transform: np.ndarray | None = None
+    extra: bytes = b""  # OBJT fields of a newer minor version (spec §8.1)
+
+
+@dataclass(frozen=True)
+class Planes:
+    triplets: np.ndarray
+
+
+@dataclass(frozen=True)
+class Group:
+    obj: int
+    kind: int
+    refs: tuple[int, ...]
+    bounding: tuple[int, ...] = ()  # local indices of bounding / cut planes
+    cells: tuple[tuple[int, ...], ...] | None = None
+    tree: tuple[int, ...] | None = None
+    extra: bytes = b""  # kind data of a kind this version does not know
+
+
+@dataclass(frozen=True)
+class Colour:
+    group: int
+    rgba: np.ndarray
+
+
+@dataclass(frozen=True)
+class Chunk:
+    type: bytes
+    payload: bytes
+
+
+@dataclass(frozen=True)
+class ValidCase:
+    name: str
+    description: str
+    header: Header
+    ops: tuple
+    compress: bool = False
+    index: bool = True
+    stream: bool = False  # written through a non-seekable sink: the header cannot get its counts
+    decoded_bbox: bool = False  # header bbox = the decoded geometry's, rounded to 9 decimals
+    assembled_only: bool = False  # uses what a version 1.0 writer cannot write
+    header_flags: int = 0  # PHDR flag bits beyond the writer's (assembled cases only)
+    findings: tuple[str, ...] = ()
+    findings_optional: tuple[str, ...] = ()
+    table: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        planes = [op.triplets for op in self.ops if isinstance(op, Planes)]
+        raw = np.concatenate(planes) if planes else np.zeros((0, 3))
+        object.__setattr__(self, "table", stored_planes(raw, self.header.coding, self.header.quantization))
+
+    @property
+    def objects(self) -> list[Obj]:
+        return [op for op in self.ops if isinstance(op, Obj)]
+
+    @property
+    def groups(self) -> list[Group]:
+        return [op for op in self.ops if isinstance(op, Group)]
+
+    @property
+    def counts(self) -> tuple[int, int, int] | None:
+        return None if self.stream else (len(self.table), len(self.objects), len(self.groups))
+
+
+def _role_bits(g: Group) -> np.ndarray:
+    bits = np.zeros(len(g.refs), dtype=bool)
+    bits[list(g.bounding)] = True
+    return bits
+
+
+def _cells(g: Group):
+    return None if g.cells is None else tuple(np.array(c, dtype=np.uint32) for c in g.cells)
+
+
+def _tree(g: Group):
+    return None if g.tree is None else np.array(g.tree, dtype=np.uint32)
+
+
+class _Pipe(io.RawIOBase):
+    """A write-only, non-seekable sink, as a pipe or socket is."""
+
+    def __init__(self) -> None:
+        self.data = bytearray()
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, b) -> int:
+        self.data += b
+        return len(b)
+
+
+def written(case: ValidCase, header: Header) -> bytes:
+    """The file as ``planefmt.Writer`` writes it."""
+    sink = _Pipe() if case.stream else io.BytesIO()
+    with planefmt.Writer(sink, header, compress=case.compress, index=case.index) as w:
+        for op in case.ops:
+            if isinstance(op, Obj):
+                w.add_object(op.name, op.parent, op.transform)
+            elif isinstance(op, Planes):
+                w.add_planes(op.triplets)
+            elif isinstance(op, Group):
+                w.add_group(op.obj, op.kind, np.array(op.refs), _role_bits(op), cells=_cells(op), tree=_tree(op),
+                            extra=op.extra)
+            elif isinstance(op, Colour):
+                w.add_colours(op.group, op.rgba)
+            else:
+                w.add_chunk(op.type, op.payload)
+    return bytes(sink.data) if case.stream else sink.getvalue()
+
+
+def assembled(case: ValidCase, header: Header) -> bytes:
+    """The file assembled chunk by chunk from planefmt's payload encoders and ``chunk_bytes``."""
+    counts = case.counts or (None, None, None)
+    header = dataclasses.replace(header, plane_count=counts[0], object_count=counts[1], group_count=counts[2])
+    phdr = bytearray(records.encode_header(header))
+    phdr[2:4] = (int.from_bytes(phdr[2:4], "little") | case.header_flags).to_bytes(2, "little")
+    layout = [(schema.PHDR, bytes(phdr))]
+    planes = objects = groups = 0
+    for op in case.ops:
+        if isinstance(op, Obj):
+            rec = ObjectRecord(objects, op.name, op.parent, op.transform)
+            layout.append((schema.OBJT, records.encode_object(rec) + op.extra))
+            objects += 1
+        elif isinstance(op, Planes):
+            layout.append((schema.PLNS, records.encode_planes(planes, op.triplets, header, case.compress)))
+            planes += len(op.triplets)
+        elif isinstance(op, Group):
+            rec = PartGroup(groups, op.obj, op.kind, np.array(op.refs, dtype=np.uint32), _role_bits(op),
+                            cells=_cells(op), tree=_tree(op), extra=op.extra)
+            layout.append((schema.GRUP, records.encode_group(rec, case.compress)))
+            groups += 1
+        elif isinstance(op, Colour):
+            layout.append((schema.COLR, records.encode_colours(Colours(op.group, op.rgba))))
+        else:
+            layout.append((op.type, op.payload))
+    return frame(finish(layout, case.index))
+
+
+def geometry(case: ValidCase) -> tuple[dict, np.ndarray | None]:
+    """The expected geometry section and the world bounding box of the decoded surface."""
+    worlds = world_matrices([(o.parent, o.transform) for o in case.objects])
+    summaries, corners = [], []
+    for g in case.groups:
+        if g.kind not in KNOWN_KINDS:
+            summaries.append(None)  # skipped: SKIPPED_GROUP_KIND
+            continue
+        s, points = reference.summary(g.kind, case.table[list(g.refs)], _role_bits(g), g.cells, g.tree)
+        summaries.append({k: v if k in ("vertices", "triangles") else rounded(v) for k, v in s.items()})
+        corners.append(points @ worlds[g.obj][:3, :3].T + worlds[g.obj][:3, 3])
+    world = None
+    if corners:
+        points = np.concatenate(corners)
+        world = np.array(rounded([points.min(axis=0), points.max(axis=0)]))
+    section = {"tolerance": GEOMETRY_TOLERANCE, "world_bbox": None if world is None else world.tolist(),
+               "groups": summaries}
+    return section, world
+
+
+def expected(case: ValidCase, header: Header, geo: dict) -> dict:
+    objects = [{"name": o.name, "parent": o.parent,
+                "transform": None if o.transform is None else np.asarray(o.transform, float).ravel().tolist()}
+               for o in case.objects]
+    groups = []
+    for i, g in enumerate(case.groups):
+        entry = {"index": i, "object": g.obj, "kind": g.kind, "refs": list(g.refs), "bounding": list(g.bounding)}
+        if g.cells is not None:
+            entry["cells"] = [list(c) for c in g.cells]
+        if g.tree is not None:
+            entry["tree"] = list(g.tree)
+        groups.append(entry)
+    colours = [{"group": op.group, "rgba": np.asarray(op.rgba).tolist()} for op in case.ops
+               if isinstance(op, Colour)]
+    return {
+        "header": header_json(header, case.counts),
+        "planes": case.table.tolist(),
+        "objects": objects,
+        "groups": groups,
+        "colours": colours,
+        "findings": sorted(set(case.findings)),
+        "findings_optional": sorted(set(case.findings_optional)),
+        "geometry": geo,
+    }
+
+
+def build(case: ValidCase) -> tuple[bytes, dict]:
+    """The file's bytes and its expected result."""
+    geo, world = geometry(case)
+    header = case.header
+    if case.decoded_bbox:
+        header = dataclasses.replace(header, bbox=world)
+    data = assembled(case, header)
+    if not case.assembled_only:
+        by_writer = written(case, header)
+        if by_writer != data:
+            raise AssertionError(f"{case.name}: planefmt.Writer and the chunk assembler disagree")
+    return data, expected(case, header, geo)
+
+
+# -- shapes ----------------------------------------------------------------------------------
+
+#: A convex "gem" of ten planes at irregular angles and distances (every plane bounds a face).
+GEM = np.array([
+    [0.0, 0.0, 1.0], [math.pi, 0.0, 0.9],
+    [1.1, 0.3, 1.1], [1.2, 1.9, 0.95], [1.0, 3.4, 1.05], [1.3, 4.6, 0.9], [1.15, 5.9, 1.0],
+    [2.0, 1.0, 1.2], [2.1, 2.8, 0.85], [1.9, 5.0, 1.1],
+])
+
+
+def tangent_planes(n: int) -> np.ndarray:
+    """Planes tangent to the unit sphere at a Fibonacci lattice of ``n`` points.
+
+    Angles are rounded to 6 decimals so that the file does not depend on the
+    last bits of the platform's acos.
+    """
+    golden = math.pi * (3.0 - math.sqrt(5.0))
+    return np.array([[round(math.acos(1.0 - 2.0 * (i + 0.5) / n), 6), round(i * golden % (2 * math.pi), 6), 1.0]
+                     for i in range(n)])
+
+
+def affine(linear, x: float = 0.0, y: float = 0.0, z: float = 0.0) -> np.ndarray:
+    """The 4x4 matrix of ``p -> linear p + (x, y, z)``."""
+    m = np.eye(4)
+    m[:3, :3] = linear
+    m[:3, 3] = (x, y, z)
+    return m
+
+
+def translation(x: float, y: float, z: float) -> np.ndarray:
+    return affine(np.eye(3), x, y, z)
+
+
+def cube_ops(*extra_ops) -> tuple:
+    return (Obj("cube"), Planes(CUBE), Group(0, GroupKind.CONVEX, tuple(range(6))), *extra_ops)
+
+
+def quantized(bits: tuple[int, int, int], h_range: tuple[float, float]) -> Header:
+    return Header(lossy=True, coding=Coding.QUANTIZED, quantization=Quantization(*bits, *h_range),
+                  units=Units.METRE)
+
+
+#: The L-shaped solid [0,2]x[0,1]x[0,1] u [0,1]x[0,2]x[0,1]: its eight face planes, then the cut
+#: x = y through the inner corner, which splits it into two convex quadrilateral prisms.
+L_PLANES = np.array([
+    [math.pi / 2, 1.5 * math.pi, 0.0],  # 0: y >= 0
+    [math.pi / 2, 0.0, 2.0],  # 1: x <= 2
+    [math.pi / 2, math.pi / 2, 1.0],  # 2: y <= 1 (face for 1 <= x <= 2)
+    [math.pi / 2, 0.0, 1.0],  # 3: x <= 1 (face for 1 <= y <= 2)
+    [math.pi / 2, math.pi / 2, 2.0],  # 4: y <= 2
+    [math.pi / 2, math.pi, 0.0],  # 5: x >= 0
+    [0.0, 0.0, 1.0],  # 6: z <= 1
+    [math.pi, 0.0, 0.0],  # 7: z >= 0
+    [math.pi / 2, 1.75 * math.pi, 0.0],  # 8: x - y <= 0, a cut plane
+])
+IN, OUT = reference.BSP_IN, reference.BSP_OUT
+#: Cells of the L (entries 2 j + s): the prism below the cut x = y uses its complement (17 = 2*8 + 1).
+L_CELLS = ((0, 2, 4, 17, 12, 14), (6, 8, 10, 16, 12, 14))
+#: A tree of the L over its eight face planes: split on y <= 1, then each side is a chain of splits.
+L_TREE = (2, 0, 1, 5, 6, 7, IN, OUT, OUT, OUT, OUT, OUT, 3, 4, 5, 6, 7, IN, OUT, OUT, OUT, OUT, OUT)
+
+_scene_planes_leg = np.array([
+    [math.pi / 2, math.nextafter(2 * math.pi, 0.0), 0.1],  # x <= 0.1 with phi just below 2 pi
+    [math.pi / 2, math.pi / 2, 0.1],  # y <= 0.1
+    [0.0, 1.0, 1.0],  # z <= 1 at the pole, phi = 1 (writers SHOULD store 0; readers take any)
+])
+
+_rgba = np.array([[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255, 255, 0, 128],
+                  [0, 255, 255, 0], [255, 0, 255, 255]], dtype=np.uint8)
+
+CASES = [
+    ValidCase("cube_float32", "the unit cube of spec §12, float32, metres, with index: the 401 bytes printed there",
+              SPEC_HEADER, cube_ops()),
+    ValidCase("cube_float64", "the unit cube of spec §12 in float64",
+              dataclasses.replace(SPEC_HEADER, coding=Coding.FLOAT64), cube_ops()),
+    ValidCase("cube_noindex", "the spec §12 cube without iNDX: PEND index_offset 0",
+              SPEC_HEADER, cube_ops(), index=False),
+    ValidCase("cube_colours", "the spec §12 cube with a cOLR chunk, one RGBA colour per face",
+              SPEC_HEADER, cube_ops(Colour(0, _rgba))),
+    ValidCase("cube_ancillary", "the spec §12 cube with an unknown ancillary chunk nOTE between OBJT and PLNS",
+              SPEC_HEADER, (Obj("cube"), Chunk(b"nOTE", b"an ancillary chunk no reader knows; skip it"),
+                            Planes(CUBE), Group(0, GroupKind.CONVEX, tuple(range(6)))),
+              findings=("UNKNOWN_ANCILLARY_CHUNK",)),
+    ValidCase("cube_q16_16_16", "the unit cube quantized at 16/16/16 bits, lossless: poles, equator, axis "
+              "directions and both ends of the h range [0, 1] are exact codes",
+              dataclasses.replace(quantized((16, 16, 16), (0.0, 1.0)), lossy=False, tolerance=1e-6,
+                                  error_bound=0.0),
+              cube_ops(), decoded_bbox=True),
+    ValidCase("gem_q11_13_17", "a ten-plane convex gem quantized at odd widths 11/13/17, h range [-1, 2]",
+              quantized((11, 13, 17), (-1.0, 2.0)), (Obj("gem"), Planes(GEM), Group(0, 0, tuple(range(10)))),
+              decoded_bbox=True),
+    ValidCase("gem_q7_9_5", "the gem quantized coarsely at 7/9/5 bits (records straddle bytes, 2 padding bits)",
+              quantized((7, 9, 5), (0.5, 1.5)), (Obj("gem"), Planes(GEM), Group(0, 0, tuple(range(10)))),
+              decoded_bbox=True),
+    ValidCase("gem_q24_24_24", "the gem quantized at 24/24/24 bits",
+              quantized((24, 24, 24), (0.0, 2.0)), (Obj("gem"), Planes(GEM), Group(0, 0, tuple(range(10)))),
+              decoded_bbox=True),
+    ValidCase("gem_q32_32_32", "the gem quantized at the widest widths, 32/32/32 bits",
+              quantized((32, 32, 32), (-1000.0, 1000.0)),
+              (Obj("gem"), Planes(GEM), Group(0, 0, tuple(range(10)))), decoded_bbox=True),
+    ValidCase("prism_q2_3_1", "an octagonal prism at narrow widths 2/3/1 (nu codes 0..2: poles and equator), "
+              "with h_min = h_max = 1", quantized((2, 3, 1), (1.0, 1.0)),
+              (Obj("prism"), Planes(np.array([[0.0, 0.0, 1.0], [math.pi, 0.0, 1.0]] + [
+                  [math.pi / 2, k * math.pi / 4, 1.0] for k in range(8)])),
+               Group(0, 0, tuple(range(10)))), decoded_bbox=True),
+    ValidCase("sphere200", "200 planes tangent to the unit sphere, one convex group, float32, uncompressed",
+              Header(coding=Coding.FLOAT32, units=Units.METRE),
+              (Obj("sphere"), Planes(tangent_planes(200)), Group(0, 0, tuple(range(200)))), decoded_bbox=True),
+    ValidCase("sphere200_zlib", "sphere200 with zlib-compressed PLNS data and GRUP body",
+              Header(coding=Coding.FLOAT32, units=Units.METRE),
+              (Obj("sphere"), Planes(tangent_planes(200)), Group(0, 0, tuple(range(200)))), decoded_bbox=True,
+              compress=True),
+    ValidCase("stream_nocounts", "two objects written through a non-seekable sink: COUNTS_KNOWN clear, "
+              "counts 0, index present", Header(coding=Coding.FLOAT64, units=Units.MILLIMETRE),
+              (Obj("cube"), Planes(CUBE), Group(0, 0, tuple(range(6))),
+               Obj("gem", transform=translation(3.0, 0.0, 0.0)), Planes(GEM), Group(1, 0, tuple(range(6, 16)))),
+              stream=True),
+    ValidCase("scene_hierarchy", "five objects, parents and transforms (translation, rotation with scale, "
+              "mirror), planes shared between groups, several PLNS blocks, an empty name, a group-less node",
+              Header(coding=Coding.FLOAT64, units=Units.CENTIMETRE),
+              (Obj("table", transform=translation(10.0, 0.0, 0.0)),
+               Obj("top", parent=0, transform=translation(0.0, 0.0, 1.0)),
+               Planes(CUBE), Group(1, 0, tuple(range(6))),
+               Planes(box((1, 0, 0), (2, 1, 1))[[0, 2]]), Group(1, 0, (6, 1, 7, 3, 4, 5)),
+               Obj("leg", parent=0), Planes(_scene_planes_leg), Group(2, 0, (8, 9, 2, 3, 10, 5)),
+               Obj("", parent=2, transform=affine([[0, -2, 0], [2, 0, 0], [0, 0, 2]], 0.5, 0.5)),
+               Group(3, 0, tuple(range(6))),
+               Obj("Würfel ✓", transform=affine(np.diag([-1.0, 1.0, 1.0]), -3.0)),
+               Group(4, 0, tuple(range(6)))),
+              decoded_bbox=True),
+    ValidCase("cells_l", "an L-shaped solid as kind 1: two convex cells split by the cut plane x = y "
+              "(role bit set), one using its complement", Header(coding=Coding.FLOAT64, units=Units.METRE),
+              (Obj("L"), Planes(L_PLANES),
+               Group(0, GroupKind.CELLS, tuple(range(9)), bounding=(8,), cells=L_CELLS)),
+              decoded_bbox=True),
+    ValidCase("bsp_l", "the same L as kind 2, a BSP tree splitting first on the face plane y = 1: the two IN "
+              "leaves touch on y = 1, where the surface is only 1 <= x <= 2",
+              Header(coding=Coding.FLOAT64, units=Units.METRE),
+              (Obj("L"), Planes(L_PLANES[:8]),
+               Group(0, GroupKind.BSP, tuple(range(8)), tree=L_TREE)),
+              decoded_bbox=True),
+    ValidCase("patch_convex", "kind 3: an open box (bottom and four sides) cut by one slanted bounding plane",
+              Header(coding=Coding.FLOAT64, units=Units.METRE),
+              (Obj("open box"),
+               Planes(np.vstack([box((0, 0, 0), (1, 1, 1))[[0, 1, 2, 3, 5]], [[0.46, math.pi, 0.8]]])),
+               Group(0, GroupKind.PSEUDO_CONVEX, tuple(range(6)), bounding=(5,))),
+              decoded_bbox=True),
+    ValidCase("patch_concave", "kind 4: the inside of a tray 2 x 1 x 0.5, stored inverted (an outward box with a "
+              "bounding lid), decoded with faces flipped to point inwards",
+              Header(coding=Coding.FLOAT64, units=Units.METRE),
+              (Obj("tray"), Planes(box((0, 0, 0), (2, 1, 0.5))),
+               Group(0, GroupKind.PSEUDO_CONCAVE, tuple(range(6)), bounding=(4,))),
+              decoded_bbox=True),
+    ValidCase("minor_1_1", "version 1.1: 8 more PHDR bytes and a new flag bit, 5 more OBJT bytes after the "
+              "transform, a group of unknown kind 9 (skipped) between two known ones",
+              dataclasses.replace(SPEC_HEADER, version=(1, 1), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
+              (Obj("cube", transform=translation(0.5, 0.0, 0.0), extra=b"later"), Planes(CUBE),
+               Group(0, 0, tuple(range(6))), Group(0, 9, tuple(range(6)), bounding=(4, 5), extra=b"\x00\x01\x02\x03"),
+               Group(0, GroupKind.PSEUDO_CONVEX, tuple(range(6)), bounding=(4,))),
+              decoded_bbox=True, assembled_only=True, header_flags=0x0100,
+              findings=("SKIPPED_GROUP_KIND",), findings_optional=("NEWER_MINOR_VERSION",)),
+    ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
+              Header(coding=Coding.FLOAT32), (), index=False),
+]

@@ -1,0 +1,231 @@
+"""Reference geometry of part groups (spec §8.2-§8.4), for the expected results of valid cases.
+
+Deliberately independent of planefmt's own decoder (``planefmt.halfspace``,
+``planefmt.codec``): the suite checks that decoder against this one. It is
+written for clarity on the handful of small groups the suite holds, not for
+speed: linear programs (scipy's HiGHS) decide emptiness and boundedness,
+Qhull's half-space intersection gives the vertices, and faces are polygons
+gathered plane by plane.
+
+Every function takes planes as ``omega`` (n, 3) unit outward normals and
+``h`` (n,) in model units, the solid side being ``omega . x <= h``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import linprog
+from scipy.spatial import HalfspaceIntersection
+
+#: Candidate vertices closer than this fraction of the polytope's extent are one vertex,
+#: and a vertex this close to a plane lies on it. Qhull's vertices are good to ~1e-15.
+WELD = 1e-9
+
+#: Vertex and triangle counts are only stated where distinct vertices are at least this
+#: fraction of the extent apart, so that no sane decoder's vertex welding can change them.
+DISTINCT = 1e-5
+
+#: Tokens of spec §8.4.
+BSP_IN, BSP_OUT = 0xFFFFFFFE, 0xFFFFFFFF
+
+
+class Defect(Exception):
+    """The planes do not describe a valid part group; ``code`` is the spec's error code."""
+
+    def __init__(self, code: str, reason: str) -> None:
+        super().__init__(reason)
+        self.code = code
+
+
+@dataclass(frozen=True)
+class Face:
+    """A convex polygon of a polytope: vertices counter-clockwise seen from outside."""
+
+    normal: np.ndarray  # (3,) outward unit normal
+    offset: float  # normal . x = offset on the face
+    points: np.ndarray  # (k, 3)
+    plane: int  # row of the half-space it lies on
+
+    @property
+    def area_vector(self) -> np.ndarray:
+        p = self.points
+        return 0.5 * np.cross(p[1:-1] - p[0], p[2:] - p[0]).sum(axis=0)
+
+    @property
+    def area(self) -> float:
+        return float(np.linalg.norm(self.area_vector))
+
+
+def planes_of(triplets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(omega, h)`` of triplets ``(nu, phi, h)`` (spec §2.2)."""
+    t = np.asarray(triplets, dtype=np.float64).reshape(-1, 3)
+    s = np.sin(t[:, 0])
+    omega = np.column_stack([s * np.cos(t[:, 1]), s * np.sin(t[:, 1]), np.cos(t[:, 0])])
+    return omega, t[:, 2].copy()
+
+
+def convex_faces(omega: np.ndarray, h: np.ndarray) -> list[Face]:
+    """Faces of ``{x : omega_i . x <= h_i}``; raises ``Defect`` if it is empty, flat or unbounded."""
+    free = [(None, None)] * 3
+    extent = []
+    for axis in range(3):
+        for sign in (1.0, -1.0):
+            c = np.zeros(3)
+            c[axis] = -sign
+            res = linprog(c, A_ub=omega, b_ub=h, bounds=free, method="highs")
+            if res.status == 2:
+                raise Defect("EMPTY_POLYTOPE", "the half-spaces have no common point")
+            if res.status == 3:
+                raise Defect("UNBOUNDED_POLYTOPE", "the half-spaces do not bound a finite region")
+            extent.append(res.x[axis])
+    size = float(np.linalg.norm(np.array(extent[0::2]) - np.array(extent[1::2])))
+    # Chebyshev centre: the deepest point, and the radius of the largest ball inside.
+    res = linprog([0, 0, 0, -1.0], A_ub=np.column_stack([omega, np.ones(len(h))]), b_ub=h,
+                  bounds=free + [(0, None)], method="highs")
+    if not res.x[3] > WELD * size:
+        raise Defect("EMPTY_POLYTOPE", "the intersection has no interior")
+    points = HalfspaceIntersection(np.column_stack([omega, -h]), res.x[:3]).intersections
+    vertices = _weld(points, WELD * size)
+    faces = []
+    for i, (n, d) in enumerate(zip(omega, h)):
+        on = vertices[np.abs(vertices @ n - d) <= WELD * size]
+        if len(on) < 3:
+            continue  # the plane touches the polytope at a point or an edge: no face
+        centre = on.mean(axis=0)
+        e1 = np.cross(n, np.eye(3)[np.argmin(np.abs(n))])
+        e1 /= np.linalg.norm(e1)
+        e2 = np.cross(n, e1)  # (e1, e2, n) right-handed: ascending angle is counter-clockwise
+        angle = np.arctan2((on - centre) @ e2, (on - centre) @ e1)
+        faces.append(Face(n, float(d), on[np.argsort(angle)], i))
+    return faces
+
+
+def _weld(points: np.ndarray, tol: float) -> np.ndarray:
+    """One point per cluster of points within ``tol`` (degenerate vertices come several times)."""
+    out = []
+    left = np.asarray(points, dtype=np.float64)
+    while len(left):
+        near = np.linalg.norm(left - left[0], axis=1) <= tol
+        out.append(left[near].mean(axis=0))
+        left = left[~near]
+    return np.array(out)
+
+
+def flipped(face: Face) -> Face:
+    return Face(-face.normal, -face.offset, face.points[::-1], face.plane)
+
+
+def _overlap(face: Face, other: Face) -> float:
+    """Area common to two coplanar, oppositely oriented convex faces."""
+    e1 = face.points[1] - face.points[0]
+    e1 /= np.linalg.norm(e1)
+    e2 = np.cross(face.normal, e1)
+    origin = face.points[0]
+
+    def flat(p: np.ndarray) -> list[np.ndarray]:
+        return list(np.column_stack([(p - origin) @ e1, (p - origin) @ e2]))
+
+    subject = flat(face.points)
+    clip = flat(other.points[::-1])  # reversed: counter-clockwise in this face's basis too
+    # Sutherland-Hodgman: keep the part of the subject left of every clip edge.
+    for a, b in zip(clip, clip[1:] + clip[:1]):
+        if not subject:
+            return 0.0
+        edge = b - a
+        side = [edge[0] * (p - a)[1] - edge[1] * (p - a)[0] for p in subject]
+        kept = []
+        for k, p in enumerate(subject):
+            q, sq = subject[k - 1], side[k - 1]
+            if (side[k] >= 0) != (sq >= 0):
+                kept.append(q + (p - q) * (sq / (sq - side[k])))
+            if side[k] >= 0:
+                kept.append(p)
+        subject = kept
+    if len(subject) < 3:
+        return 0.0
+    x, y = np.array(subject).T
+    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+
+
+def _cell_faces(omega: np.ndarray, h: np.ndarray, entries) -> list[Face]:
+    """Faces of one cell: entries ``2 j + s`` of local planes, ``s = 1`` for the complement."""
+    j = np.asarray(entries, dtype=np.int64) >> 1
+    sign = np.where(np.asarray(entries) & 1, -1.0, 1.0)
+    faces = convex_faces(omega[j] * sign[:, None], h[j] * sign)
+    return [Face(f.normal, f.offset, f.points, int(j[f.plane])) for f in faces]
+
+
+def bsp_cells(tokens, m: int) -> list[list[int]]:
+    """The IN leaves of a preorder BSP token stream (spec §8.4), as cell entry lists."""
+    cells: list[list[int]] = []
+    stack = [[]]  # half-spaces of the region each pending subtree covers
+    for t in (int(x) for x in tokens):
+        region = stack.pop()
+        if t == BSP_IN:
+            cells.append(region)
+        elif t != BSP_OUT:
+            assert t < m
+            stack.append(region + [2 * t + 1])  # outer subtree, visited after the inner one
+            stack.append(region + [2 * t])
+    return cells
+
+
+def _solid_union(cells: list[list[Face]], size: float) -> tuple[float, np.ndarray]:
+    """Area and area vector of the boundary of a union of convex cells with disjoint interiors.
+
+    A face fragment is interior exactly where another cell's face lies on the
+    same plane facing the other way; everything else is surface.
+    """
+    area, vector = 0.0, np.zeros(3)
+    for c, faces in enumerate(cells):
+        for f in faces:
+            hidden = sum(_overlap(f, g) for d, other in enumerate(cells) if d != c for g in other
+                         if f.normal @ g.normal < -1 + 1e-12 and abs(f.offset + g.offset) <= WELD * size)
+            visible = f.area - hidden
+            area += visible
+            vector += f.normal * visible
+    return area, vector
+
+
+def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None,
+            tree=None) -> tuple[dict, np.ndarray]:
+    """The geometry summary of the conformance contract for one group (see README.md).
+
+    ``triplets`` (m, 3) are the planes of the group's references in order;
+    ``bounding`` (m,) its role bits. Returns the summary and the vertices of
+    the decoded surface (local coordinates, with repeats); raises ``Defect``
+    for invalid geometry.
+    """
+    omega, h = planes_of(triplets)
+    volume = None
+    if kind in (0, 3, 4):
+        faces = convex_faces(omega, h)
+        if kind == 0:
+            if len(faces) < len(h):
+                raise Defect("REDUNDANT_PLANE", "a plane of the convex group bounds no face")
+            volume = sum(f.area * f.offset for f in faces) / 3.0  # divergence theorem
+        else:
+            faces = [f for f in faces if not bounding[f.plane]]
+            if kind == 4:
+                faces = [flipped(f) for f in faces]
+        points = np.concatenate([f.points for f in faces])
+        vertices = _weld(points, WELD * float(np.linalg.norm(np.ptp(points, axis=0))))
+        area = sum(f.area for f in faces)
+        vector = sum(f.area_vector for f in faces)
+        counts = (len(vertices), sum(len(f.points) - 2 for f in faces))
+        gaps = np.linalg.norm(vertices[:, None] - vertices[None], axis=2) + np.eye(len(vertices)) * 1e300
+        if gaps.min() < DISTINCT * np.linalg.norm(np.ptp(vertices, axis=0)):
+            raise ValueError("vertices too close together for the counts to be unambiguous")
+    else:
+        entries = cells if kind == 1 else bsp_cells(tree, len(h))
+        cell_faces = [_cell_faces(omega, h, e) for e in entries]
+        points = np.concatenate([f.points for faces in cell_faces for f in faces])
+        area, vector = _solid_union(cell_faces, float(np.linalg.norm(np.ptp(points, axis=0))))
+        volume = sum(f.area * f.offset for faces in cell_faces for f in faces) / 3.0
+        counts = (None, None)  # how T-junctions are resolved is the decoder's choice
+    return {
+        "vertices": counts[0], "triangles": counts[1], "area": area, "area_vector": vector,
+        "volume": volume, "bbox": [points.min(axis=0), points.max(axis=0)],
+    }, points

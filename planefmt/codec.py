@@ -1,0 +1,774 @@
+"""The geometry codec: triangle meshes to part groups of planes and back, with verified error.
+
+Conventions (spec §2.2): planes ``(omega, h)`` with outward unit normals,
+the solid where ``omega . x <= h``; triplets ``(nu, phi, h)`` in radians,
+radians, model units; triangles counter-clockwise seen from outside.
+Tolerances and error bounds are **fractions of the bounding-box diagonal**;
+distances are otherwise in model units.
+
+Encoding a mesh (:func:`encode_mesh`):
+
+1. Vertices are welded by position and adjacent coplanar triangles merged
+   into polygons, one plane each (:mod:`planefmt.polygonize`, coplanarity
+   tolerance ``min(5e-7, tolerance / 2)`` of the diagonal).
+2. Lossy options of the paper (§5 there): ``tau`` merges neighbouring planes
+   whose normals differ by less than ``tau`` radians, ``delta`` drops planes
+   whose faces cover less than ``delta`` of the total area.
+3. The mesh is split into bodies (edge-connected pieces). Each body goes to
+   the first strategy of :data:`BODY_STRATEGIES` that takes it; a strategy
+   returns the body's part groups. Today there is one: a closed, outward,
+   convex body (within the tolerance) becomes one ``CONVEX`` group.
+4. The triplet coding is chosen and **verified**: candidate codings are tried
+   cheapest first (quantized at increasing widths, then float32, then
+   float64); each candidate's planes go through :func:`quantize.roundtrip`
+   (exactly what a reader gets back), are decoded, and the two-sided
+   Hausdorff distance between decoded and source surface is measured
+   (:func:`planefmt.hausdorff.hausdorff`). The first that meets the tolerance
+   wins; its measured error is the header's ``error_bound``. A first-order
+   prediction of the vertex displacement (planes re-intersected at each
+   decoded vertex) skips widths that cannot pass without decoding them: where
+   faces meet at a small angle the vertex error grows like ``1 / sin angle``,
+   so the angles, not ``h``, set the widths.
+
+Decoding dispatches on ``group.kind`` through :data:`DECODERS`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
+from typing import BinaryIO, Protocol
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import ConvexHull, QhullError
+
+from . import quantize
+from .errors import CODES, GeometryError, PlnError
+from .halfspace import decode_convex, resolve_vertices
+from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
+from .model import Coding, GroupKind, Header, Mesh, Node, PartGroup, Quantization, Scene, Units
+from .planes import from_triplets, to_triplets, transform_points
+from .polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize
+from .reader import Reader
+from .validate import GROUP_CHECKS, Finding
+from .writer import Writer
+
+#: Quantized widths tried for nu and phi.
+MIN_BITS, MAX_BITS = 2, 32
+
+#: Verifications of quantized candidates that may fail before the float codings are tried.
+_MAX_FAILED = 3
+
+#: Attempts at a certified Hausdorff bound with a rising target (each 1.1x the last at least).
+_MEASURE_STEPS = 64
+
+#: Refinement budget of a pass/fail verification: a candidate whose bound cannot be certified
+#: within it counts as failed (the next, finer coding certifies far sooner).
+_VERIFY_PIECES = 100_000
+
+#: Rounds of mutual-best-pair merging for ``tau`` (each merges at least the closest pair).
+_TAU_ROUNDS = 64
+
+
+class GroupLike(Protocol):
+    """What decoding needs of a part group: a ``PartGroup`` from the reader or a :class:`GroupSpec`."""
+
+    kind: int
+    refs: np.ndarray
+    bounding: np.ndarray
+    cells: tuple[np.ndarray, ...] | None
+    tree: np.ndarray | None
+
+
+@dataclass(frozen=True)
+class GroupSpec:
+    """A part group as the encoder builds it: ``refs`` index the object's plane list."""
+
+    kind: GroupKind
+    refs: np.ndarray  # (m,) int64
+    bounding: np.ndarray  # (m,) bool: True for bounding/cut planes
+    cells: tuple[np.ndarray, ...] | None = None
+    tree: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class Body:
+    """One edge-connected piece of a mesh, as a strategy of :data:`BODY_STRATEGIES` sees it.
+
+    ``polygons`` is the lossless polygonization of the whole mesh and
+    ``faces`` the indices of this body's faces in it; ``face_plane`` gives
+    each of those faces' plane in the (possibly simplified) plane list
+    ``omega``, ``h`` (-1: the face's plane was dropped). ``tolerance`` is a
+    fraction of the diagonal.
+    """
+
+    polygons: Polygons
+    faces: np.ndarray
+    face_plane: np.ndarray
+    omega: np.ndarray
+    h: np.ndarray
+    tolerance: float
+
+
+@dataclass(frozen=True)
+class DecodedGroup:
+    """A decoded part group: triangles, and which local references each vertex lies on."""
+
+    vertices: np.ndarray  # (V, 3) model units
+    triangles: np.ndarray  # (T, 3) counter-clockwise from outside
+    inc_vertex: np.ndarray  # (I,) vertex of each incidence
+    inc_ref: np.ndarray  # (I,) local reference (index into group.refs) of each incidence
+    redundant: np.ndarray  # local references that bound no face
+
+
+@dataclass(frozen=True)
+class Encoded:
+    """A mesh encoded as planes.
+
+    ``triplets`` (n, 3) are the planes before coding (radians, model units);
+    ``groups`` reference them. ``coding`` and ``quantization`` are the chosen
+    coding; ``bbox`` (2, 3) the decoded geometry's box; ``tolerance`` the
+    requested and ``error_bound`` the verified two-sided Hausdorff distance,
+    both fractions of the bbox diagonal. ``lossy`` follows spec §5: planes
+    dropped or merged, or the error above the tolerance. ``mesh`` is what a
+    reader decodes; ``fit_error`` the largest vertex distance to a fitted
+    polygon plane, as a fraction of the diagonal.
+    """
+
+    triplets: np.ndarray
+    groups: tuple[GroupSpec, ...]
+    coding: Coding
+    quantization: Quantization | None
+    bbox: np.ndarray
+    tolerance: float
+    error_bound: float
+    lossy: bool
+    mesh: Mesh
+    fit_error: float
+
+    @property
+    def payload_bytes(self) -> int:
+        """Bytes of the uncompressed triplet data (spec §7)."""
+        return quantize.payload_size(len(self.triplets), self.coding, self.quantization)
+
+    def header(self, units: Units = Units.UNSPECIFIED) -> Header:
+        """The PHDR record for a file holding this mesh as its only object."""
+        return Header(lossy=self.lossy, coding=self.coding, quantization=self.quantization, units=units,
+                      bbox=self.bbox, tolerance=self.tolerance, error_bound=self.error_bound)
+
+
+# -- strategies: bodies to part groups ---------------------------------------------------------
+
+def is_convex(body: Body) -> bool:
+    """Whether the body bounds a convex solid, within ``body.tolerance`` of the diagonal.
+
+    Closed and consistently oriented with positive volume; at every edge
+    between two planes the far vertex of each side lies on the inner side of
+    the other's plane (up to the tolerance); and the volume equals its convex
+    hull's (which rules out surfaces that wind around a convex solid twice).
+    """
+    poly = body.polygons
+    eps = body.tolerance * poly.diagonal
+    f = poly.faces[body.faces]
+    edges = edge_adjacency(f, len(poly.vertices))
+    if not edges.closed:
+        return False
+    v = poly.vertices
+    centre = v[f].reshape(-1, 3).mean(axis=0)
+    p = v[f] - centre
+    volume = float(np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum()) / 6.0
+    if not volume > 0.0:
+        return False
+    plane = poly.face_plane[body.faces]
+    ta, sa = np.divmod(edges.a, 3)
+    tb, sb = np.divmod(edges.b, 3)
+    cross = (plane[ta] != plane[tb]) & (plane[ta] >= 0) & (plane[tb] >= 0)
+    for (t1, t2, s2) in ((ta, tb, sb), (tb, ta, sa)):
+        far = f[t2[cross], (s2[cross] + 2) % 3]
+        pl = plane[t1[cross]]
+        if (np.einsum("ij,ij->i", poly.omega[pl], v[far]) - poly.h[pl] > eps).any():
+            return False
+    area = float(poly.area[np.unique(plane[plane >= 0])].sum())
+    try:
+        hull = ConvexHull(v[np.unique(f)], qhull_options="Qt")
+    except QhullError:
+        return False
+    # A surface winding twice around a convex solid has twice its volume; 1e-9 allows rounding.
+    return abs(hull.volume - volume) <= 2.0 * eps * area + 1e-9 * hull.volume
+
+
+def encode_convex_body(body: Body) -> list[GroupSpec] | None:
+    """One ``CONVEX`` group of the body's planes, or None if the body is not convex."""
+    if not is_convex(body):
+        return None
+    refs = np.unique(body.face_plane[body.face_plane >= 0])
+    return [GroupSpec(GroupKind.CONVEX, refs, np.zeros(len(refs), dtype=bool))]
+
+
+#: Strategies tried in order for each body: ``(name, encode)``; ``encode`` returns the body's
+#: part groups or None when it does not apply. Solid decomposition (BSP, cells) and pseudo-convex
+#: or pseudo-concave patches for open surfaces are to be added here.
+BODY_STRATEGIES: list[tuple[str, Callable[[Body], list[GroupSpec] | None]]] = [
+    ("convex", encode_convex_body),
+]
+
+
+# -- decoders: part groups to triangles -------------------------------------------------------
+
+def decode_convex_group(planes: np.ndarray, group: GroupLike, label: object,
+                        error: PlaneError) -> DecodedGroup:
+    """A ``CONVEX`` group: the intersection of all its inner half-spaces (spec §8.2.1)."""
+    poly = decode_convex(planes, group=label, plane_error=error.of(planes), merge_limit=error.merge_limit)
+    inc_vertex, inc_ref = poly.incidences
+    return DecodedGroup(poly.vertices, poly.triangles, inc_vertex, inc_ref, poly.redundant)
+
+
+#: Decoder of each part-group kind: ``decode(planes, group, label, error)`` with ``planes`` the
+#: (m, 3) triplets of ``group.refs`` and ``error`` the coding's :class:`PlaneError`.
+DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], DecodedGroup]] = {
+    GroupKind.CONVEX: decode_convex_group,
+}
+
+
+@dataclass(frozen=True)
+class PlaneError:
+    """How far a coding may move a plane: ``angle`` radians for the normal, ``h`` model units plus
+    ``h_relative`` times the largest ``|h|`` of the part group for the distance.
+
+    ``merge_limit`` (model units) caps how far decoders may move vertices when they merge the
+    clusters such errors make: half the file's tolerance, so merging stays within what the
+    encoder verifies.
+    """
+
+    angle: float = 0.0
+    h: float = 0.0
+    h_relative: float = 0.0
+    merge_limit: float = math.inf
+
+    def of(self, planes: np.ndarray) -> tuple[float, float]:
+        """``(radians, model units)`` for the triplets ``planes`` of one part group."""
+        h_max = float(np.abs(planes[:, 2]).max(initial=0.0))
+        return self.angle, self.h + self.h_relative * h_max
+
+
+EXACT = PlaneError()
+
+
+def plane_error(coding: Coding, quantization: Quantization | None, tolerance: float = math.nan,
+                diagonal: float = math.nan) -> PlaneError:
+    """Half a step for quantized planes, half a float32 ulp for float32, nothing for float64.
+
+    Decoders merge the vertex clusters this much error makes of vertices
+    where several planes meet, moving vertices by at most half of
+    ``tolerance`` (fraction) x ``diagonal`` (model units) where both are
+    known; the encoder verifies that very decoding.
+    """
+    limit = 0.5 * tolerance * diagonal
+    limit = limit if math.isfinite(limit) else math.inf
+    if coding == Coding.QUANTIZED and quantization is not None:
+        nu, phi, h = quantize.half_steps(quantization)
+        return PlaneError(angle=float(max(nu, phi)), h=float(h), merge_limit=limit)
+    if coding == Coding.FLOAT32:
+        return PlaneError(angle=float(np.spacing(np.float32(2 * math.pi))) / 2, h_relative=2.0 ** -24,
+                          merge_limit=limit)
+    return EXACT
+
+
+def header_plane_error(header: Header) -> PlaneError:
+    """The :func:`plane_error` of a file's coding, tolerance and bbox."""
+    return plane_error(header.coding, header.quantization, header.tolerance, header.diagonal)
+
+
+def decode_group(planes: np.ndarray, group: GroupLike, label: object = None,
+                 error: PlaneError = EXACT) -> DecodedGroup:
+    """Decode one part group from the triplets ``planes`` (m, 3) of its references.
+
+    ``error`` is the coding's :func:`plane_error` (exact planes by default).
+    """
+    decoder = DECODERS.get(int(group.kind))
+    if decoder is None:
+        try:
+            name = GroupKind(group.kind).name
+        except ValueError:
+            name = f"kind {group.kind}"
+        raise GeometryError(f"part group {label}: decoding {name} groups is not implemented yet",
+                            code="UNKNOWN_GROUP_KIND")
+    planes = np.asarray(planes, dtype=np.float64).reshape(-1, 3)
+    return decoder(planes, group, label, error)
+
+
+def decode_mesh(source: Encoded | np.ndarray, groups: Iterable[GroupLike] | None = None, *,
+                header: Header | None = None) -> Mesh:
+    """Triangles of part groups: ``decode_mesh(triplets, groups, header=...)`` or ``decode_mesh(encoded)``.
+
+    ``triplets`` (n, 3) is the plane table the groups' ``refs`` index, as a
+    reader returns it; ``header`` (its coding) sets the plane error the
+    decoder allows for (exact planes without it). For an :class:`Encoded`,
+    its planes go through the coding first, so the result is what a reader
+    of its file decodes. Raises ``GeometryError`` (e.g. ``EMPTY_POLYTOPE``,
+    ``UNBOUNDED_POLYTOPE``) naming the group.
+    """
+    if isinstance(source, Encoded):
+        table = quantize.roundtrip(source.triplets, source.coding, source.quantization)
+        groups = source.groups
+        error = plane_error(source.coding, source.quantization, source.tolerance,
+                            float(np.linalg.norm(source.bbox[1] - source.bbox[0])))
+    else:
+        table = np.asarray(source, dtype=np.float64).reshape(-1, 3)
+        error = EXACT if header is None else header_plane_error(header)
+    return _concatenate([decode_group(table[np.asarray(g.refs, dtype=np.int64)], g, i, error)
+                         for i, g in enumerate(groups or ())])
+
+
+def _concatenate(parts: Sequence[DecodedGroup]) -> Mesh:
+    if not parts:
+        return Mesh(np.empty((0, 3)), np.empty((0, 3), dtype=np.int64))
+    offsets = np.cumsum([0] + [len(p.vertices) for p in parts[:-1]])
+    return Mesh(np.concatenate([p.vertices for p in parts]),
+                np.concatenate([p.triangles + o for p, o in zip(parts, offsets)]).astype(np.int64))
+
+
+# -- encoding ---------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Object:
+    """A mesh prepared for coding: its planes, groups and source surface (local coordinates)."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    triplets: np.ndarray
+    groups: tuple[GroupSpec, ...]
+    world: np.ndarray
+    simplified: bool
+    fit: float  # model units
+
+
+def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1e-6,
+                coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
+                delta: float | None = None, tau: float | None = None) -> Encoded:
+    """Encode a triangle mesh (model units, counter-clockwise from outside) as planes.
+
+    ``tolerance``: the two-sided Hausdorff distance allowed between decoded
+    and source surface, as a fraction of the bbox diagonal (default 1e-6,
+    "lossless"). ``coding``/``bits`` force a coding (``bits`` one width for
+    nu, phi and h, or a triple; implies quantized); a forced coding is not
+    held to the tolerance: its measured error is reported. ``delta``
+    (fraction of the total area) and ``tau`` (radians) simplify the planes;
+    then ``tolerance`` bounds the error the *coding* adds to the simplified
+    planes' own, and the total is measured and recorded.
+
+    Raises ``GeometryError``: ``DEGENERATE_GEOMETRY`` for malformed input or a
+    body no strategy takes (today: anything not convex), ``TOLERANCE_NOT_MET``
+    when no coding meets the tolerance.
+    """
+    obj = _prepare(vertices, faces, np.eye(4), tolerance, delta, tau)
+    choice = _choose([obj], tolerance, coding, bits)
+    return Encoded(triplets=obj.triplets, groups=obj.groups, coding=choice.coding,
+                   quantization=choice.quantization, bbox=choice.bbox, tolerance=float(tolerance),
+                   error_bound=choice.error_bound, lossy=choice.lossy, mesh=choice.meshes[0],
+                   fit_error=obj.fit / choice.diagonal)
+
+
+def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, tolerance: float,
+             delta: float | None, tau: float | None) -> _Object:
+    if not (math.isfinite(tolerance) and tolerance > 0):
+        raise GeometryError(f"tolerance must be a positive fraction of the diagonal, not {tolerance}")
+    for name, value in (("delta", delta), ("tau", tau)):
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise GeometryError(f"{name} must be a non-negative number, not {value}")
+    poly = polygonize(vertices, faces, tolerance=min(COPLANAR_TOLERANCE, tolerance / 2))
+    omega, h, face_plane = poly.omega, poly.h, poly.face_plane
+    if tau:
+        omega, h, face_plane = merge_planes(poly, tau)
+    if delta:
+        face_plane = drop_planes(poly, face_plane, delta)
+    simplified = bool(tau) or bool(delta)
+    body_of_face = _bodies(poly)
+    by_body = np.argsort(body_of_face, kind="stable")
+    groups: list[GroupSpec] = []
+    for b, faces_b in enumerate(np.split(by_body, np.cumsum(np.bincount(body_of_face))[:-1])):
+        body = Body(poly, faces_b, face_plane[faces_b], omega, h, tolerance)
+        groups.extend(_encode_body(body, b))
+    # Keep only the planes the groups use, numbered in first-use order.
+    used = np.concatenate([g.refs for g in groups])
+    _, first = np.unique(used, return_index=True)
+    order = used[np.sort(first)]
+    index = np.full(len(h), -1, dtype=np.int64)
+    index[order] = np.arange(len(order))
+    groups = [GroupSpec(g.kind, index[g.refs], g.bounding, g.cells, g.tree) for g in groups]
+    return _Object(vertices=poly.vertices, faces=poly.faces, triplets=to_triplets(omega[order], h[order]),
+                   groups=tuple(groups), world=world, simplified=simplified, fit=poly.max_distance)
+
+
+def _bodies(poly: Polygons) -> np.ndarray:
+    """Body label per face: edge-connected components."""
+    edges = edge_adjacency(poly.faces, len(poly.vertices))
+    m = len(poly.faces)
+    graph = coo_matrix((np.ones(len(edges.a), dtype=np.int8), (edges.a // 3, edges.b // 3)), shape=(m, m))
+    return connected_components(graph, directed=False)[1]
+
+
+def _encode_body(body: Body, index: int) -> list[GroupSpec]:
+    if not (body.face_plane >= 0).any():
+        raise GeometryError(f"body {index}: every plane was dropped (delta too large)")
+    for _, strategy in BODY_STRATEGIES:
+        groups = strategy(body)
+        if groups is not None:
+            return groups
+    raise GeometryError(f"body {index} ({len(body.faces)} triangles) is not a closed convex surface "
+                        f"within the tolerance, or not convex; solid decomposition is not implemented yet")
+
+
+def merge_planes(poly: Polygons, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The paper's lossy τ: merge neighbouring planes whose normals differ by less than ``tau`` radians.
+
+    Merging is done in rounds of mutual best pairs (the closest neighbour of
+    each cluster of planes), so that chains of small angles do not fold a
+    smooth surface into one plane: two clusters merge only if every member
+    normal stays within ``tau`` of the merged normal (bounded by the member
+    spread plus the angle between the two clusters). A merged plane has the
+    area-weighted normal and the ``h`` halfway between its extreme vertices,
+    which minimises the largest vertex distance for that normal.
+    Returns ``(omega, h, face_plane)`` with the merged planes appended and
+    faces re-pointed; unmerged planes are unchanged.
+    """
+    k = len(poly.h)
+    edges = edge_adjacency(poly.faces, len(poly.vertices))
+    pa, pb = poly.face_plane[edges.a // 3], poly.face_plane[edges.b // 3]
+    keep = (pa != pb) & (pa >= 0) & (pb >= 0)
+    pairs = np.unique(np.sort(np.column_stack([pa[keep], pb[keep]]), axis=1), axis=0)
+    cluster = np.arange(k)
+    normal = poly.omega.copy()
+    spread = np.zeros(k)
+    for _ in range(_TAU_ROUNDS):
+        ca, cb = cluster[pairs[:, 0]], cluster[pairs[:, 1]]
+        diff = ca != cb
+        ca, cb = ca[diff], cb[diff]
+        theta = np.arccos(np.clip(np.einsum("ij,ij->i", normal[ca], normal[cb]), -1.0, 1.0))
+        ok = theta + np.maximum(spread[ca], spread[cb]) < tau
+        if not ok.any():
+            break
+        src = np.concatenate([ca[ok], cb[ok]])
+        dst = np.concatenate([cb[ok], ca[ok]])
+        ang = np.concatenate([theta[ok], theta[ok]])
+        order = np.lexsort((ang, src))
+        first = np.r_[True, src[order][1:] != src[order][:-1]]
+        best = np.full(k, -1)
+        best[src[order][first]] = dst[order][first]
+        c = np.flatnonzero(best >= 0)
+        mutual = c[(best[best[c]] == c) & (c < best[c])]
+        root = np.arange(k)
+        root[best[mutual]] = mutual
+        cluster = root[cluster]
+        normal, spread = _cluster_normals(poly, cluster, k)
+    return _merged_planes(poly, cluster, normal)
+
+
+def _cluster_normals(poly: Polygons, cluster: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
+    vec = np.column_stack([np.bincount(cluster, weights=poly.omega[:, i] * poly.area, minlength=k)
+                           for i in range(3)])
+    length = np.linalg.norm(vec, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        normal = vec / length[:, None]
+    normal[~(length > 0)] = poly.omega[~(length > 0)]
+    angle = np.arccos(np.clip(np.einsum("ij,ij->i", poly.omega, normal[cluster]), -1.0, 1.0))
+    spread = np.zeros(k)
+    np.maximum.at(spread, cluster, angle)
+    return normal, spread
+
+
+def _merged_planes(poly: Polygons, cluster: np.ndarray,
+                   normal: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    k = len(poly.h)
+    size = np.bincount(cluster, minlength=k)
+    merged = size[cluster] > 1
+    face_plane = poly.face_plane.copy()
+    on = face_plane >= 0
+    fc = np.full(len(face_plane), -1)
+    fc[on] = cluster[face_plane[on]]
+    sel = on & merged[np.maximum(face_plane, 0)]
+    ids, new = np.unique(fc[sel], return_inverse=True)
+    d = np.einsum("fj,fkj->fk", normal[fc[sel]], poly.vertices[poly.faces[sel]])
+    lo = np.full(len(ids), np.inf)
+    hi = np.full(len(ids), -np.inf)
+    np.minimum.at(lo, new, d.min(axis=1))
+    np.maximum.at(hi, new, d.max(axis=1))
+    face_plane[sel] = k + new
+    return (np.concatenate([poly.omega, normal[ids]]), np.concatenate([poly.h, 0.5 * (lo + hi)]),
+            face_plane)
+
+
+def drop_planes(poly: Polygons, face_plane: np.ndarray, delta: float) -> np.ndarray:
+    """The paper's lossy δ: faces on planes covering less than ``delta`` x total area lose their plane."""
+    on = face_plane >= 0
+    area = np.bincount(face_plane[on], weights=_face_areas(poly)[on])
+    small = area < delta * area.sum()
+    out = face_plane.copy()
+    out[on & small[np.maximum(face_plane, 0)]] = -1
+    return out
+
+
+def _face_areas(poly: Polygons) -> np.ndarray:
+    p = poly.vertices[poly.faces]
+    return 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 1]), axis=1)
+
+
+# -- choosing and verifying the coding --------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Choice:
+    coding: Coding
+    quantization: Quantization | None
+    meshes: list[Mesh]  # decoded, local coordinates
+    bbox: np.ndarray  # world
+    diagonal: float
+    error_bound: float  # fraction of diagonal
+    lossy: bool
+
+
+def _candidates(coding: Coding | None, bits: int | tuple[int, int, int] | None, table: np.ndarray,
+                radius: float) -> list[tuple[Coding, Quantization | None]]:
+    """Codings to try, cheapest first; forced ones alone."""
+    h_min, h_max = float(table[:, 2].min()), float(table[:, 2].max())
+    if bits is not None:
+        widths = (bits,) * 3 if isinstance(bits, int) else tuple(bits)
+        if len(widths) != 3 or not all(isinstance(b, (int, np.integer)) for b in widths):
+            raise PlnError(f"bits must be an int or three ints, not {bits!r}", code="UNSUPPORTED_CODING")
+        q = Quantization(*(int(b) for b in widths), h_min, h_max)
+        quantize.check_quantization(q)
+        return [(Coding.QUANTIZED, q)]
+    if coding is not None and Coding(coding) != Coding.QUANTIZED:
+        return [(Coding(coding), None)]
+    out: list[tuple[Coding, Quantization | None]] = []
+    span = h_max - h_min
+    for b in range(MIN_BITS, MAX_BITS + 1):
+        # nu and phi get equal widths (equal steps on the equator). h's half step is kept at half
+        # the displacement an angle half step causes at the far end of the model: the angles
+        # cost two widths, h one, so this split minimises bits for a given error.
+        target = 0.5 * Quantization(b, b, 1, 0.0, 0.0).steps()[0] * max(radius, 1e-300)
+        bits_h = 1 if span <= 0 else min(MAX_BITS, max(1, math.ceil(math.log2(span / target + 1))))
+        out.append((Coding.QUANTIZED, Quantization(b, b, bits_h, h_min, h_max)))
+    if coding is None:
+        out += [(Coding.FLOAT32, None), (Coding.FLOAT64, None)]
+    return out
+
+
+def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
+            bits: int | tuple[int, int, int] | None) -> _Choice:
+    """Pick the cheapest coding whose decoded surfaces meet the tolerance; verify it."""
+    forced = coding is not None or bits is not None
+    simplified = any(o.simplified for o in objects)
+    offsets = np.cumsum([0] + [len(o.triplets) for o in objects])
+    spans = list(zip(offsets[:-1], offsets[1:]))
+    table = np.concatenate([o.triplets for o in objects])
+    diag_src = _diagonal(np.concatenate([transform_points(o.vertices, o.world) for o in objects]))
+    scale = [float(np.linalg.norm(o.world[:3, :3], 2)) for o in objects]
+    radius = max(float(np.linalg.norm(o.vertices, axis=1).max()) for o in objects)
+
+    base = [_decode_object(o.triplets, o, EXACT) for o in objects]
+    base_meshes = [_concatenate(d) for d in base]
+    if simplified:
+        # The tolerance bounds what the coding adds to the simplified planes' own error.
+        base_err = [_measure(m, o, tolerance * diag_src, exact=True) for m, o in zip(base_meshes, objects)]
+        extra = max(base_err)
+    else:
+        # Lossless: what float64 planes lose is the polygon fit; measured with the chosen coding.
+        base_err = [o.fit * s for o, s in zip(objects, scale)]
+        extra = 0.0
+
+    def limit(meshes: list[Mesh]) -> tuple[float, np.ndarray]:
+        world = np.concatenate([transform_points(m.vertices, o.world) for m, o in zip(meshes, objects)])
+        return extra + tolerance * min(diag_src, _diagonal(world)), world
+
+    allowance, _ = limit(base_meshes)
+    if not forced and max(base_err) > allowance:
+        raise GeometryError(
+            f"the fitted polygon planes are {max(base_err) / diag_src:.3g} of the diagonal from the "
+            f"source vertices, above the tolerance {tolerance:g}", code="TOLERANCE_NOT_MET")
+
+    failed = 0
+    for cod, q in _candidates(coding, bits, table, radius):
+        if cod == Coding.FLOAT64:
+            meshes = base_meshes
+        else:
+            rt = quantize.roundtrip(table, cod, q)
+            if not forced and cod == Coding.QUANTIZED:
+                # Half the room for the prediction: the certified bound the verification needs
+                # comes quickly only with a margin between the true error and the target.
+                predicted = max((0.0 if simplified else e) + s * _displacement(d, rt[a:b], o)
+                                for e, s, d, (a, b), o in zip(base_err, scale, base, spans, objects))
+                if failed >= _MAX_FAILED or predicted > 0.5 * (allowance - extra):
+                    continue
+            try:
+                error = plane_error(cod, q, tolerance, diag_src)
+                meshes = [_concatenate(_decode_object(rt[a:b], o, error)) for (a, b), o in zip(spans, objects)]
+            except GeometryError:
+                # Coarse planes can lose a face or the solid altogether: not this coding.
+                if forced:
+                    raise
+                failed += 1
+                continue
+        bound, world = limit(meshes)
+        errors = [_measure(m, o, bound, exact=forced) for m, o in zip(meshes, objects)]
+        if forced or max(errors) <= bound:
+            diagonal = _diagonal(world)
+            error_bound = max(errors) / diagonal
+            return _Choice(coding=cod, quantization=q, meshes=meshes,
+                           bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,
+                           error_bound=error_bound, lossy=simplified or error_bound > tolerance)
+        failed += cod == Coding.QUANTIZED
+    raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g}", code="TOLERANCE_NOT_MET")
+
+
+def _diagonal(points: np.ndarray) -> float:
+    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) if len(points) else 0.0
+
+
+def _decode_object(triplets: np.ndarray, obj: _Object, error: PlaneError) -> list[DecodedGroup]:
+    return [decode_group(triplets[g.refs], g, i, error) for i, g in enumerate(obj.groups)]
+
+
+def _displacement(decoded: list[DecodedGroup], triplets: np.ndarray, obj: _Object) -> float:
+    """Predicted largest vertex movement (model units) when the planes become ``triplets``."""
+    omega, h = from_triplets(triplets)
+    worst = 0.0
+    for d, g in zip(decoded, obj.groups):
+        moved = resolve_vertices(d.vertices, d.inc_vertex, d.inc_ref, omega[g.refs], h[g.refs])
+        worst = max(worst, float(np.linalg.norm(moved - d.vertices, axis=1).max(initial=0.0)))
+    return worst
+
+
+def _measure(mesh: Mesh, obj: _Object, target: float, *, exact: bool) -> float:
+    """Certified upper bound (world model units) of the two-sided Hausdorff distance to the source.
+
+    Refinement stops once the bound is at most ``target``. Above it, returns
+    infinity unless ``exact``; then the target starts at 1.1 times the
+    largest distance of a decoded vertex to the source and is raised to 1.1
+    times the certified lower bound (which exceeds a failed target) until a
+    bound is certified, so the result is within about 10% of the distance.
+    """
+    a = transform_points(mesh.vertices, obj.world)
+    b = transform_points(obj.vertices, obj.world)
+    if exact:
+        # The decoded vertices' exact distances to the source are a lower bound of the
+        # Hausdorff distance: start there rather than far below.
+        target = max(target, 1.1 * float(closest_distance(a, b, obj.faces)[0].max(initial=0.0)))
+    for _ in range(_MEASURE_STEPS):
+        r = hausdorff(a, mesh.faces, b, obj.faces, target=target,
+                      max_pieces=DEFAULT_MAX_PIECES if exact else _VERIFY_PIECES)
+        if r.upper <= target:
+            return float(r.upper)
+        if not exact:
+            return math.inf
+        target = 1.1 * max(target, float(r.lower))
+    return float(r.upper)
+
+
+# -- scenes and files -------------------------------------------------------------------------
+
+def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, tolerance: float = 1e-6,
+                 coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
+                 delta: float | None = None, tau: float | None = None, compress: bool = False) -> Header:
+    """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
+
+    One object per node, keeping name, parent and transform; each node's
+    mesh is encoded in its local coordinates. One coding serves the whole
+    file; the tolerance is a fraction of the diagonal of the decoded scene's
+    world bbox, and errors are measured in world coordinates. Identical
+    planes (after coding) are stored once, numbered in first-use order and
+    written just before the first group that uses them. Options as for
+    :func:`encode_mesh`.
+    """
+    worlds = _world_transforms(scene.nodes)
+    prepared = [(i, _prepare(n.mesh.vertices, n.mesh.faces, worlds[i], tolerance, delta, tau))
+                for i, n in enumerate(scene.nodes) if n.mesh is not None and len(n.mesh.faces)]
+    if not prepared:
+        raise GeometryError("the scene has no mesh to encode")
+    objects = [o for _, o in prepared]
+    choice = _choose(objects, tolerance, coding, bits)
+    header = Header(lossy=choice.lossy, coding=choice.coding, quantization=choice.quantization,
+                    units=scene.units, bbox=choice.bbox, tolerance=float(tolerance),
+                    error_bound=choice.error_bound)
+    table = quantize.roundtrip(np.concatenate([o.triplets for o in objects]), choice.coding,
+                               choice.quantization)
+    # Rows identical after coding are one plane; the plane table is in first-use order, so each
+    # object's new planes are the next block of it. Coding is idempotent: the writer re-codes
+    # these rows to the same values.
+    _, first, inverse = np.unique(table, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first, kind="stable")
+    rank = np.empty(len(order), dtype=np.int64)
+    rank[order] = np.arange(len(order))
+    global_index = rank[inverse.reshape(-1)]
+    rows = table[first[order]]
+    offsets = np.cumsum([0] + [len(o.triplets) for o in objects])
+    by_node = {i: (o, a) for (i, o), a in zip(prepared, offsets)}
+    with _writer(target, header, compress) as w:
+        for i, node in enumerate(scene.nodes):
+            obj_index = w.add_object(node.name, node.parent, node.transform)
+            if i not in by_node:
+                continue
+            o, a = by_node[i]
+            refs = global_index[a:a + len(o.triplets)]
+            if refs.max() >= w.plane_count:
+                w.add_planes(rows[w.plane_count:refs.max() + 1])
+            for g in o.groups:
+                w.add_group(obj_index, g.kind, refs[g.refs], g.bounding, cells=g.cells, tree=g.tree)
+    return header
+
+
+def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool) -> Writer:
+    return Writer(target, header, compress=compress)
+
+
+def _world_transforms(nodes: Sequence[Node]) -> list[np.ndarray]:
+    worlds: list[np.ndarray] = []
+    for i, n in enumerate(nodes):
+        local = np.eye(4) if n.transform is None else np.asarray(n.transform, dtype=np.float64)
+        if n.parent is not None and not 0 <= n.parent < i:
+            raise GeometryError(f"node {i} ({n.name!r}): parent {n.parent} does not precede it")
+        worlds.append(local if n.parent is None else worlds[n.parent] @ local)
+    return worlds
+
+
+def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
+    """Read a .pln file into a :class:`Scene`: one node per object, its groups decoded and joined.
+
+    Streams: part groups are decoded one at a time as they are read.
+    """
+    parts: dict[int, list[DecodedGroup]] = {}
+    with Reader(source) as r:
+        error = header_plane_error(r.header)
+        for g in r.part_groups():
+            parts.setdefault(g.object, []).append(decode_group(g.planes, g, g.index, error))
+        nodes = tuple(Node(name=o.name, parent=o.parent, transform=o.transform,
+                           mesh=_concatenate(parts[o.index]) if o.index in parts else None)
+                      for o in r.objects)
+        return Scene(nodes=nodes, units=r.header.units)
+
+
+def check_group(group: PartGroup, reader: Reader) -> list[Finding]:
+    """Geometry findings of one part group for ``planefmt.validate`` (spec §8.2, §10.2).
+
+    ``EMPTY_POLYTOPE`` / ``UNBOUNDED_POLYTOPE`` errors, one ``REDUNDANT_PLANE``
+    warning per plane of a convex group that bounds no face. Kinds without a
+    decoder yet are not checked.
+    """
+    if int(group.kind) not in DECODERS or group.planes is None:
+        return []
+    where = dict(file=reader.name, chunk="GRUP", group=group.index)
+    try:
+        decoded = decode_group(group.planes, group, group.index,
+                               header_plane_error(reader.header))
+    except GeometryError as exc:
+        return [Finding(exc.code, CODES[exc.code].severity, exc.reason, **where)]
+    return [Finding("REDUNDANT_PLANE", CODES["REDUNDANT_PLANE"].severity,
+                    f"part group {group.index}: plane {int(group.refs[j])} (reference {int(j)}) bounds no face",
+                    **where) for j in decoded.redundant]
+
+
+# The validator runs every registered geometry check; registering here keeps it free of the codec.
+GROUP_CHECKS.append(check_group)

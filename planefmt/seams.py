@@ -1,0 +1,193 @@
+"""Sewing decoded polygons into one surface: vertex welding, T-junction splitting, triangulation.
+
+Decoded pieces (the faces of convex cells or patches) are computed one by
+one, so a point shared by several pieces comes out as several copies that
+differ by rounding, and an edge of one piece can run along two edges of its
+neighbour (a T-junction, a crack in the triangle mesh). :func:`stitch`
+welds the copies of a vertex, inserts into every polygon edge the vertices
+lying on it, and triangulates; both tests use the planes each point lies on
+(see :func:`stitch`: how far copies of a vertex may be apart depends on
+the angles between its planes). Triangulation:
+a polygon that received no vertex is fanned from its first corner, one that
+did is fanned from its centroid (a convex polygon with points on its edges
+has no other fan free of zero-area triangles). Polygons are convex and
+counter-clockwise seen from outside; so are the triangles.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+
+def weld(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Merge points closer than ``tol`` (transitively): ``(merged (k, 3), label (n,))``.
+
+    A merged point is the mean of its members.
+    """
+    return _merge(points, cKDTree(points).query_pairs(tol, output_type="ndarray"))
+
+
+def _merge(points: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Connected components of ``pairs`` over ``points``: ``(means (k, 3), label (n,))``."""
+    n = len(points)
+    if len(pairs) == 0:
+        return points.copy(), np.arange(n)
+    g = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    label = connected_components(g, directed=False)[1].astype(np.int64)
+    k = int(label.max()) + 1
+    count = np.bincount(label, minlength=k).astype(np.float64)
+    merged = np.column_stack([np.bincount(label, weights=points[:, i], minlength=k) for i in range(3)])
+    return merged / count[:, None], label
+
+
+#: Rounding of a point solved from three planes, in units of ``eps * scale / |det|`` (measured:
+#: copies computed along different clip sequences differ by up to about 4 of these units).
+ERROR_FACTOR = 16.0
+
+
+class Planes:
+    """The planes corners lie on: ``omega`` (k, 3) unit normals, ``h`` (k,), model units."""
+
+    def __init__(self, omega: np.ndarray, h: np.ndarray) -> None:
+        self.omega = np.asarray(omega, dtype=np.float64)
+        self.h = np.asarray(h, dtype=np.float64)
+
+    def error(self, triple: np.ndarray, scale: float) -> np.ndarray:
+        """Expected rounding error (model units) of the points of plane triples ``(n, 3)``.
+
+        A point solved from three planes moves by about ``eps * scale / |det|``
+        (``det`` of their normals) under rounding of size ``eps * scale``;
+        :data:`ERROR_FACTOR` covers the clip sequences that compute it.
+        Zero where a triple is incomplete (such a corner welds by distance alone).
+        """
+        ok = (triple >= 0).all(axis=1)
+        w = self.omega[np.maximum(triple, 0)]
+        det = np.abs(np.einsum("ij,ij->i", w[:, 0], np.cross(w[:, 1], w[:, 2])))
+        with np.errstate(divide="ignore"):
+            err = ERROR_FACTOR * np.finfo(np.float64).eps * scale / det
+        return np.where(ok, err, 0.0)
+
+
+def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes: Planes,
+           plane: np.ndarray, edge_plane: np.ndarray, tol: float,
+           scale: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One triangle mesh from polygons ``corners[offsets[i]:offsets[i+1]]`` over ``points``.
+
+    Polygon ``i`` lies on plane ``plane[i]`` of ``planes``; ``edge_plane``
+    gives, per corner, the plane of the edge leaving it (negative: none). A
+    corner is thus the point of three planes, its *triple*, and rounding can
+    have moved it by :meth:`Planes.error` (``scale`` the size of the
+    coordinates): far along planes that meet at a grazing angle, where a
+    fixed welding distance either misses copies of one vertex or merges
+    distinct ones. Two corners are one vertex when closer than ``tol`` or
+    than the larger of their errors; a vertex splits an edge (a T-junction)
+    when it lies as close to the segment, strictly between its ends. Returns
+    ``(vertices (V, 3), triangles (T, 3), polygon (T,))``, ``polygon`` the
+    input polygon of each triangle. Polygons that collapse below three
+    distinct vertices are dropped.
+    """
+    points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    size = np.diff(offsets)
+    poly = np.repeat(np.arange(len(size)), size)
+    prev = np.arange(len(corners)) - 1
+    prev[offsets[:-1][size > 0]] = offsets[1:][size > 0] - 1
+    triple = np.full((len(points), 3), -1, dtype=np.int64)
+    triple[corners] = np.column_stack([plane[poly], edge_plane[prev], edge_plane])
+    err = planes.error(triple, scale)
+    err[~np.isfinite(err)] = 0.0
+    reach = max(tol, float(err.max(initial=0.0)))
+    pairs = cKDTree(points).query_pairs(reach, output_type="ndarray")
+    if len(pairs):
+        a, b = pairs[:, 0], pairs[:, 1]
+        dist = np.linalg.norm(points[a] - points[b], axis=1)
+        pairs = pairs[dist <= np.maximum(tol, np.maximum(err[a], err[b]))]
+    vertices, label = _merge(points, pairs)
+    # A welded vertex is as uncertain as its most uncertain copy.
+    verr = np.zeros(len(vertices))
+    np.maximum.at(verr, label, err)
+    ring = label[corners]
+    # Drop corners equal to their predecessor in the ring (edges that collapsed when welding).
+    keep = ring != ring[prev]
+    poly, ring, eplane = poly[keep], ring[keep], edge_plane[keep]
+    size = np.bincount(poly, minlength=len(size))
+    live = size >= 3
+    sel = live[poly]
+    poly, ring, eplane = poly[sel], ring[sel], eplane[sel]
+    size = size * live
+    start = np.concatenate([[0], np.cumsum(size)])
+    # Edges a -> b of every polygon, and the vertices lying on them.
+    nxt = np.arange(len(ring)) + 1
+    ends = start[1:][size > 0] - 1
+    nxt[ends] = start[:-1][size > 0]
+    edge, ins, t = _on_edges(vertices, verr, ring, ring[nxt], tol)
+    # Rebuild each ring with the inserted vertices, in order along their edge.
+    key = np.concatenate([np.arange(len(ring), dtype=np.float64), edge + t])
+    seq = np.concatenate([ring, ins])
+    owner = np.concatenate([poly, poly[edge]])
+    order = np.lexsort((key, owner))
+    seq, owner = seq[order], owner[order]
+    grown = np.bincount(poly[edge], minlength=len(size)) > 0
+    return _triangulate(vertices, seq, owner, grown, len(size))
+
+
+def _on_edges(vertices: np.ndarray, verr: np.ndarray, a: np.ndarray, b: np.ndarray,
+              tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vertices strictly inside edges ``a -> b``: ``(edge, vertex, t)`` with ``t`` in (0, 1).
+
+    A vertex is on an edge when within ``tol``, or its rounding error
+    ``verr``, of the segment.
+    """
+    if len(a) == 0:
+        empty = np.empty(0, dtype=np.int64)
+        return empty, empty, np.empty(0)
+    pa, pb = vertices[a], vertices[b]
+    mid = 0.5 * (pa + pb)
+    radius = 0.5 * np.linalg.norm(pb - pa, axis=1) + max(tol, float(verr.max(initial=0.0)))
+    hits = cKDTree(vertices).query_ball_point(mid, radius, return_sorted=False)
+    count = np.fromiter((len(x) for x in hits), dtype=np.int64, count=len(hits))
+    edge = np.repeat(np.arange(len(a)), count)
+    cand = np.fromiter((i for x in hits for i in x), dtype=np.int64, count=int(count.sum()))
+    ok = (cand != a[edge]) & (cand != b[edge])
+    edge, cand = edge[ok], cand[ok]
+    d = pb[edge] - pa[edge]
+    r = vertices[cand] - pa[edge]
+    length2 = np.einsum("ij,ij->i", d, d)
+    t = np.einsum("ij,ij->i", r, d) / np.where(length2 > 0, length2, 1.0)
+    dist = np.linalg.norm(r - t[:, None] * d, axis=1)
+    length = np.sqrt(length2)
+    near = dist <= np.maximum(tol, verr[cand])
+    inside = near & (t * length > tol) & ((1.0 - t) * length > tol)
+    return edge[inside], cand[inside], t[inside]
+
+
+def _triangulate(vertices: np.ndarray, seq: np.ndarray, owner: np.ndarray, grown: np.ndarray,
+                 count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Fan triangles of the rings ``seq`` grouped by ``owner``: from the first corner, or the centroid of grown rings."""
+    size = np.bincount(owner, minlength=count)
+    start = np.concatenate([[0], np.cumsum(size)])
+    plain = ~grown & (size >= 3)
+    # Plain rings: (v0, vi, vi+1).
+    per = np.where(plain, size - 2, 0)
+    p = np.repeat(np.arange(count), per)
+    local = np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per) + 1
+    base = start[p]
+    tri_plain = np.column_stack([seq[base], seq[base + local], seq[base + local + 1]])
+    # Grown rings: a new centroid vertex c, triangles (c, vi, vi+1) around the ring.
+    g = np.flatnonzero(grown & (size >= 3))
+    sel = np.isin(owner, g)
+    gi = np.searchsorted(g, owner[sel])
+    centre = np.column_stack([np.bincount(gi, weights=vertices[seq[sel], c], minlength=len(g))
+                              for c in range(3)]) / size[g][:, None]
+    cidx = len(vertices) + np.arange(len(g))
+    idx = np.flatnonzero(sel)
+    nxt = idx + 1
+    last = start[g + 1] - 1
+    wrap = np.isin(idx, last)
+    nxt[wrap] = start[owner[idx[wrap]]]
+    tri_grown = np.column_stack([cidx[gi], seq[idx], seq[nxt]])
+    tris = np.concatenate([tri_plain, tri_grown]).astype(np.int64)
+    polygon = np.concatenate([p, owner[idx]])
+    return np.concatenate([vertices, centre]), tris, polygon

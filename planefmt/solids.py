@@ -1,0 +1,211 @@
+"""Closed non-convex solids as unions of convex cells cut from the mesh's own planes (paper, algorithm 1).
+
+Encoding is a BSP autopartition (Thibault & Naylor 1987): every splitting
+plane is the plane of a face of the mesh, so a cell is described by face
+planes only (spec §8.3, §8.4), and the decomposition is consistent under any
+small change of the planes (quantization): neighbouring cells share their
+splitting plane, so they still tile the solid.
+
+* Fragments. The mesh's triangles, lying on their (polygonized) planes, are
+  pushed down the tree and split at every node (:mod:`planefmt.clipping`).
+  Fragments within ``eps`` of the splitting plane, and every fragment of the
+  splitter's own plane, are consumed there.
+* Splitter choice. In a cell whose fragments are few enough to test
+  exhaustively, a plane is *supporting* if every fragment lies on its inner
+  side (within ``eps``). If all planes are supporting, the fragments are the
+  faces of one convex piece: it becomes one cell at once, instead of a chain
+  of nodes each peeling off an empty outer side (the chain trees that made a
+  naive boundary extraction quadratic). Otherwise the splitter is the best of
+  a few random non-supporting ("reflex") planes by ``3 * splits + imbalance``.
+* Leaves. A child with no fragment is uniformly inside or outside; it is IN
+  when it lies on the inner side of the splitter whose fragments bound it,
+  because a face's inner side is the solid. This holds for one closed,
+  outward, non-self-intersecting body; bodies are encoded one by one, and
+  the encoder verifies the decoded surface, so a body where it fails
+  (self-intersection, self-contact) is caught and encoded otherwise.
+* Output. The IN cells, each pruned to its non-redundant half-spaces
+  (``CELLS``, spec §8.3), or the same tree as preorder tokens (``BSP``, spec
+  §8.4) with each convex piece written as a chain; the smaller is kept.
+
+Decoding intersects each cell's half-spaces (:mod:`planefmt.polytopes`) and
+joins the cells into one closed surface (:func:`union_surface`).
+
+Conventions: planes ``(omega, h)``, outward unit normals, inside where
+``omega . x <= h``; cell entries ``2 * j + s`` with ``s = 1`` for the
+complement ``omega . x >= h``; lengths in model units.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import ConvexHull, QhullError
+
+from .clipping import clip_triangles, vertex_sides
+from .errors import GeometryError
+from .bsptree import boundary, parse
+from .model import BSP_IN, BSP_OUT
+from .seams import Planes, stitch
+
+#: Splitter candidates evaluated per node.
+CANDIDATES = 8
+#: Cells with at most this many fragments are tested for convexity exhaustively
+#: (cost: planes x fragment vertices).
+EXHAUSTIVE = 2048
+
+
+@dataclass(frozen=True)
+class Partition:
+    """The result of :func:`partition`: a BSP tree over the body's planes.
+
+    ``tokens`` (uint32) is the preorder token stream of spec §8.4 over the
+    plane indices given to :func:`partition`; a convex piece is written as a
+    chain (each of its planes splits, the outer side is OUT, the innermost
+    leaf IN). ``splits`` counts the split nodes chosen by the splitter,
+    ``pieces`` the convex pieces and ``chain`` the split nodes of their
+    chains.
+    """
+
+    tokens: np.ndarray
+    splits: int
+    pieces: int
+    chain: int
+
+
+def partition(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.ndarray, eps: float,
+              reflex_planes: np.ndarray, *, seed: int = 0) -> Partition:
+    """BSP autopartition of a closed body's triangles ``tri`` (n, 3, 3) on planes ``tri_plane`` (n,).
+
+    ``omega`` (k, 3), ``h`` (k,) are the planes; ``eps`` (model units) the
+    distance within which a point counts as on a plane; ``reflex_planes``
+    (k,) bool marks planes with a concave edge in the mesh, the splitter
+    candidates in cells too large for the exhaustive convexity test.
+    Deterministic for a given ``seed``.
+    """
+    rng = np.random.default_rng(seed)
+    tokens: list[int] = []
+    splits = pieces = chain = 0
+    # Work items: (triangles, planes) of a cell, or a leaf token.
+    stack: list[tuple[np.ndarray, np.ndarray] | int] = [(tri, tri_plane)]
+    while stack:
+        item = stack.pop()
+        if isinstance(item, int):
+            tokens.append(item)
+            continue
+        t, pl = item
+        planes = np.unique(pl)
+        if len(t) <= EXHAUSTIVE:
+            reflex = _reach(omega[planes], h[planes], t.reshape(-1, 3)) > eps
+        else:
+            reflex = reflex_planes[planes]
+        if not reflex.any():
+            # One convex piece: every plane with a fragment here bounds it.
+            tokens.extend(int(q) for q in planes)
+            tokens.append(BSP_IN)
+            tokens.extend([BSP_OUT] * len(planes))
+            pieces += 1
+            chain += len(planes)
+            continue
+        p = _choose_splitter(omega, h, t, planes[reflex], eps, rng)
+        splits += 1
+        d = t @ omega[p] - h[p]
+        side = vertex_sides(d, eps)
+        on = (pl == p) | (side == 0).all(axis=1)
+        inner = ~on & (side <= 0).all(axis=1)
+        outer = ~on & (side >= 0).all(axis=1)
+        straddle = ~(on | inner | outer)
+        ins, outs = [t[inner]], [t[outer]]
+        inp, outp = [pl[inner]], [pl[outer]]
+        if straddle.any():
+            ts, ds, ss, ps = t[straddle], d[straddle], side[straddle], pl[straddle]
+            for keep, tl, plist in ((-1, ins, inp), (1, outs, outp)):
+                pieces_t, src = clip_triangles(ts, ds, ss, keep)
+                tl.append(pieces_t)
+                plist.append(ps[src])
+        tin, tout = np.concatenate(ins), np.concatenate(outs)
+        tokens.append(int(p))
+        # Pushed outer first so that the inner subtree is emitted first (preorder, spec §8.4). A side
+        # without fragments is one leaf: inside when it is the splitter's inner side.
+        stack.append((tout, np.concatenate(outp)) if len(tout) else BSP_OUT)
+        stack.append((tin, np.concatenate(inp)) if len(tin) else BSP_IN)
+    return Partition(tokens=np.asarray(tokens, dtype=np.uint32), splits=splits, pieces=pieces, chain=chain)
+
+
+def _choose_splitter(omega: np.ndarray, h: np.ndarray, t: np.ndarray, pool: np.ndarray, eps: float,
+                     rng: np.random.Generator) -> int:
+    """The best of a few random planes of ``pool`` by ``3 * splits + |inner - outer|``."""
+    if len(pool) == 1:
+        return int(pool[0])
+    cand = rng.choice(pool, size=min(CANDIDATES, len(pool)), replace=False)
+    d = np.einsum("nvj,kj->knv", t, omega[cand]) - h[cand][:, None, None]
+    side = vertex_sides(d, eps)
+    lo = (side < 0).any(axis=2)
+    hi = (side > 0).any(axis=2)
+    splits = (lo & hi).sum(axis=1)
+    inner = (lo & ~hi).sum(axis=1)
+    outer = (hi & ~lo).sum(axis=1)
+    score = 3 * splits + np.abs(inner - outer)
+    return int(cand[np.argmin(score)])
+
+
+def _reach(omega: np.ndarray, h: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """``max_x omega_i . x - h_i`` over ``points`` for each plane: the maximum is at a hull vertex."""
+    pts = np.unique(points, axis=0)
+    if len(pts) > 64:
+        try:
+            pts = pts[ConvexHull(pts, qhull_options="Qt").vertices]
+        except QhullError:
+            pass
+    return (omega @ pts.T - h[:, None]).max(axis=1)
+
+
+
+#: On-plane tolerance of the decoder, relative to the largest |h|: a few hundred ulps, so that
+#: every decision is made as exact arithmetic would make it (features of planes that nearly meet
+#: at one point are resolved consistently, not snapped).
+SPLIT_EPS = 4e-13
+#: Vertex welding distance of the decoder, relative to the largest |h|: above the rounding of
+#: points computed along different clip sequences from well-conditioned planes.
+WELD_TOL = 4e-11
+
+
+def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The closed surface of a BSP group: ``(vertices (V, 3), triangles (T, 3), plane (T,))``.
+
+    ``omega`` (m, 3), ``h`` (m,) are the group's planes in reference order,
+    ``face`` (m,) True for face planes (cut planes carry no surface, spec
+    §8.2.1); ``plane`` is the reference each triangle lies on. Raises
+    ``BAD_GROUP_STRUCTURE`` for a malformed tree and ``UNBOUNDED_POLYTOPE``
+    when an IN leaf does not end.
+    """
+    tree = parse(tokens, len(h))
+    reach = float(np.abs(h).max(initial=0.0))
+    reach = reach if reach > 0 else 1.0
+    eps = SPLIT_EPS * reach
+    for size in (8.0 * reach, 8e3 * reach):
+        pts, count, labels, plane = boundary(tree, omega, h, size, eps)
+        if not (labels[np.arange(labels.shape[1])[None, :] < count[:, None]] < 0).any():
+            break
+    else:
+        raise GeometryError("an IN leaf of the BSP tree does not end", code="UNBOUNDED_POLYTOPE")
+    keep = face[plane]
+    pts, count, labels, plane = pts[keep], count[keep], labels[keep], plane[keep]
+    slot = np.arange(pts.shape[1])[None, :] < count[:, None]
+    offsets = np.concatenate([[0], np.cumsum(count)])
+    vertices, triangles, polygon = stitch(pts[slot], offsets, np.arange(int(count.sum())), Planes(omega, h),
+                                          plane, labels[slot], WELD_TOL * reach, reach)
+    return vertices, triangles, plane[polygon]
+
+
+def decode_bsp_group(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A BSP group as the codec wants it: ``(vertices, triangles, inc_vertex, inc_ref)``.
+
+    Incidences pair each vertex with the reference of every surface triangle
+    around it (the planes it lies on).
+    """
+    vertices, triangles, plane = decode_tree(omega, h, tokens, face)
+    inc = np.unique(np.column_stack([triangles.reshape(-1), np.repeat(plane, 3)]), axis=0)
+    return vertices, triangles, inc[:, 0], inc[:, 1]

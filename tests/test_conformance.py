@@ -1,0 +1,143 @@
+"""The conformance suite (issue 6): planefmt passes it, the files regenerate byte for byte,
+and the cube is the one printed in spec §12."""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+import planefmt
+
+ROOT = Path(__file__).resolve().parent.parent
+# conformance/ is a folder of the repository, not an installed package.
+sys.path.insert(0, str(ROOT))
+
+from conformance import adapter, cases_invalid, generate, runner  # noqa: E402
+from conformance.runner import Case, Outcome  # noqa: E402
+
+SUITE = ROOT / "conformance"
+CASES = runner.load_manifest()
+
+#: planefmt gaps found by the suite (reported on issue 6). Strict: a fix makes the test fail
+#: until its entry is removed here.
+KNOWN_FAILURES = {
+    "invalid/xindx_ordinal.pln": "the reader never compares iNDX ordinals with the chunks",
+    "invalid/xindx_missing.pln": "the reader never checks that iNDX lists every OBJT/PLNS/GRUP; "
+                                 "random access then fails with BAD_PLANE_REFERENCE",
+    "invalid/xindx_mid_chunk.pln": "an entry pointing inside a chunk is only found by random access, "
+                                   "as BAD_CHUNK_TYPE",
+}
+
+
+def in_process(path: Path) -> Outcome:
+    """What ``python -m conformance.adapter path`` answers, without starting a process."""
+    try:
+        result = adapter.describe(str(path))
+    except planefmt.PlnError as exc:
+        return Outcome(1, {"error": exc.code}, str(exc))
+    return Outcome(0, json.loads(json.dumps(result, allow_nan=False)), "")
+
+
+@pytest.mark.parametrize("case", [
+    pytest.param(c, marks=pytest.mark.xfail(reason=KNOWN_FAILURES[c.path], strict=True))
+    if c.path in KNOWN_FAILURES else c for c in CASES], ids=[c.path for c in CASES])
+def test_planefmt_conforms(case: Case):
+    expected = json.loads((SUITE / case.path).with_suffix(".json").read_text(encoding="utf-8"))
+    assert runner.check(case, expected, in_process(SUITE / case.path), "container") is None
+
+
+def test_adapter_command_line_keeps_the_contract():
+    def call(name: str) -> tuple[int, dict]:
+        proc = subprocess.run([sys.executable, "-m", "conformance.adapter", str(SUITE / name)],
+                              capture_output=True, cwd=ROOT)
+        return proc.returncode, json.loads(proc.stdout)
+
+    code, result = call("valid/cube_float32.pln")
+    assert code == 0 and result["header"]["counts"] == {"planes": 6, "objects": 1, "groups": 1}
+    assert call("invalid/xcrc_plns.pln") == (1, {"error": "CRC_MISMATCH"})
+
+
+def test_runner_reports_every_failure_and_exits_1(tmp_path):
+    # An implementation that calls every file truncated passes exactly the TRUNCATED cases.
+    fake = f"{sys.executable} -c 'print(\"{{\\\"error\\\": \\\"TRUNCATED\\\"}}\"); raise SystemExit(1)'"
+    proc = subprocess.run([sys.executable, "-m", "conformance", "--impl", fake], capture_output=True,
+                          text=True, cwd=tmp_path, env=dict(os.environ, PYTHONPATH=str(ROOT)))
+    truncated = sum("TRUNCATED" in c.expected.split("|") for c in CASES)
+    lines = proc.stdout.splitlines()
+    assert proc.returncode == 1
+    assert lines[-1] == f"{truncated} passed, {len(CASES) - truncated} failed"
+    assert len([line for line in lines if line.startswith("FAIL ")]) == len(CASES) - truncated
+
+
+def test_geometry_is_compared_where_reported():
+    case = next(c for c in CASES if c.path == "valid/cube_float64.pln")
+    expected = json.loads((SUITE / "valid/cube_float64.json").read_text())
+    got = in_process(SUITE / case.path).result
+    got["geometry"] = json.loads(json.dumps(expected["geometry"]))
+    assert runner.compare_valid(expected, got, "geometry") is None
+    got["geometry"]["groups"][0]["volume"] = 1.00001  # 1e-5 off, ten times the tolerance
+    assert "volume" in runner.compare_valid(expected, got, "container")
+    got["geometry"] = None
+    assert runner.compare_valid(expected, got, "container") is None
+    assert runner.compare_valid(expected, got, "geometry") == "no geometry"
+
+
+def test_regenerating_gives_identical_files(tmp_path):
+    generate.main([str(tmp_path)])
+    made = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file())
+    checked_in = sorted(p.relative_to(SUITE) for p in SUITE.rglob("*")
+                        if p.is_file() and p.suffix in (".pln", ".json", ".tsv"))
+    assert made == checked_in
+    for rel in made:
+        assert (tmp_path / rel).read_bytes() == (SUITE / rel).read_bytes(), rel
+
+
+def spec_hexdump() -> bytes:
+    """The bytes of the file printed in spec §12, parsed from its hex dump.
+
+    Rows are ``NNNN: hex bytes  comment``; ``00..`` stands for zeros up to the
+    next row's offset and ``(× n)`` repeats a row's bytes n times. Every row
+    must start where the previous one ended.
+    """
+    block = (ROOT / "spec/pln-1.md").read_text(encoding="utf-8").split("## 12.")[1].split("```")[1]
+    rows = []
+    for line in block.splitlines():
+        m = re.match(r"([0-9a-f]{4}): (.*)", line)
+        if m:
+            tokens = m[2].split()
+            n = next((i for i, t in enumerate(tokens) if not re.fullmatch(r"[0-9a-f]{2}(\.\.)?", t)), len(tokens))
+            repeat = re.search(r"\(× (\d+)\)", m[2])
+            rows.append((int(m[1], 16), tokens[:n], int(repeat[1]) if repeat else 1))
+    data = bytearray()
+    for (offset, hexes, repeat), following in zip(rows, [r[0] for r in rows[1:]] + [None]):
+        assert len(data) == offset, f"row {offset:04x} starts at {len(data):04x}"
+        data += bytes(following - offset) if hexes == ["00.."] else bytes.fromhex("".join(hexes)) * repeat
+    return bytes(data)
+
+
+def test_cube_is_the_file_of_spec_section_12():
+    dump = spec_hexdump()
+    assert len(dump) == 401
+    assert (SUITE / "valid/cube_float32.pln").read_bytes() == dump
+    assert cases_invalid.CUBE_FILE == dump  # most broken files are this cube with one defect
+
+
+def test_zlib_case_is_compressed_and_suite_is_small():
+    data = (SUITE / "valid/sphere200_zlib.pln").read_bytes()
+    pos, methods = 8, {}
+    while pos < len(data):
+        ctype, length = data[pos:pos + 4], int.from_bytes(data[pos + 4:pos + 8], "little")
+        payload = data[pos + 8:pos + 8 + length]
+        if ctype == b"PLNS":
+            methods["PLNS"] = payload[12]
+        if ctype == b"GRUP":
+            methods["GRUP"] = payload[9]
+        pos += 12 + length
+    assert methods == {"PLNS": 1, "GRUP": 1}
+    assert sum(p.stat().st_size for p in SUITE.rglob("*") if p.is_file()) < 2_000_000

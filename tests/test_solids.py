@@ -1,0 +1,150 @@
+"""Closed non-convex solids as BSP trees of their own planes (planefmt.solids, bsptree, seams, bodies)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+
+from planefmt.bodies import (decode_groups, encode_groups, euler_characteristic, is_closed_manifold,
+                             signed_volume)
+from planefmt.bsptree import parse
+from planefmt.errors import GeometryError
+from planefmt.hausdorff import closest_distance, hausdorff
+from planefmt.model import BSP_IN, BSP_OUT, GroupKind
+from planefmt.solids import decode_tree
+
+import shapes
+
+TOL = 1e-6
+
+
+def check_solid(v: np.ndarray, f: np.ndarray) -> dict:
+    """Encode and decode a closed mesh; assert the solid contract; return numbers for the caller."""
+    enc = encode_groups(v, f, tolerance=TOL)
+    dv, df = decode_groups(enc.omega, enc.h, enc.groups)
+    sv, sf = enc.vertices, enc.faces
+    diag = float(np.linalg.norm(np.ptp(sv[np.unique(sf)], axis=0)))
+    assert is_closed_manifold(df, len(dv)), [r.note for r in enc.reports]
+    assert euler_characteristic(df) == euler_characteristic(sf)
+    vol = signed_volume(sv, sf)
+    assert abs(signed_volume(dv, df) - vol) <= 1e-6 * abs(vol)
+    h = hausdorff(dv, df, sv, sf, target=TOL * diag)
+    assert h.certified and h.upper <= TOL * diag, (h.lower / diag, h.upper / diag)
+    return {"kinds": [r.kind for r in enc.reports], "groups": enc.groups, "planes": len(enc.h)}
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_random_box_unions_are_exact_watertight_solids(seed: int) -> None:
+    v, f = shapes.random_boxes(seed)
+    out = check_solid(v, f)
+    assert "solid" in out["kinds"] or "convex" in out["kinds"]
+
+
+@pytest.mark.parametrize("make", [shapes.ring, shapes.plate_with_holes, shapes.dented_sphere])
+def test_curved_and_holed_solids(make) -> None:
+    v, f = make()
+    out = check_solid(v, f)
+    assert out["kinds"] == ["solid"]
+    # Only the mesh's own planes: a BSP group has no bounding (cut) planes.
+    assert all(not g.bounding.any() for g in out["groups"])
+
+
+@pytest.mark.parametrize("shared", [False, True])
+def test_touching_bodies_stay_separate(shared: bool) -> None:
+    """Two cubes touching along a face: both faces of the contact survive decoding.
+
+    Without shared vertices (box.STL's case) they are two closed bodies; with
+    them, one non-manifold body, encoded as patches, exactly.
+    """
+    a = shapes.cube(0.0, 1.0)
+    b = shapes.cube(0.0, 1.0)
+    v = np.concatenate([a[0], b[0] + [1.0, 0.0, 0.0]])
+    f = np.concatenate([a[1], b[1] + len(a[0])])
+    if not shared:
+        v = v + np.repeat([[0.0, 0.0, 0.0], [0.0, 0.0, 1e-3]], 8, axis=0)
+    enc = encode_groups(v, f, tolerance=TOL)
+    assert len(enc.reports) == (1 if shared else 2)
+    dv, df = decode_groups(enc.omega, enc.h, enc.groups)
+    assert shapes.area(dv, df) == pytest.approx(12.0, rel=1e-9)
+    assert euler_characteristic(df) == 4
+    # Exact vertex distances both ways (the certified measure does not settle on coincident,
+    # opposite faces within its budget; it is exercised on every other shape here).
+    assert closest_distance(dv, enc.vertices, enc.faces)[0].max() <= TOL
+    assert closest_distance(enc.vertices, dv, df)[0].max() <= TOL
+
+
+def test_chain_trees_decode_in_bounded_time() -> None:
+    """A nearly convex body: its convex remainder is one piece, not a chain of empty peelings."""
+    v, f = shapes.dented_sphere(64)
+    t0 = time.perf_counter()
+    out = check_solid(v, f)
+    assert time.perf_counter() - t0 < 60
+    print(f"dented sphere: {len(f)} triangles, {out['planes']} planes, {len(out['groups'][0].tree)} tokens")
+
+
+def test_decoding_survives_perturbed_planes() -> None:
+    """Cells share their splitting planes, so moved planes (a coarse coding) still tile the solid."""
+    v, f = shapes.plate_with_holes()
+    enc = encode_groups(v, f, tolerance=TOL)
+    (g,) = enc.groups
+    assert g.kind == GroupKind.BSP
+    rng = np.random.default_rng(7)
+    omega = enc.omega + rng.normal(0, 1e-7, enc.omega.shape)
+    omega /= np.linalg.norm(omega, axis=1)[:, None]
+    h = enc.h + rng.normal(0, 1e-7, enc.h.shape)
+    dv, df, _ = decode_tree(omega[g.refs], h[g.refs], g.tree, ~g.bounding)
+    assert is_closed_manifold(df, len(dv))
+    assert euler_characteristic(df) == euler_characteristic(enc.faces)
+
+
+def test_inside_out_and_open_bodies_are_not_solids() -> None:
+    v, f = shapes.cube()
+    enc = encode_groups(v, f[:, ::-1], tolerance=TOL)
+    assert [r.kind for r in enc.reports] == ["patches"]
+    dv, df = decode_groups(enc.omega, enc.h, enc.groups)
+    # Orientation kept: every decoded triangle faces into the cube, as the source did.
+    n = np.cross(dv[df[:, 1]] - dv[df[:, 0]], dv[df[:, 2]] - dv[df[:, 0]])
+    centre = dv[df].mean(axis=1) - 0.5
+    assert (np.einsum("ij,ij->i", n, centre) < 0).all()
+
+
+# -- the token stream (spec §8.4) ------------------------------------------------------------------
+
+@pytest.mark.parametrize("tokens", [
+    [], [0], [0, BSP_IN], [BSP_IN, BSP_OUT], [0, BSP_IN, BSP_OUT, BSP_OUT], [5, BSP_IN, BSP_OUT],
+    [0xFFFFFFF3], [0, 0xFFFFFFF0, BSP_OUT],
+])
+def test_malformed_trees_are_rejected(tokens: list[int]) -> None:
+    with pytest.raises(GeometryError) as err:
+        parse(np.array(tokens, dtype=np.uint32), 2)
+    assert err.value.code == "BAD_GROUP_STRUCTURE"
+
+
+def test_tree_parse_finds_subtrees() -> None:
+    # 0 [inner: 1 [IN] [OUT]] [outer: OUT]
+    tree = parse(np.array([0, 1, BSP_IN, BSP_OUT, BSP_OUT], dtype=np.uint32), 2)
+    assert tree.outer.tolist() == [4, 3, -1, -1, -1]
+    assert tree.end.tolist() == [5, 4, 3, 4, 5]
+
+
+def test_unbounded_in_leaf_is_an_error() -> None:
+    omega = np.array([[0.0, 0.0, 1.0]])
+    with pytest.raises(GeometryError) as err:
+        decode_tree(omega, np.array([1.0]), np.array([0, BSP_IN, BSP_OUT], dtype=np.uint32), np.array([True]))
+    assert err.value.code == "UNBOUNDED_POLYTOPE"
+
+
+def test_cut_planes_carry_no_surface() -> None:
+    """A cube split in two by a cut plane decodes to the cube, without the cut face."""
+    w = np.array([[1.0, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1], [1, 0, 0]])
+    h = np.array([1.0, 0, 1, 0, 1, 0, 0.5])
+    chain = [0, 1, 2, 3, 4, 5, BSP_IN] + [BSP_OUT] * 6
+    tokens = np.array([6] + chain + chain, dtype=np.uint32)  # both halves of x = 0.5 are IN
+    face = np.array([True] * 6 + [False])
+    dv, df, plane = decode_tree(w, h, tokens, face)
+    assert is_closed_manifold(df, len(dv))
+    assert shapes.area(dv, df) == pytest.approx(6.0)
+    assert signed_volume(dv, df) == pytest.approx(1.0)
+    assert 6 not in plane
