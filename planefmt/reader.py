@@ -51,6 +51,8 @@ class Reader:
         self._done = False
         self._started = False
         self.index_offset: int | None = None
+        # (offset, type, ordinal) of every OBJT, PLNS and GRUP chunk so far: what iNDX must list.
+        self._listed: list[tuple[int, bytes, int]] = []
         self._base = _tell(self._fp)
         try:
             self._stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
@@ -132,12 +134,14 @@ class Reader:
     def _dispatch(self, raw: RawChunk) -> Record | None:
         t = raw.type
         if t == schema.PLNS:
+            self._listed.append((raw.offset, t, self._plane_count))
             block = records.decode_planes(raw.payload, self.header, self._plane_count, self.limits)
             self._append_planes(block.triplets)
             return block
         if t == schema.OBJT:
             if len(self.objects) >= self.limits.max_objects:
                 raise PlnError(f"more than {self.limits.max_objects} objects", code="LIMIT_EXCEEDED")
+            self._listed.append((raw.offset, t, len(self.objects)))
             obj = records.decode_object(raw.payload, len(self.objects))
             self.objects.append(obj)
             return obj
@@ -146,6 +150,7 @@ class Reader:
                 raw.payload, expected_index=self._group_count, objects=len(self.objects),
                 planes=self._plane_count, minor=self.header.version[1], limits=self.limits)
             self.findings.extend(found)
+            self._listed.append((raw.offset, t, group.index))
             self._group_refs[group.index] = len(group.refs)
             self._group_count += 1
             if self.retain_planes:
@@ -155,7 +160,7 @@ class Reader:
             return records.decode_colours(raw.payload, self._group_refs)
         if t == schema.INDX:
             self.index_offset = raw.offset
-            records.decode_index(raw.payload, raw.offset)
+            self._check_index(records.decode_index(raw.payload, raw.offset))
             return None
         if t == schema.PEND:
             self._finish(raw)
@@ -166,6 +171,20 @@ class Reader:
             self.findings.append(("UNKNOWN_ANCILLARY_CHUNK", f"skipped chunk {raw.name} at byte {raw.offset}"))
             return UnknownChunk(type=t, payload=bytes(raw.payload), offset=raw.offset)
         raise FormatError(f"unknown critical chunk {raw.name}", code="UNKNOWN_CRITICAL_CHUNK")
+
+    def _check_index(self, entries: np.ndarray) -> None:
+        """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §8.6)."""
+        listed = np.array(self._listed, dtype=schema.INDEX_ENTRY_DTYPE)
+        if len(entries) != len(listed):
+            raise FormatError(f"iNDX lists {len(entries)} chunks; the file has {len(listed)} OBJT, PLNS and GRUP "
+                              "chunks before it", code="BAD_INDEX")
+        wrong = np.flatnonzero(entries != listed)
+        if len(wrong):
+            i = int(wrong[0])
+            got, want = entries[i], listed[i]
+            raise FormatError(f"iNDX entry {i} says {got['type'].decode('latin-1')} #{got['ordinal']} at byte "
+                              f"{got['offset']}; the file has {want['type'].decode()} #{want['ordinal']} at byte "
+                              f"{want['offset']}", code="BAD_INDEX")
 
     def _finish(self, raw: RawChunk) -> None:
         index_offset = records.decode_end(raw.payload)

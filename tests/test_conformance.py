@@ -24,17 +24,6 @@ from conformance.runner import Case, Outcome  # noqa: E402
 SUITE = ROOT / "conformance"
 CASES = runner.load_manifest()
 
-#: planefmt gaps found by the suite (reported on issue 6). Strict: a fix makes the test fail
-#: until its entry is removed here.
-KNOWN_FAILURES = {
-    "invalid/xindx_ordinal.pln": "the reader never compares iNDX ordinals with the chunks",
-    "invalid/xindx_missing.pln": "the reader never checks that iNDX lists every OBJT/PLNS/GRUP; "
-                                 "random access then fails with BAD_PLANE_REFERENCE",
-    "invalid/xindx_mid_chunk.pln": "an entry pointing inside a chunk is only found by random access, "
-                                   "as BAD_CHUNK_TYPE",
-}
-
-
 def in_process(path: Path) -> Outcome:
     """What ``python -m conformance.adapter path`` answers, without starting a process."""
     try:
@@ -44,9 +33,7 @@ def in_process(path: Path) -> Outcome:
     return Outcome(0, json.loads(json.dumps(result, allow_nan=False)), "")
 
 
-@pytest.mark.parametrize("case", [
-    pytest.param(c, marks=pytest.mark.xfail(reason=KNOWN_FAILURES[c.path], strict=True))
-    if c.path in KNOWN_FAILURES else c for c in CASES], ids=[c.path for c in CASES])
+@pytest.mark.parametrize("case", CASES, ids=[c.path for c in CASES])
 def test_planefmt_conforms(case: Case):
     expected = json.loads((SUITE / case.path).with_suffix(".json").read_text(encoding="utf-8"))
     assert runner.check(case, expected, in_process(SUITE / case.path), "container") is None
