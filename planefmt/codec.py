@@ -47,13 +47,14 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError
 
 from . import quantize
-from .errors import CODES, GeometryError, PlnError
+from .errors import CODES, FormatError, GeometryError, PlnError
 from .halfspace import decode_convex, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
-from .model import Coding, GroupKind, Header, Mesh, Node, PartGroup, Quantization, Scene, Units
+from .model import Coding, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup, Quantization, Scene, Units
 from .planes import from_triplets, to_triplets, transform_points
 from .polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize
 from .reader import Reader
+from .salvage import salvage
 from .validate import GROUP_CHECKS, Finding
 from .writer import Writer
 
@@ -744,10 +745,41 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
         error = header_plane_error(r.header)
         for g in r.part_groups():
             parts.setdefault(g.object, []).append(decode_group(g.planes, g, g.index, error))
-        nodes = tuple(Node(name=o.name, parent=o.parent, transform=o.transform,
-                           mesh=_concatenate(parts[o.index]) if o.index in parts else None)
-                      for o in r.objects)
-        return Scene(nodes=nodes, units=r.header.units)
+        return _assemble(r.objects, parts, r.header.units)
+
+
+def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str]]:
+    """What :func:`decode_scene` gives for the intact part of a damaged file, and what was lost.
+
+    Reads through :func:`planefmt.salvage.salvage`: every intact object and
+    part group is kept, a group that no longer decodes (its planes were
+    damaged into an empty or unbounded set) joins the losses. Raises
+    ``FormatError`` (``MISSING_HEADER``) when no header survived.
+    """
+    got = salvage(source)
+    if got.header is None:
+        raise FormatError("no intact PHDR chunk: nothing to salvage", code="MISSING_HEADER",
+                          file=getattr(source, "name", None) if not isinstance(source, (str, os.PathLike))
+                          else os.fspath(source))
+    lost = [f"{x.message}" + ("" if x.offset is None else f" (byte {x.offset})") for x in got.losses]
+    error = header_plane_error(got.header)
+    objects = [r for r in got.records if isinstance(r, ObjectRecord)]
+    parts: dict[int, list[DecodedGroup]] = {}
+    for g in got.part_groups:
+        try:
+            parts.setdefault(g.object, []).append(decode_group(g.planes, g, g.index, error))
+        except GeometryError as exc:
+            lost.append(f"part group {g.index} lost: {exc.reason}")
+    return _assemble(objects, parts, got.header.units), lost
+
+
+def _assemble(objects: Sequence[ObjectRecord], parts: dict[int, list[DecodedGroup]], units: Units) -> Scene:
+    # Salvaged objects may have gaps in their indices; nodes are numbered by position.
+    position = {o.index: i for i, o in enumerate(objects)}
+    nodes = tuple(Node(name=o.name, parent=None if o.parent is None else position[o.parent], transform=o.transform,
+                       mesh=_concatenate(parts[o.index]) if o.index in parts else None)
+                  for o in objects)
+    return Scene(nodes=nodes, units=units)
 
 
 def check_group(group: PartGroup, reader: Reader) -> list[Finding]:

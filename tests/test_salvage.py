@@ -91,3 +91,31 @@ def test_cli_info_salvage_lists_losses_and_exits_1(tmp_path):
     info = json.loads(p.stdout)
     assert info["groups"]["total"] == 9
     assert {loss["code"] for loss in info["losses"]} >= {"CRC_MISMATCH"}
+
+
+def test_cli_convert_salvage_writes_the_intact_objects_and_lists_the_lost(tmp_path):
+    import subprocess
+    import sys
+
+    import trimesh
+
+    data = bytearray(ten_groups())
+    pos = grup_offsets(bytes(data))[4]
+    data[pos + 30] ^= 0xFF
+    path = tmp_path / "damaged.pln"
+    path.write_bytes(bytes(data))
+    out = tmp_path / "rescued.glb"
+    cmd = [sys.executable, "-m", "planefmt_converters.cli", "convert"]
+    plain = subprocess.run([*cmd, str(path), str(out)], capture_output=True, text=True)
+    assert plain.returncode == 2 and not out.exists()
+    p = subprocess.run([*cmd, str(path), str(out), "--salvage"], capture_output=True, text=True)
+    assert p.returncode == 1, p.stderr
+    assert "part group 4 lost" in p.stderr and "Traceback" not in p.stderr
+    scene = trimesh.load(out)
+    volumes = sorted(round(g.volume, 9) for g in scene.geometry.values())
+    # Group k is the cube [-k, 1 + k]^3; group 4's chunk is the damaged one.
+    assert volumes == [float((1 + 2 * k) ** 3) for k in range(10) if k != 4]
+    not_pln = tmp_path / "cube.obj"
+    not_pln.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    p = subprocess.run([*cmd, str(not_pln), str(tmp_path / "x.pln"), "--salvage"], capture_output=True, text=True)
+    assert p.returncode == 2 and "--salvage reads damaged .pln files" in p.stderr

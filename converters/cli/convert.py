@@ -12,6 +12,7 @@ input is never touched.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import shutil
 import signal
@@ -31,6 +32,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--to", help="output format name (glb, gltf, obj, ply, stl, off, usda, usdc, usdz, pln)")
     p.add_argument("--from", dest="from_", help="input format name instead of detecting it")
     p.add_argument("--jobs", type=int, default=1, help="batch: convert this many files at once")
+    p.add_argument("--salvage", action="store_true",
+                   help="a damaged .pln input: convert every intact object and part group, list the losses "
+                        "on stderr and exit 1")
     g = p.add_argument_group(".pln output")
     g.add_argument("--tolerance", type=float, default=1e-6,
                    help="largest error allowed, a fraction of the bbox diagonal (default 1e-6)")
@@ -62,11 +66,25 @@ def _pln_options(args: argparse.Namespace) -> dict:
     return opts
 
 
-def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict) -> list[str]:
-    """Convert one file; returns warning lines (what was dropped). Raises PlnError on bad input."""
+def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict,
+                salvage: bool = False) -> tuple[list[str], list[str]]:
+    """Convert one file; returns warning lines (what was dropped) and, with ``salvage``, what was lost.
+
+    Raises PlnError on bad input.
+    """
     from planefmt_converters import registry
 
-    scene, dropped = registry.read(src, from_)
+    lost: list[str] = []
+    if salvage:
+        fmt_in = registry.get(from_) if from_ else registry.detect(src)
+        if fmt_in.name != "pln":
+            raise _Usage(f"--salvage reads damaged .pln files; {src} is {fmt_in.name}", code="UNKNOWN_FORMAT")
+        from planefmt import codec
+
+        scene, lost = codec.salvage_scene(src)
+        dropped: list[str] = []
+    else:
+        scene, dropped = registry.read(src, from_)
     fmt = registry.get(to) if to else registry.for_extension(dst, writable=True)
     if fmt is None:
         raise _Usage(f"cannot tell the output format from {dst!r}: name it with --to", code="UNKNOWN_FORMAT")
@@ -76,15 +94,16 @@ def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts:
         warnings.append(f"{src}: dropped {', '.join(dropped)} (planes cannot carry them)")
     if notes:
         warnings.append(f"{dst}: not kept by {fmt.name}: {', '.join(notes)}")
-    return warnings
+    return warnings, [f"{src}: {line}" for line in lost]
 
 
-def _batch_job(job: tuple) -> tuple[str, list[str] | None, str | None]:
-    src, dst, to, from_, opts = job
+def _batch_job(job: tuple) -> tuple[str, list[str] | None, bool, str | None]:
+    src, dst, to, from_, opts, salvage = job
     try:
-        return src, convert_one(src, dst, to, from_, opts), None
+        warnings, lost = convert_one(src, dst, to, from_, opts, salvage)
+        return src, warnings + [f"lost {line}" for line in lost], bool(lost), None
     except PlnError as exc:
-        return src, None, str(exc)
+        return src, None, False, str(exc)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -118,13 +137,16 @@ def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int
             from planefmt_converters import registry
 
             dst = os.path.join(tmp, "stdout" + registry.get(args.to).extensions[0])
-        for line in convert_one(src, dst, args.to, args.from_, opts):
+        warnings, lost = convert_one(src, dst, args.to, args.from_, opts, args.salvage)
+        for line in warnings:
             print(f"pln: warning: {line}", file=sys.stderr)
+        for line in lost:
+            print(f"pln: lost: {line}", file=sys.stderr)
         if to_stdout:
             with open(dst, "rb") as f:
                 shutil.copyfileobj(f, sys.stdout.buffer)
             sys.stdout.buffer.flush()
-    return 0
+    return 1 if lost else 0
 
 
 def _run_batch(args: argparse.Namespace, opts: dict) -> int:
@@ -135,23 +157,21 @@ def _run_batch(args: argparse.Namespace, opts: dict) -> int:
     ext = registry.get(args.to).extensions[0]
     outdir = Path(args.outdir)
     outdir.mkdir(parents=True, exist_ok=True)
-    jobs = [(src, str(outdir / (Path(src).stem + ext)), args.to, args.from_, opts) for src in args.paths]
-    failed = 0
+    jobs = [(src, str(outdir / (Path(src).stem + ext)), args.to, args.from_, opts, args.salvage)
+            for src in args.paths]
+    failed = losses = 0
     progress = _Progress(len(jobs))
-    if args.jobs > 1:
-        with ProcessPoolExecutor(args.jobs) as pool:
-            results = pool.map(_batch_job, jobs)
-            for result in results:
-                failed += _report(result, progress)
-    else:
-        for job in jobs:
-            failed += _report(_batch_job(job), progress)
+    with contextlib.ExitStack() as stack:
+        pool = stack.enter_context(ProcessPoolExecutor(args.jobs)) if args.jobs > 1 else None
+        for result in (pool.map if pool else map)(_batch_job, jobs):
+            failed += _report(result, progress)
+            losses += result[2]
     progress.done()
-    return 2 if failed else 0
+    return 2 if failed else 1 if losses else 0
 
 
 def _report(result: tuple, progress: "_Progress") -> int:
-    src, warnings, error = result
+    src, warnings, _, error = result
     progress.step(src)
     if error:
         progress.clear()

@@ -1,0 +1,710 @@
+"""plnread: an independent, container-level reader of the .pln format.
+
+It was written from `spec/pln-1.md` alone (plus the output contract of
+`conformance/README.md`), without looking at planefmt or at the suite's
+generator, to show that the written spec and the conformance contract are
+enough for a second implementation.  It uses the Python 3.11 standard
+library only.
+
+It checks everything a reader must check without decoding geometry
+(signature, chunk framing, CRC-32, header, plane table in every coding,
+objects, part groups of every kind with their cells/tree structure,
+colours, index, end chunk, versioning, zlib compression, limits) and, for a
+valid file, prints the JSON object of conformance/README.md ("geometry" is
+null: this reader does not decode geometry).
+
+Usage:
+    python conformance/independent/plnread.py FILE.pln
+
+    # through the conformance runner, from the repository root:
+    python -m conformance --impl "python conformance/independent/plnread.py"
+
+Exit status 0 and one JSON object on stdout for a valid file; exit status 1
+and {"error": "CODE"} on stdout (a human-readable message on stderr) for an
+invalid one; exit status 2 for a usage or I/O error.
+"""
+
+import json
+import math
+import os
+import struct
+import sys
+import zlib
+
+# --------------------------------------------------------------------------
+# Constants (spec sections in brackets)
+
+SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
+
+READER_MAJOR, READER_MINOR = 1, 0  # this reader implements version 1.0
+
+MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
+
+# §10.3 limits (the reference reader's defaults)
+LIMIT_CHUNK = 256 * 1024 * 1024
+LIMIT_RAW = 256 * 1024 * 1024
+LIMIT_DEFLATE_RATIO = 1100
+LIMIT_PLANES = 2**28
+LIMIT_REFS = 2**24
+LIMIT_OBJECTS = 2**24
+
+READ_BLOCK = 1 << 20  # payloads are read in bounded blocks (§4.1)
+
+KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"iNDX", b"PEND"}
+
+FLAG_LOSSY, FLAG_COUNTS_KNOWN, FLAG_BBOX_KNOWN = 1, 2, 4  # §5
+OBJ_HAS_TRANSFORM = 1  # §8.1
+KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
+
+F32_PI = struct.unpack("<f", struct.pack("<I", 0x40490FDB))[0]  # §7.1
+F32_2PI = struct.unpack("<f", struct.pack("<I", 0x40C90FDB))[0]
+
+TOKEN_IN, TOKEN_OUT, TOKEN_RESERVED_LO = 0xFFFFFFFE, 0xFFFFFFFF, 0xFFFFFFF0  # §8.4
+NO_PARENT = 0xFFFFFFFF
+
+
+class PlnError(Exception):
+    """A reader error of spec §10.1."""
+
+    def __init__(self, code, message, chunk=None, offset=None):
+        super().__init__(message)
+        self.code = code
+        self.message = message
+        self.chunk = chunk
+        self.offset = offset
+
+
+# --------------------------------------------------------------------------
+# Small helpers
+
+
+def u8(b, o):
+    return b[o]
+
+
+def u16(b, o):
+    return struct.unpack_from("<H", b, o)[0]
+
+
+def u32(b, o):
+    return struct.unpack_from("<I", b, o)[0]
+
+
+def u64(b, o):
+    return struct.unpack_from("<Q", b, o)[0]
+
+
+def f64(b, o):
+    return struct.unpack_from("<d", b, o)[0]
+
+
+def is_letter(c):
+    return 0x41 <= c <= 0x5A or 0x61 <= c <= 0x7A
+
+
+def nan_to_none(x):
+    return None if isinstance(x, float) and math.isnan(x) else x
+
+
+class Cursor:
+    """Reads a payload front to back; running past its end is BAD_PAYLOAD."""
+
+    def __init__(self, data, what):
+        self.data = data
+        self.pos = 0
+        self.what = what
+
+    def remaining(self):
+        return len(self.data) - self.pos
+
+    def need(self, n, what=None):
+        if n > self.remaining():
+            raise PlnError(
+                "BAD_PAYLOAD",
+                "%s: %s needs %d bytes, %d remain"
+                % (self.what, what or "field", n, self.remaining()),
+            )
+
+    def take(self, n, what=None):
+        self.need(n, what)
+        b = self.data[self.pos:self.pos + n]
+        self.pos += n
+        return b
+
+    def u32(self, what=None):
+        self.need(4, what)
+        v = u32(self.data, self.pos)
+        self.pos += 4
+        return v
+
+    def u32_array(self, n, what=None):
+        # the length is checked against the bytes present before allocating
+        self.need(4 * n, what)
+        v = list(struct.unpack_from("<%dI" % n, self.data, self.pos)) if n else []
+        self.pos += 4 * n
+        return v
+
+
+def check_bit_padding(data, nbits, what):
+    """§2.1: the unused bits of the last byte must be 0."""
+    if nbits % 8 and data:
+        last = data[-1]
+        if last >> (nbits % 8):
+            raise PlnError("BAD_PAYLOAD", "%s: non-zero padding bits" % what)
+
+
+def decompress(method, raw_size, stored, what):
+    """§6 compression, with the §10.3 limits checked before inflating."""
+    if method not in (0, 1):
+        raise PlnError("BAD_COMPRESSION", "%s: compression method %d" % (what, method))
+    if raw_size > LIMIT_RAW:
+        raise PlnError("LIMIT_EXCEEDED", "%s: raw size %d above the limit" % (what, raw_size))
+    if method == 0:
+        if len(stored) != raw_size:
+            raise PlnError(
+                "SIZE_MISMATCH",
+                "%s: %d stored bytes, raw size %d" % (what, len(stored), raw_size),
+            )
+        return stored
+    if raw_size > LIMIT_DEFLATE_RATIO * len(stored):
+        raise PlnError(
+            "LIMIT_EXCEEDED",
+            "%s: raw size %d above %d x the %d stored bytes"
+            % (what, raw_size, LIMIT_DEFLATE_RATIO, len(stored)),
+        )
+    d = zlib.decompressobj()
+    try:
+        out = d.decompress(stored, raw_size + 1)  # never more than raw_size + 1
+    except zlib.error as e:
+        raise PlnError("BAD_COMPRESSION", "%s: invalid zlib stream (%s)" % (what, e))
+    if len(out) > raw_size:
+        raise PlnError("SIZE_MISMATCH", "%s: inflates to more than raw size %d" % (what, raw_size))
+    if not d.eof:
+        if len(out) < raw_size:
+            raise PlnError("BAD_COMPRESSION", "%s: zlib stream ends early" % what)
+        # exactly raw_size bytes so far but the stream is not finished: see
+        # whether it would produce more (SIZE_MISMATCH) or is cut (BAD_COMPRESSION)
+        try:
+            more = d.decompress(d.unconsumed_tail, 1)
+        except zlib.error as e:
+            raise PlnError("BAD_COMPRESSION", "%s: invalid zlib stream (%s)" % (what, e))
+        if more:
+            raise PlnError("SIZE_MISMATCH", "%s: inflates to more than raw size %d" % (what, raw_size))
+        if not d.eof:
+            raise PlnError("BAD_COMPRESSION", "%s: zlib stream ends early" % what)
+    if len(out) != raw_size:
+        raise PlnError(
+            "SIZE_MISMATCH", "%s: inflates to %d bytes, raw size %d" % (what, len(out), raw_size)
+        )
+    if d.unused_data:
+        raise PlnError(
+            "SIZE_MISMATCH", "%s: %d bytes after the zlib stream" % (what, len(d.unused_data))
+        )
+    return out
+
+
+# --------------------------------------------------------------------------
+# The reader
+
+
+class Reader:
+    def __init__(self, stream, size=None):
+        self.f = stream
+        self.size = size  # total input size if known
+        self.pos = 0
+
+        self.header = None
+        self.minor = 0
+        self.planes = []
+        self.objects = []
+        self.groups = []  # JSON dicts
+        self.group_refcounts = []
+        self.colours = []
+        self.findings = []
+        self.chunk_list = []  # (offset, type, ordinal) of OBJT, PLNS, GRUP
+        self.index_offset = None  # offset of the iNDX chunk, if seen
+        self.last_was_index = False
+
+    # -- input -------------------------------------------------------------
+
+    def read_exact(self, n, what):
+        """Read n bytes or raise TRUNCATED, in bounded blocks."""
+        if self.size is not None and n > self.size - self.pos:
+            raise PlnError(
+                "TRUNCATED",
+                "%s: needs %d bytes, %d remain" % (what, n, max(0, self.size - self.pos)),
+                offset=self.pos,
+            )
+        parts = []
+        left = n
+        while left:
+            b = self.f.read(min(left, READ_BLOCK))
+            if not b:
+                raise PlnError("TRUNCATED", "%s: input ends" % what, offset=self.pos)
+            parts.append(b)
+            left -= len(b)
+            self.pos += len(b)
+        return b"".join(parts)
+
+    def at_eof(self):
+        b = self.f.read(1)
+        if b:
+            self.pos += 1
+            return False
+        return True
+
+    def finding(self, code):
+        if code not in self.findings:
+            self.findings.append(code)
+
+    # -- top level ---------------------------------------------------------
+
+    def read(self):
+        self.read_signature()
+        first = True
+        while True:
+            offset = self.pos
+            head = self.f.read(8)
+            if len(head) < 8:
+                if not head:
+                    raise PlnError("TRUNCATED", "input ends before PEND", offset=offset)
+                raise PlnError("TRUNCATED", "input ends inside a chunk head", offset=offset)
+            self.pos += 8
+            ctype = head[:4]
+            length = u32(head, 4)
+            name = ctype.decode("latin-1")
+            if not all(is_letter(c) for c in ctype):
+                raise PlnError("BAD_CHUNK_TYPE", "chunk type %r is not four ASCII letters" % ctype,
+                               name, offset)
+            if length > MAX_CHUNK_LENGTH:
+                raise PlnError("CHUNK_TOO_LONG", "length %d above 2^31-1" % length, name, offset)
+            if length > LIMIT_CHUNK:
+                raise PlnError("LIMIT_EXCEEDED", "length %d above the limit" % length, name, offset)
+            try:
+                payload = self.read_exact(length, "%s payload" % name)
+                crc_bytes = self.read_exact(4, "%s CRC" % name)
+            except PlnError as e:
+                e.chunk, e.offset = name, offset
+                raise
+            crc = u32(crc_bytes, 0)
+            if zlib.crc32(ctype + payload) & 0xFFFFFFFF != crc:
+                raise PlnError("CRC_MISMATCH", "CRC mismatch", name, offset)
+
+            try:
+                if first:
+                    if ctype != b"PHDR":
+                        raise PlnError("MISSING_HEADER", "first chunk is not PHDR")
+                    self.read_header(payload)
+                    first = False
+                    continue
+                if ctype == b"PHDR":
+                    raise PlnError("DUPLICATE_HEADER", "a second PHDR")
+                if self.last_was_index and ctype != b"PEND":
+                    raise PlnError("BAD_INDEX", "iNDX is not immediately followed by PEND")
+                if ctype == b"PEND":
+                    self.read_end(payload)
+                    if not self.at_eof():
+                        raise PlnError("TRAILING_DATA", "bytes after PEND")
+                    return
+                if ctype == b"OBJT":
+                    self.read_object(payload, offset)
+                elif ctype == b"PLNS":
+                    self.read_planes(payload, offset)
+                elif ctype == b"GRUP":
+                    self.read_group(payload, offset)
+                elif ctype == b"cOLR":
+                    self.read_colours(payload)
+                elif ctype == b"iNDX":
+                    self.read_index(payload, offset)
+                elif ctype[0] & 0x20:
+                    self.finding("UNKNOWN_ANCILLARY_CHUNK")
+                else:
+                    raise PlnError("UNKNOWN_CRITICAL_CHUNK", "unknown critical chunk")
+            except PlnError as e:
+                if e.chunk is None:
+                    e.chunk, e.offset = name, offset
+                raise
+
+    def read_signature(self):
+        sig = b""
+        while len(sig) < 8:
+            b = self.f.read(8 - len(sig))
+            if not b:
+                break
+            sig += b
+        self.pos = len(sig)
+        if sig == SIGNATURE:
+            return
+        if len(sig) < 8 and SIGNATURE.startswith(sig):
+            raise PlnError("TRUNCATED", "input ends inside the signature", offset=0)
+        if len(sig) >= 4 and sig[1:4] == b"PLN" and sig[0] in (0x89, 0x09):
+            raise PlnError("TEXT_MODE_DAMAGE", "signature damaged by a text-mode transfer", offset=0)
+        raise PlnError("BAD_SIGNATURE", "not a .pln signature", offset=0)
+
+    # -- §5 header ---------------------------------------------------------
+
+    def read_header(self, p):
+        if len(p) >= 1 and p[0] != 1:
+            raise PlnError("UNSUPPORTED_VERSION", "major version %d" % p[0])
+        if len(p) < 108:
+            raise PlnError("BAD_PAYLOAD", "PHDR payload of %d bytes, under 108" % len(p))
+        major, minor, flags = p[0], p[1], u16(p, 2)
+        coding, bn, bp, bh, units = p[4], p[5], p[6], p[7], p[8]
+        h_min, h_max = f64(p, 12), f64(p, 20)
+        bbox_min = [f64(p, 28 + 8 * i) for i in range(3)]
+        bbox_max = [f64(p, 52 + 8 * i) for i in range(3)]
+        tolerance, error_bound = f64(p, 76), f64(p, 84)
+        plane_count, object_count, group_count = u64(p, 92), u32(p, 100), u32(p, 104)
+
+        if minor > READER_MINOR:
+            self.finding("NEWER_MINOR_VERSION")
+        if coding not in (0, 1, 2):
+            raise PlnError("UNSUPPORTED_CODING", "coding %d" % coding)
+        if coding == 2:
+            for w in (bn, bp, bh):
+                if not 1 <= w <= 32:
+                    raise PlnError("UNSUPPORTED_CODING", "quantized width %d outside 1-32" % w)
+        if not (math.isfinite(h_min) and math.isfinite(h_max)) or h_min > h_max:
+            raise PlnError("BAD_HEADER_VALUE", "h range [%r, %r]" % (h_min, h_max))
+        if units > 7:
+            raise PlnError("BAD_HEADER_VALUE", "units %d" % units)
+        if flags & FLAG_BBOX_KNOWN:
+            for a, b in zip(bbox_min, bbox_max):
+                if not (math.isfinite(a) and math.isfinite(b)) or a > b:
+                    raise PlnError("BAD_HEADER_VALUE", "bbox %r %r" % (bbox_min, bbox_max))
+        for name, v in (("tolerance", tolerance), ("error_bound", error_bound)):
+            if not (math.isnan(v) or (math.isfinite(v) and v >= 0)):
+                raise PlnError("BAD_HEADER_VALUE", "%s %r" % (name, v))
+
+        self.minor = minor
+        self.coding = coding
+        self.bits = (bn, bp, bh)
+        self.h_range = (h_min, h_max)
+        self.flags = flags
+        self.counts = (plane_count, object_count, group_count)
+        self.header = {
+            "version": [major, minor],
+            "lossy": bool(flags & FLAG_LOSSY),
+            "coding": coding,
+            "bits": [bn, bp, bh],
+            "h_range": [h_min, h_max],
+            "units": units,
+            "bbox": [bbox_min, bbox_max] if flags & FLAG_BBOX_KNOWN else None,
+            "tolerance": nan_to_none(tolerance),
+            "error_bound": nan_to_none(error_bound),
+            "counts": (
+                {"planes": plane_count, "objects": object_count, "groups": group_count}
+                if flags & FLAG_COUNTS_KNOWN else None
+            ),
+        }
+
+    # -- §8.1 objects ------------------------------------------------------
+
+    def read_object(self, p, offset):
+        c = Cursor(p, "OBJT")
+        head = c.take(12, "OBJT head")
+        index, parent, flags, name_len = u32(head, 0), u32(head, 4), head[8], u16(head, 10)
+        if index != len(self.objects):
+            raise PlnError("BAD_OBJECT", "object index %d, expected %d" % (index, len(self.objects)))
+        if len(self.objects) + 1 > LIMIT_OBJECTS:
+            raise PlnError("LIMIT_EXCEEDED", "more than %d objects" % LIMIT_OBJECTS)
+        if parent != NO_PARENT and parent >= index:
+            raise PlnError("BAD_OBJECT", "parent %d is not an earlier object" % parent)
+        raw_name = c.take(name_len, "name")
+        try:
+            name = raw_name.decode("utf-8")
+        except UnicodeDecodeError:
+            raise PlnError("BAD_OBJECT", "name is not UTF-8")
+        transform = None
+        if flags & OBJ_HAS_TRANSFORM:
+            m = list(struct.unpack("<16d", c.take(128, "transform")))
+            if not all(math.isfinite(v) for v in m):
+                raise PlnError("BAD_OBJECT", "transform entry not finite")
+            if m[12:16] != [0.0, 0.0, 0.0, 1.0]:
+                raise PlnError("BAD_OBJECT", "transform last row %r is not 0 0 0 1" % m[12:16])
+            transform = m
+        # later fields: ignored (§8.1, §11)
+        self.objects.append({
+            "name": name,
+            "parent": None if parent == NO_PARENT else parent,
+            "transform": transform,
+        })
+        self.chunk_list.append((offset, b"OBJT", index))
+
+    # -- §7 plane table ----------------------------------------------------
+
+    def read_planes(self, p, offset):
+        if len(p) < 20:
+            raise PlnError("BAD_PAYLOAD", "PLNS payload of %d bytes, under 20" % len(p))
+        first, count, method, raw_size = u64(p, 0), u32(p, 8), p[12], u32(p, 16)
+        if first != len(self.planes):
+            raise PlnError("PLANE_INDEX_MISMATCH",
+                           "first %d, %d planes before" % (first, len(self.planes)))
+        if len(self.planes) + count > LIMIT_PLANES:
+            raise PlnError("LIMIT_EXCEEDED", "plane table above %d planes" % LIMIT_PLANES)
+        if self.coding == 0:
+            expected = 12 * count
+        elif self.coding == 1:
+            expected = 24 * count
+        else:
+            expected = (count * sum(self.bits) + 7) // 8
+        if raw_size != expected:
+            raise PlnError("SIZE_MISMATCH",
+                           "raw_size %d, %d planes take %d" % (raw_size, count, expected))
+        data = decompress(method, raw_size, p[20:], "PLNS data")
+        base = len(self.planes)
+        if self.coding == 0:
+            vals = struct.unpack("<%df" % (3 * count), data)
+            self.add_float_planes(vals, count, F32_PI, F32_2PI, base)
+        elif self.coding == 1:
+            vals = struct.unpack("<%dd" % (3 * count), data)
+            self.add_float_planes(vals, count, math.pi, 2 * math.pi, base)
+        else:
+            self.add_quantized_planes(data, count, base)
+        self.chunk_list.append((offset, b"PLNS", first))
+
+    def add_float_planes(self, vals, count, pi, two_pi, base):
+        planes = self.planes
+        for i in range(count):
+            nu, phi, h = vals[3 * i], vals[3 * i + 1], vals[3 * i + 2]
+            if not (math.isfinite(nu) and math.isfinite(phi) and math.isfinite(h)):
+                raise PlnError("BAD_TRIPLET", "plane %d not finite" % (base + i))
+            if not (0.0 <= nu <= pi):
+                raise PlnError("BAD_TRIPLET", "plane %d: nu %r outside [0, pi]" % (base + i, nu))
+            if not (0.0 <= phi < two_pi):
+                raise PlnError("BAD_TRIPLET", "plane %d: phi %r outside [0, 2pi)" % (base + i, phi))
+            planes.append([nu, phi, h])
+
+    def add_quantized_planes(self, data, count, base):
+        bn, bp, bh = self.bits
+        rec = bn + bp + bh
+        check_bit_padding(data, count * rec, "PLNS quantized data")
+        m_nu = 2 ** (bn - 1)
+        n_phi = 2 ** bp
+        m_h = 2 ** bh - 1
+        h_min, h_max = self.h_range
+        step_nu = math.pi / m_nu
+        step_phi = (2 * math.pi) / n_phi
+        step_h = (h_max - h_min) / m_h
+        mask_nu, mask_phi, mask_h = (1 << bn) - 1, (1 << bp) - 1, (1 << bh) - 1
+        planes = self.planes
+        for i in range(count):
+            start = i * rec
+            b0 = start >> 3
+            b1 = (start + rec + 7) >> 3
+            v = int.from_bytes(data[b0:b1], "little") >> (start & 7)
+            q_nu = v & mask_nu
+            q_phi = (v >> bn) & mask_phi
+            q_h = (v >> (bn + bp)) & mask_h
+            if q_nu > m_nu:
+                raise PlnError("BAD_TRIPLET",
+                               "plane %d: nu code %d above %d" % (base + i, q_nu, m_nu))
+            planes.append([q_nu * step_nu, q_phi * step_phi, h_min + q_h * step_h])
+
+    # -- §8.2 part groups --------------------------------------------------
+
+    def read_group(self, p, offset):
+        if len(p) < 16:
+            raise PlnError("BAD_PAYLOAD", "GRUP payload of %d bytes, under 16" % len(p))
+        index, obj, kind, method, raw_size = u32(p, 0), u32(p, 4), p[8], p[9], u32(p, 12)
+        if index != len(self.groups):
+            raise PlnError("GROUP_INDEX_MISMATCH",
+                           "group index %d, expected %d" % (index, len(self.groups)))
+        if obj >= len(self.objects):
+            raise PlnError("BAD_OBJECT_REFERENCE",
+                           "object %d, %d defined" % (obj, len(self.objects)))
+        known = kind in KNOWN_KINDS
+        if not known and self.minor <= READER_MINOR:
+            raise PlnError("UNKNOWN_GROUP_KIND",
+                           "kind %d in a version 1.%d file" % (kind, self.minor))
+        body = decompress(method, raw_size, p[16:], "GRUP body")
+
+        c = Cursor(body, "GRUP body")
+        m = c.u32("ref_count")
+        if m == 0:
+            raise PlnError("BAD_GROUP_STRUCTURE", "ref_count 0")
+        if m > LIMIT_REFS:
+            raise PlnError("LIMIT_EXCEEDED", "ref_count %d above %d" % (m, LIMIT_REFS))
+        refs = c.u32_array(m, "refs")
+        n_planes = len(self.planes)
+        for r in refs:
+            if r >= n_planes:
+                raise PlnError("BAD_PLANE_REFERENCE",
+                               "reference to plane %d, %d defined" % (r, n_planes))
+        roles = c.take((m + 7) // 8, "roles")
+        check_bit_padding(roles, m, "GRUP roles")
+        bounding = [i for i in range(m) if (roles[i >> 3] >> (i & 7)) & 1]
+
+        g = {"index": index, "object": obj, "kind": kind, "refs": refs, "bounding": bounding}
+        if not known:
+            self.finding("SKIPPED_GROUP_KIND")  # kind data is not interpreted
+        elif kind in (0, 3, 4):
+            if c.remaining():
+                raise PlnError("BAD_PAYLOAD",
+                               "%d bytes of kind data for kind %d" % (c.remaining(), kind))
+        elif kind == 1:
+            g["cells"] = self.read_cells(c, m)
+        elif kind == 2:
+            g["tree"] = self.read_tree(c, m)
+        self.groups.append(g)
+        self.group_refcounts.append(m)
+        self.chunk_list.append((offset, b"GRUP", index))
+
+    def read_cells(self, c, m):
+        """§8.3."""
+        n = c.u32("cell_count")
+        if n == 0:
+            raise PlnError("BAD_GROUP_STRUCTURE", "cell_count 0")
+        sizes = c.u32_array(n, "cell sizes")
+        total = 0
+        for s in sizes:
+            if s == 0:
+                raise PlnError("BAD_GROUP_STRUCTURE", "a cell of size 0")
+            total += s
+        entries = c.u32_array(total, "cell entries")
+        if c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "%d bytes after the cell entries" % c.remaining())
+        for e in entries:
+            if (e >> 1) >= m:
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "cell entry %d: local reference %d of %d" % (e, e >> 1, m))
+        cells = []
+        k = 0
+        for s in sizes:
+            cells.append(entries[k:k + s])
+            k += s
+        return cells
+
+    def read_tree(self, c, m):
+        """§8.4."""
+        t = c.u32("token_count")
+        tokens = c.u32_array(t, "tokens")
+        if c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the tokens" % c.remaining())
+        slots = 1
+        for i, tok in enumerate(tokens):
+            if slots <= 0:
+                raise PlnError("BAD_GROUP_STRUCTURE", "token %d after a complete tree" % i)
+            if tok < TOKEN_RESERVED_LO:
+                if tok >= m:
+                    raise PlnError("BAD_GROUP_STRUCTURE",
+                                   "split on local reference %d of %d" % (tok, m))
+                slots += 1
+            elif tok in (TOKEN_IN, TOKEN_OUT):
+                slots -= 1
+            else:
+                raise PlnError("BAD_GROUP_STRUCTURE", "reserved token 0x%08X" % tok)
+        if slots != 0:
+            raise PlnError("BAD_GROUP_STRUCTURE", "incomplete tree (%d open slots)" % slots)
+        return tokens
+
+    # -- §8.5 colours ------------------------------------------------------
+
+    def read_colours(self, p):
+        if len(p) < 8:
+            raise PlnError("BAD_PAYLOAD", "cOLR payload of %d bytes, under 8" % len(p))
+        group, count = u32(p, 0), u32(p, 4)
+        if group >= len(self.groups):
+            raise PlnError("BAD_COLOURS", "colours for group %d, %d defined" % (group, len(self.groups)))
+        if count != self.group_refcounts[group]:
+            raise PlnError("BAD_COLOURS", "%d colours for %d references"
+                           % (count, self.group_refcounts[group]))
+        if len(p) != 8 + 4 * count:
+            raise PlnError("BAD_COLOURS", "cOLR payload of %d bytes for %d colours" % (len(p), count))
+        rgba = [list(p[8 + 4 * i:12 + 4 * i]) for i in range(count)]
+        self.colours.append({"group": group, "rgba": rgba})
+
+    # -- §8.6 index --------------------------------------------------------
+
+    def read_index(self, p, offset):
+        if self.index_offset is not None:
+            raise PlnError("BAD_INDEX", "a second iNDX")
+        if len(p) < 4:
+            raise PlnError("BAD_PAYLOAD", "iNDX payload of %d bytes, under 4" % len(p))
+        count = u32(p, 0)
+        if len(p) != 4 + 16 * count:
+            raise PlnError("BAD_INDEX", "iNDX count %d, payload of %d bytes" % (count, len(p)))
+        entries = []
+        for i in range(count):
+            o = 4 + 16 * i
+            entries.append((u64(p, o), bytes(p[o + 8:o + 12]), u32(p, o + 12)))
+        prev = -1
+        for i, (off, typ, _) in enumerate(entries):
+            if off <= prev:
+                raise PlnError("BAD_INDEX", "entry %d: offsets do not increase" % i)
+            prev = off
+            if off >= offset:
+                raise PlnError("BAD_INDEX", "entry %d: offset %d not before the index" % (i, off))
+        if len(entries) != len(self.chunk_list):
+            raise PlnError("BAD_INDEX", "%d entries for %d OBJT/PLNS/GRUP chunks"
+                           % (len(entries), len(self.chunk_list)))
+        for i, (e, actual) in enumerate(zip(entries, self.chunk_list)):
+            if e != actual:
+                raise PlnError("BAD_INDEX", "entry %d is %r, the chunk is %r" % (i, e, actual))
+        self.index_offset = offset
+        self.last_was_index = True
+
+    # -- §4.4 end ----------------------------------------------------------
+
+    def read_end(self, p):
+        if len(p) != 8:
+            raise PlnError("BAD_PAYLOAD", "PEND payload of %d bytes, not 8" % len(p))
+        index_offset = u64(p, 0)
+        if index_offset != 0 and index_offset != self.index_offset:
+            raise PlnError("BAD_INDEX", "PEND index_offset %d, iNDX at %r"
+                           % (index_offset, self.index_offset))
+        if self.flags & FLAG_COUNTS_KNOWN:
+            actual = (len(self.planes), len(self.objects), len(self.groups))
+            if actual != self.counts:
+                raise PlnError("COUNT_MISMATCH", "header counts %r, file %r" % (self.counts, actual))
+
+    # -- output ------------------------------------------------------------
+
+    def result(self):
+        return {
+            "header": self.header,
+            "planes": self.planes,
+            "objects": self.objects,
+            "groups": self.groups,
+            "colours": self.colours,
+            "findings": self.findings,
+            "geometry": None,
+        }
+
+
+def main(argv):
+    if len(argv) != 2:
+        sys.stderr.write("usage: plnread.py FILE.pln\n")
+        return 2
+    path = argv[1]
+    try:
+        f = open(path, "rb")
+    except OSError as e:
+        sys.stderr.write("plnread: %s\n" % e)
+        return 2
+    with f:
+        try:
+            st = os.fstat(f.fileno())
+            import stat as _stat
+            size = st.st_size if _stat.S_ISREG(st.st_mode) else None
+        except OSError:
+            size = None
+        reader = Reader(f, size)
+        try:
+            reader.read()
+        except PlnError as e:
+            where = ""
+            if e.chunk is not None:
+                where += " in %s" % e.chunk
+            if e.offset is not None:
+                where += " at offset %d" % e.offset
+            sys.stderr.write("%s: %s%s: %s\n" % (path, e.code, where, e.message))
+            sys.stdout.write(json.dumps({"error": e.code}) + "\n")
+            return 1
+    sys.stdout.write(json.dumps(reader.result(), allow_nan=False) + "\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

@@ -1,0 +1,66 @@
+"""Interrupted conversions (issue 7): SIGKILL, SIGTERM or SIGINT at any moment leave nothing under
+the target name, and never touch the input."""
+
+from __future__ import annotations
+
+import hashlib
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import trimesh
+
+CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
+BUNNY = CORPUS / "smooth_dense" / "bun_zipper.ply"
+PLN = [sys.executable, "-m", "planefmt_converters.cli", "convert"]
+
+
+def _digest(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _full_run(target: Path) -> float:
+    t0 = time.perf_counter()
+    subprocess.run([*PLN, str(BUNNY), str(target)], check=True, capture_output=True)
+    return time.perf_counter() - t0
+
+
+def test_sigkill_at_any_moment_leaves_no_file_under_the_target_name(tmp_path: Path) -> None:
+    before = _digest(BUNNY)
+    runtime = _full_run(tmp_path / "reference.obj")
+    killed = 0
+    # Kill points spread over the whole conversion, start-up and writing included.
+    for k, fraction in enumerate((0.15, 0.35, 0.55, 0.75, 0.85, 0.95)):
+        target = tmp_path / f"out{k}.obj"
+        proc = subprocess.Popen([*PLN, str(BUNNY), str(target)], stdout=subprocess.DEVNULL,
+                                stderr=subprocess.DEVNULL)
+        time.sleep(fraction * runtime)
+        proc.send_signal(signal.SIGKILL)
+        code = proc.wait(timeout=60)
+        if code == -signal.SIGKILL:
+            killed += 1
+            assert not target.exists(), f"a killed conversion left {target.name}"
+        else:
+            assert code == 0
+            assert len(trimesh.load(target, force="mesh").faces) > 60_000  # complete, not partial
+    assert killed >= 3, "the conversion finished before most kill points: the test did not test"
+    assert _digest(BUNNY) == before
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_sigterm_and_sigint_clean_up_and_exit_non_zero(sig: signal.Signals, tmp_path: Path) -> None:
+    runtime = _full_run(tmp_path / "reference.glb")
+    target = tmp_path / "out.glb"
+    proc = subprocess.Popen([*PLN, str(BUNNY), str(target)], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            text=True)
+    time.sleep(0.7 * runtime)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    if proc.returncode == 0:
+        pytest.skip("the conversion finished before the signal arrived")
+    assert proc.returncode != 0 and "Traceback" not in err, err
+    assert not target.exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["reference.glb"], "temporary files left behind"
