@@ -23,6 +23,7 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest
+	$(BIN)/python -m conformance
 
 bench: $(STAMP)
 	$(BIN)/python -m pip install -q -e '.[bench]'

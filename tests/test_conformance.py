@@ -128,3 +128,14 @@ def test_zlib_case_is_compressed_and_suite_is_small():
         pos += 12 + length
     assert methods == {"PLNS": 1, "GRUP": 1}
     assert sum(p.stat().st_size for p in SUITE.rglob("*") if p.is_file()) < 2_000_000
+
+
+def test_independent_reader_written_from_the_spec_passes_the_suite():
+    """conformance/independent/plnread.py: stdlib only, written from spec/ and the README contract alone
+    (no planefmt code read), through the runner's command-line contract, on a file and on a pipe."""
+    reader = f"{sys.executable} {ROOT / 'conformance' / 'independent' / 'plnread.py'}"
+    for impl in (reader, f"sh -c 'cat \"$0\" | {reader} /dev/stdin'"):
+        p = subprocess.run([sys.executable, "-m", "conformance", "--impl", impl], capture_output=True, text=True,
+                           cwd=ROOT, timeout=600)
+        assert p.returncode == 0, p.stdout[-2000:]
+        assert p.stdout.splitlines()[-1] == f"{len(CASES)} passed, 0 failed"
