@@ -3,7 +3,9 @@
     python fuzz/fuzz_pln.py [libFuzzer options] [CORPUS_DIR ...]
 
 Every input is read to the end through ``planefmt.open`` (streaming) and,
-where it parses, through ``salvage`` and random access. Any exception outside
+where it parses, through ``salvage``, random access and ``validate`` with
+geometry (which decodes every part group planefmt can decode: the
+half-space intersection of hostile plane sets). Any exception outside
 the ``PlnError`` tree is a crash; libFuzzer's ``-timeout`` and
 ``-rss_limit_mb`` turn hangs and memory blow-ups into crashes too. Crash
 inputs belong in ``fuzz/regressions/`` (``tests/test_fuzz_regressions.py``
@@ -19,8 +21,10 @@ import atheris
 
 with atheris.instrument_imports():
     import planefmt
+    from planefmt import codec  # noqa: F401  (registers the geometry checks of validate)
     from planefmt.chunks import Limits
     from planefmt.salvage import salvage
+    from planefmt.validate import validate
 
 #: Small caps: a fuzzer input is at most a few kB, so anything bigger is hostile.
 LIMITS = Limits(max_chunk_length=1 << 20, max_raw_size=1 << 22, max_planes=1 << 16,
@@ -29,6 +33,7 @@ LIMITS = Limits(max_chunk_length=1 << 20, max_raw_size=1 << 22, max_planes=1 << 
 
 def exercise(data: bytes) -> None:
     """Read ``data`` every way a user can; only ``PlnError`` may escape."""
+    groups = 0
     try:
         with planefmt.open(io.BytesIO(data), limits=LIMITS) as r:
             groups = sum(1 for _ in r.part_groups())
@@ -41,6 +46,9 @@ def exercise(data: bytes) -> None:
         salvage(io.BytesIO(data), limits=LIMITS)
     except planefmt.PlnError:
         pass
+    if groups:
+        # validate reports every PlnError as a finding: anything it raises is a crash.
+        validate(io.BytesIO(data), geometry=True, limits=LIMITS)
 
 
 def test_one_input(data: bytes) -> None:

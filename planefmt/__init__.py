@@ -15,9 +15,23 @@ from .writer import Writer
 
 __version__ = "0.1.0"
 
+#: The geometry codec's entry points, loaded on first use: they pull in scipy, which a reader
+#: that only walks the container (``pln info`` on a pipe) should not pay for.
+_CODEC = ("decode_mesh", "decode_scene", "encode_mesh", "encode_scene", "salvage_scene")
+
+
+def __getattr__(name: str):
+    if name in _CODEC:
+        from . import codec
+
+        return getattr(codec, name)
+    raise AttributeError(f"module 'planefmt' has no attribute {name!r}")
+
+
 __all__ = [
     "CODES", "ChecksumError", "Coding", "Colours", "ConversionError", "FormatError", "GeometryError",
     "GroupKind", "Header", "Limits", "LimitError", "Mesh", "Node", "ObjectRecord", "PartGroup",
     "PlaneBlock", "PlnError", "Quantization", "Reader", "Scene", "TruncatedError", "UnknownChunk",
-    "Units", "VersionError", "Writer", "chunk_bytes", "open",
+    "Units", "VersionError", "Writer", "chunk_bytes", "decode_mesh", "decode_scene", "encode_mesh",
+    "encode_scene", "open", "salvage_scene",
 ]
