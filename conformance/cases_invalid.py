@@ -710,6 +710,12 @@ def _():
     return with_index([GOOD_ENTRIES[0], GOOD_ENTRIES[2]])
 
 
+@case("xindx_not_last", "CHUNK_ORDER", "an ancillary tEXt chunk between iNDX and PEND")
+def _():
+    layout = finish(cube())
+    return frame(layout[:-1] + [(b"tEXt", b"late"), layout[-1]])
+
+
 @case("xindx_count", "BAD_INDEX", "iNDX count 2 with 3 entries present", also=("BAD_PAYLOAD",))
 def _():
     layout = finish(cube())

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 
-from planefmt import codec
 from planefmt.model import Scene
 
 SIGNATURE_TAIL = b"PLN"
@@ -16,12 +15,17 @@ def sniff(head: bytes, size: int) -> bool:
 
 
 def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
+    # The codec (scipy) loads only when a .pln is decoded or encoded, not for `pln info`.
+    from planefmt import codec
+
     return codec.decode_scene(path), []
 
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
           delta: float | None = None, tau: float | None = None, compress: bool = False) -> list[str]:
     """Encode ``scene`` (atomically); the notes name what planes could not carry."""
+    from planefmt import codec
+
     codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta, tau=tau,
                        compress=compress)
     return ["face colours"] if any(n.mesh is not None and n.mesh.face_colours is not None

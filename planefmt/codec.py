@@ -787,11 +787,17 @@ def check_group(group: PartGroup, reader: Reader) -> list[Finding]:
 
     ``EMPTY_POLYTOPE`` / ``UNBOUNDED_POLYTOPE`` errors, one ``REDUNDANT_PLANE``
     warning per plane of a convex group that bounds no face. Kinds without a
-    decoder yet are not checked.
+    decoder yet get one ``GEOMETRY_NOT_CHECKED`` note.
     """
-    if int(group.kind) not in DECODERS or group.planes is None:
+    if group.planes is None:
         return []
     where = dict(file=reader.name, chunk="GRUP", group=group.index)
+    if int(group.kind) not in DECODERS:
+        if int(group.kind) not in GroupKind._value2member_map_:
+            return []  # a newer minor version's kind: SKIPPED_GROUP_KIND already says so
+        return [Finding("GEOMETRY_NOT_CHECKED", CODES["GEOMETRY_NOT_CHECKED"].severity,
+                        f"part group {group.index}: kind {GroupKind(group.kind).name} is not decoded by this "
+                        f"version of planefmt", **where)]
     try:
         decoded = decode_group(group.planes, group, group.index,
                                header_plane_error(reader.header))

@@ -61,6 +61,7 @@ _CATALOGUE = [
     Code("EMPTY_POLYTOPE", "error", "the half-spaces of a part group have an empty intersection"),
     Code("UNBOUNDED_POLYTOPE", "error", "the half-spaces of a part group do not bound a finite region"),
     Code("REDUNDANT_PLANE", "warning", "a plane of a convex group bounds no face"),
+    Code("GEOMETRY_NOT_CHECKED", "info", "a part group of a kind this decoder cannot decode yet was not checked"),
     Code("DEGENERATE_GEOMETRY", "error", "the input geometry is degenerate (NaN, no area, no faces)"),
     Code("TOLERANCE_NOT_MET", "error", "the decoded surface is farther from the source than the tolerance"),
     # converters and CLI

@@ -133,6 +133,8 @@ class Reader:
 
     def _dispatch(self, raw: RawChunk) -> Record | None:
         t = raw.type
+        if self.index_offset is not None and t != schema.PEND:
+            raise FormatError(f"{raw.name} after iNDX: iNDX must be followed by PEND", code="CHUNK_ORDER")
         if t == schema.PLNS:
             self._listed.append((raw.offset, t, self._plane_count))
             block = records.decode_planes(raw.payload, self.header, self._plane_count, self.limits)
@@ -257,7 +259,7 @@ class Reader:
         # A shallow copy shares the file but starts from an empty plane table and object list.
         sub = copy.copy(self)
         sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
-        sub.findings, sub.retain_planes = [], True
+        sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
         stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
         for i in np.flatnonzero(np.isin(types[: pos + 1], [schema.OBJT, schema.PLNS])).tolist() + [int(pos)]:
             offset = int(entries["offset"][i])

@@ -45,6 +45,9 @@ GROUP_CHECKS: list[GroupCheck] = []
 def validate(source: str | os.PathLike | BinaryIO, *, geometry: bool = True,
              limits: Limits | None = None) -> list[Finding]:
     """All findings for ``source``; an empty list means a conforming file."""
+    if geometry:
+        # The codec registers its decoder in GROUP_CHECKS when imported; it imports this module.
+        from . import codec  # noqa: F401
     findings: list[Finding] = []
     name = None
     try:

@@ -344,3 +344,20 @@ def test_major_version_mismatch():
     data = write_bytes(Header(version=(2, 0)), lambda w: None)
     with pytest.raises(planefmt.VersionError):
         read_all(data)
+
+
+def test_chunk_after_the_index_is_chunk_order():
+    data = cube_file()
+    pos = data.index(b"PEND")
+    bad = data[:pos] + chunk_bytes(b"tEXt", b"late") + data[pos:]
+    with pytest.raises(planefmt.FormatError) as e:
+        with planefmt.open(io.BytesIO(bad)) as r:
+            list(r)
+    assert e.value.code == "CHUNK_ORDER" and e.value.chunk == "tEXt" and e.value.offset == pos
+
+
+def test_every_catalogued_code_is_in_the_spec():
+    from pathlib import Path
+
+    spec = (Path(__file__).resolve().parent.parent / "spec" / "pln-1.md").read_text(encoding="utf-8")
+    assert [c for c in planefmt.CODES if f"`{c}`" not in spec] == []

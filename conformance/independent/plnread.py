@@ -300,7 +300,7 @@ class Reader:
                 if ctype == b"PHDR":
                     raise PlnError("DUPLICATE_HEADER", "a second PHDR")
                 if self.last_was_index and ctype != b"PEND":
-                    raise PlnError("BAD_INDEX", "iNDX is not immediately followed by PEND")
+                    raise PlnError("CHUNK_ORDER", "iNDX is not immediately followed by PEND (§4.3)")
                 if ctype == b"PEND":
                     self.read_end(payload)
                     if not self.at_eof():
@@ -619,7 +619,7 @@ class Reader:
 
     def read_index(self, p, offset):
         if self.index_offset is not None:
-            raise PlnError("BAD_INDEX", "a second iNDX")
+            raise PlnError("CHUNK_ORDER", "a second iNDX (§4.3)")
         if len(p) < 4:
             raise PlnError("BAD_PAYLOAD", "iNDX payload of %d bytes, under 4" % len(p))
         count = u32(p, 0)
