@@ -2,7 +2,7 @@
 
 Converts ``samples/cylinder.stl`` to .pln (lossless: tolerance 1e-6 of the
 bounding-box diagonal, verified by the encoder), prints ``pln info``, and
-converts the .pln back to GLB and OBJ.
+converts the .pln back to GLB and OBJ, and draws it to ``cylinder.png``.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ def main(argv: list[str] | None = None) -> int:
         ["info", str(out / "cylinder.pln")],
         ["convert", str(out / "cylinder.pln"), str(out / "cylinder.glb")],
         ["convert", str(out / "cylinder.pln"), str(out / "cylinder.obj")],
+        ["preview", str(out / "cylinder.pln"), "-o", str(out / "cylinder.png")],
     ]
     for step in steps:
         print("$ pln " + " ".join(step), flush=True)
