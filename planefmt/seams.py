@@ -46,6 +46,8 @@ def _merge(points: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarra
 #: Rounding of a point solved from three planes, in units of ``eps * scale / |det|`` (measured:
 #: copies computed along different clip sequences differ by up to about 4 of these units).
 ERROR_FACTOR = 16.0
+#: Largest welding reach a corner's error estimate may claim, relative to the coordinates' size.
+MAX_REACH = 1e-6
 
 
 class Planes:
@@ -98,8 +100,19 @@ def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes:
     triple[corners] = np.column_stack([plane[poly], edge_plane[prev], edge_plane])
     err = planes.error(triple, scale)
     err[~np.isfinite(err)] = 0.0
-    reach = max(tol, float(err.max(initial=0.0)))
-    pairs = cKDTree(points).query_pairs(reach, output_type="ndarray")
+    # Planes meeting at a grazing angle can claim an error as large as the model: searching every
+    # point within the largest claim found all pairs (ADIS16480.STL: more than 6 GB). Each point
+    # searches its own reach, capped at MAX_REACH of the coordinates' size.
+    err = np.minimum(err, MAX_REACH * scale)
+    tree = cKDTree(points)
+    pairs = tree.query_pairs(tol, output_type="ndarray")
+    wide = np.flatnonzero(err > tol)
+    if len(wide):
+        near = cKDTree(points[wide]).sparse_distance_matrix(tree, float(err[wide].max()), output_type="ndarray")
+        near = near[near["v"] <= err[wide][near["i"]]]
+        extra = np.column_stack([wide[near["i"]], near["j"]])
+        extra = np.sort(extra[extra[:, 0] != extra[:, 1]], axis=1)
+        pairs = np.unique(np.vstack([pairs.reshape(-1, 2), extra]), axis=0)
     if len(pairs):
         a, b = pairs[:, 0], pairs[:, 1]
         dist = np.linalg.norm(points[a] - points[b], axis=1)
