@@ -51,9 +51,12 @@ from .errors import CODES, FormatError, GeometryError, PlnError
 from .halfspace import decode_convex, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
 from .model import Coding, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup, Quantization, Scene, Units
+from .bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
+from .patches import PlaneTable, decode_patch_groups
 from .planes import from_triplets, to_triplets, transform_points
 from .polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize
 from .reader import Reader
+from .solids import decode_bsp_group
 from .salvage import salvage
 from .validate import GROUP_CHECKS, Finding
 from .writer import Writer
@@ -104,7 +107,8 @@ class Body:
     ``faces`` the indices of this body's faces in it; ``face_plane`` gives
     each of those faces' plane in the (possibly simplified) plane list
     ``omega``, ``h`` (-1: the face's plane was dropped). ``tolerance`` is a
-    fraction of the diagonal.
+    fraction of the diagonal. A strategy that needs planes of its own
+    (bounding planes of patches) adds them to ``table``.
     """
 
     polygons: Polygons
@@ -113,6 +117,8 @@ class Body:
     omega: np.ndarray
     h: np.ndarray
     tolerance: float
+    table: PlaneTable  # the object's planes: ``omega``, ``h``, then the bounding planes strategies add
+    simplified: bool  # tau or delta changed the planes
 
 
 @dataclass(frozen=True)
@@ -210,11 +216,24 @@ def encode_convex_body(body: Body) -> list[GroupSpec] | None:
     return [GroupSpec(GroupKind.CONVEX, refs, np.zeros(len(refs), dtype=bool))]
 
 
+def encode_general_body(body: Body) -> list[GroupSpec]:
+    """Any other body through :func:`planefmt.bodies.encode_body`: a closed outward body as a BSP
+    tree of its own face planes (verified closed, same volume and Euler characteristic), falling
+    back to, and anything else as, verified pseudo-convex and pseudo-concave patches."""
+    if body.simplified:
+        raise GeometryError(f"a non-convex body ({len(body.faces)} triangles): the lossy options "
+                            f"delta and tau apply to convex bodies only in this version")
+    poly = body.polygons
+    groups, _ = encode_body(poly.vertices, poly.faces[body.faces], body.face_plane, poly.distance,
+                            body.table, body.tolerance * poly.diagonal)
+    return [GroupSpec(g.kind, g.refs, g.bounding, tree=g.tree) for g in groups]
+
+
 #: Strategies tried in order for each body: ``(name, encode)``; ``encode`` returns the body's
-#: part groups or None when it does not apply. Solid decomposition (BSP, cells) and pseudo-convex
-#: or pseudo-concave patches for open surfaces are to be added here.
+#: part groups or None when it does not apply.
 BODY_STRATEGIES: list[tuple[str, Callable[[Body], list[GroupSpec] | None]]] = [
     ("convex", encode_convex_body),
+    ("solid or patches", encode_general_body),
 ]
 
 
@@ -228,10 +247,35 @@ def decode_convex_group(planes: np.ndarray, group: GroupLike, label: object,
     return DecodedGroup(poly.vertices, poly.triangles, inc_vertex, inc_ref, poly.redundant)
 
 
+def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
+    """A ``BSP`` group: the closed surface of its IN leaves, welded without T-junctions (spec §8.4)."""
+    if group.tree is None:
+        raise GeometryError(f"part group {label}: a BSP group without a tree", code="BAD_GROUP_STRUCTURE")
+    omega, h = from_triplets(planes)
+    v, t, inc_v, inc_r = decode_bsp_group(omega, h, np.asarray(group.tree, dtype=np.uint32),
+                                          ~np.asarray(group.bounding, dtype=bool))
+    return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64))
+
+
+def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
+    """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes (spec §8.2.2)."""
+    omega, h = from_triplets(planes)
+    try:
+        (v, t, inc_v, inc_r), = decode_patch_groups(
+            omega, h, [len(h)], ~np.asarray(group.bounding, dtype=bool),
+            np.array([int(group.kind) == GroupKind.PSEUDO_CONCAVE]))
+    except GeometryError as exc:
+        raise GeometryError(f"part group {label}: {exc.reason.split(': ', 1)[-1]}", code=exc.code) from None
+    return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64))
+
+
 #: Decoder of each part-group kind: ``decode(planes, group, label, error)`` with ``planes`` the
 #: (m, 3) triplets of ``group.refs`` and ``error`` the coding's :class:`PlaneError`.
 DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], DecodedGroup]] = {
     GroupKind.CONVEX: decode_convex_group,
+    GroupKind.BSP: decode_bsp,
+    GroupKind.PSEUDO_CONVEX: decode_patch,
+    GroupKind.PSEUDO_CONCAVE: decode_patch,
 }
 
 
@@ -299,7 +343,12 @@ def decode_group(planes: np.ndarray, group: GroupLike, label: object = None,
         raise GeometryError(f"part group {label}: decoding {name} groups is not implemented yet",
                             code="UNKNOWN_GROUP_KIND")
     planes = np.asarray(planes, dtype=np.float64).reshape(-1, 3)
-    return decoder(planes, group, label, error)
+    try:
+        return decoder(planes, group, label, error)
+    except (ArithmeticError, IndexError, ValueError, np.linalg.LinAlgError, QhullError) as exc:
+        # Planes from a file can be anything; a numeric failure deep in a decoder is still bad input.
+        raise GeometryError(f"part group {label}: its planes do not decode ({type(exc).__name__}: {exc})",
+                            code="DEGENERATE_GEOMETRY") from exc
 
 
 def decode_mesh(source: Encoded | np.ndarray, groups: Iterable[GroupLike] | None = None, *,
@@ -346,6 +395,10 @@ class _Object:
     world: np.ndarray
     simplified: bool
     fit: float  # model units
+    closed: bool  # the source is a closed 2-manifold: its decoding must be one, of the same volume
+    volume: float  # model units cubed, local coordinates
+    euler: int
+    area: float  # model units squared, local coordinates
 
 
 def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1e-6,
@@ -391,9 +444,11 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     body_of_face = _bodies(poly)
     by_body = np.argsort(body_of_face, kind="stable")
     groups: list[GroupSpec] = []
+    table = PlaneTable(omega, h)
     for b, faces_b in enumerate(np.split(by_body, np.cumsum(np.bincount(body_of_face))[:-1])):
-        body = Body(poly, faces_b, face_plane[faces_b], omega, h, tolerance)
+        body = Body(poly, faces_b, face_plane[faces_b], omega, h, tolerance, table, simplified)
         groups.extend(_encode_body(body, b))
+    omega, h = (np.array(a) for a in table.arrays())
     # Keep only the planes the groups use, numbered in first-use order.
     used = np.concatenate([g.refs for g in groups])
     _, first = np.unique(used, return_index=True)
@@ -402,7 +457,30 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     index[order] = np.arange(len(order))
     groups = [GroupSpec(g.kind, index[g.refs], g.bounding, g.cells, g.tree) for g in groups]
     return _Object(vertices=poly.vertices, faces=poly.faces, triplets=to_triplets(omega[order], h[order]),
-                   groups=tuple(groups), world=world, simplified=simplified, fit=poly.max_distance)
+                   groups=tuple(groups), world=world, simplified=simplified, fit=poly.max_distance,
+                   closed=is_closed_manifold(poly.faces, len(poly.vertices)),
+                   volume=signed_volume(poly.vertices, poly.faces), euler=euler_characteristic(poly.faces),
+                   area=_area(poly.vertices, poly.faces))
+
+
+def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
+    p = vertices[faces]
+    return float(np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()) / 2.0
+
+
+#: Relative volume (closed sources) or area (open ones) a lossless decoding must keep.
+STRUCTURE_TOLERANCE = 1e-6
+
+
+def structure_kept(mesh: Mesh, obj: _Object) -> bool:
+    """Whether a decoding keeps the source's structure: a closed source decodes closed, with its
+    Euler characteristic and volume; an open one keeps its area (both within
+    :data:`STRUCTURE_TOLERANCE`, relative)."""
+    if obj.closed:
+        return (is_closed_manifold(mesh.faces, len(mesh.vertices)) and euler_characteristic(mesh.faces) == obj.euler
+                and abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume)
+                <= STRUCTURE_TOLERANCE * abs(obj.volume))
+    return abs(_area(mesh.vertices, mesh.faces) - obj.area) <= STRUCTURE_TOLERANCE * obj.area
 
 
 def _bodies(poly: Polygons) -> np.ndarray:
@@ -420,8 +498,7 @@ def _encode_body(body: Body, index: int) -> list[GroupSpec]:
         groups = strategy(body)
         if groups is not None:
             return groups
-    raise GeometryError(f"body {index} ({len(body.faces)} triangles) is not a closed convex surface "
-                        f"within the tolerance, or not convex; solid decomposition is not implemented yet")
+    raise GeometryError(f"body {index} ({len(body.faces)} triangles): no strategy encodes it")
 
 
 def merge_planes(poly: Polygons, tau: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -613,6 +690,9 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                     raise
                 failed += 1
                 continue
+        if not forced and not simplified and not all(structure_kept(m, o) for m, o in zip(meshes, objects)):
+            failed += cod == Coding.QUANTIZED
+            continue
         bound, world = limit(meshes)
         errors = [_measure(m, o, bound, exact=forced) for m, o in zip(meshes, objects)]
         if forced or max(errors) <= bound:
@@ -622,7 +702,9 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                            bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,
                            error_bound=error_bound, lossy=simplified or error_bound > tolerance)
         failed += cod == Coding.QUANTIZED
-    raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g}", code="TOLERANCE_NOT_MET")
+    raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g} (two-sided Hausdorff distance; "
+                        f"closed sources must also decode closed, with their volume and Euler characteristic, "
+                        f"open ones with their area, within {STRUCTURE_TOLERANCE:g})", code="TOLERANCE_NOT_MET")
 
 
 def _diagonal(points: np.ndarray) -> float:

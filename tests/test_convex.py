@@ -163,21 +163,6 @@ def test_malformed_planes_are_geometry_errors(bad):
         decode_convex(bad)
 
 
-def test_non_convex_body_is_refused_for_now():
-    # An L-shaped prism: closed, outward, not convex.
-    box = trimesh.creation.box([2, 1, 1])
-    notch = trimesh.creation.box([1, 1, 1.2])
-    notch.apply_translation([0.5, 0.5, 0.0])
-    mesh = box.difference(notch, engine="manifold")
-    with pytest.raises(GeometryError, match="not convex; solid decomposition is not implemented yet"):
-        encode_mesh(mesh.vertices, mesh.faces)
-
-
-def test_open_surface_is_refused_for_now():
-    with pytest.raises(GeometryError, match="not convex"):
-        encode_mesh(CUBE_V, CUBE_F[:-2])
-
-
 def test_unreachable_tolerance_is_tolerance_not_met():
     v, f = random_hull(30, 9)
     with pytest.raises(GeometryError) as err:

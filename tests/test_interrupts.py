@@ -40,12 +40,14 @@ def test_sigkill_at_any_moment_leaves_no_file_under_the_target_name(tmp_path: Pa
         time.sleep(fraction * runtime)
         proc.send_signal(signal.SIGKILL)
         code = proc.wait(timeout=60)
-        if code == -signal.SIGKILL:
-            killed += 1
-            assert not target.exists(), f"a killed conversion left {target.name}"
+        assert code in (0, -signal.SIGKILL)
+        if target.exists():
+            # Only ever the whole output: renamed into place once written (the process may be
+            # killed after that, while it exits).
+            assert len(trimesh.load(target, force="mesh").faces) > 60_000
         else:
-            assert code == 0
-            assert len(trimesh.load(target, force="mesh").faces) > 60_000  # complete, not partial
+            assert code == -signal.SIGKILL
+            killed += 1
     assert killed >= 3, "the conversion finished before most kill points: the test did not test"
     assert _digest(BUNNY) == before
 

@@ -1,0 +1,88 @@
+"""The codec on non-convex bodies (issue 4): closed solids as BSP trees, other surfaces as patches,
+each held to the tolerance and to the source's structure (closed, volume, Euler characteristic, area)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from planefmt import codec
+from planefmt.bodies import euler_characteristic, is_closed_manifold, signed_volume
+from planefmt.errors import GeometryError
+from planefmt.hausdorff import hausdorff
+from planefmt.model import GroupKind
+
+import shapes
+
+TOL = 1e-6
+
+
+def l_prism() -> tuple[np.ndarray, np.ndarray]:
+    box = trimesh.creation.box([2, 1, 1])
+    notch = trimesh.creation.box([1, 1, 1.2])
+    notch.apply_translation([0.5, 0.5, 0.0])
+    m = box.difference(notch, engine="manifold")
+    return np.asarray(m.vertices), np.asarray(m.faces)
+
+
+def area(v: np.ndarray, f: np.ndarray) -> float:
+    p = v[f]
+    return float(np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()) / 2
+
+
+def round_trip(v: np.ndarray, f: np.ndarray) -> tuple[codec.Encoded, np.ndarray, np.ndarray]:
+    enc = codec.encode_mesh(v, f, tolerance=TOL)
+    mesh = codec.decode_mesh(enc)
+    sv, sf = enc.mesh.vertices, enc.mesh.faces
+    assert np.array_equal(mesh.vertices, sv) and np.array_equal(mesh.faces, sf)
+    diag = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+    # Re-measured independently: certified within the tolerance, and not above the recorded bound.
+    r = hausdorff(mesh.vertices, mesh.faces, v, f, target=TOL * diag)
+    assert r.certified and r.upper <= TOL * diag
+    assert r.lower <= enc.error_bound * diag * (1 + 1e-9)
+    assert 0 <= enc.error_bound <= TOL and not enc.lossy
+    return enc, mesh.vertices, mesh.faces
+
+
+@pytest.mark.parametrize("make", [l_prism, lambda: shapes.random_boxes(3)], ids=["L prism", "box union"])
+def test_closed_non_convex_solid_is_one_watertight_bsp_group(make):
+    v, f = make()
+    enc, dv, df = round_trip(v, f)
+    assert [g.kind for g in enc.groups] == [GroupKind.BSP]
+    assert is_closed_manifold(df, len(dv)) and euler_characteristic(df) == euler_characteristic(f)
+    assert abs(signed_volume(dv, df) - signed_volume(v, f)) <= 1e-6 * signed_volume(v, f)
+
+
+def test_open_surface_becomes_patches_and_keeps_its_area():
+    box = trimesh.creation.box([1, 2, 0.5])
+    v, f = np.asarray(box.vertices), np.asarray(box.faces)[:-2]  # one face removed: an open box
+    enc, dv, df = round_trip(v, f)
+    assert {g.kind for g in enc.groups} <= {GroupKind.PSEUDO_CONVEX, GroupKind.PSEUDO_CONCAVE}
+    assert any(g.bounding.any() for g in enc.groups)  # the open border is cut by bounding planes
+    assert abs(area(dv, df) - area(v, f)) <= 1e-6 * area(v, f)
+
+
+def test_lossy_options_on_a_non_convex_body_are_refused_clearly():
+    v, f = l_prism()
+    with pytest.raises(GeometryError, match="delta and tau apply to convex bodies only"):
+        codec.encode_mesh(v, f, tau=0.01)
+
+
+def test_file_round_trip_of_a_mixed_scene(tmp_path):
+    from planefmt.model import Mesh, Node, Scene
+
+    lv, lf = l_prism()
+    cube = trimesh.creation.box([1, 1, 1])
+    open_v, open_f = np.asarray(cube.vertices), np.asarray(cube.faces)[:-2]
+    shift = np.eye(4)
+    shift[0, 3] = 5
+    scene = Scene(nodes=(Node("L", None, None, Mesh(lv, lf)), Node("open", None, shift, Mesh(open_v, open_f))))
+    header = codec.encode_scene(scene, tmp_path / "mixed.pln")
+    back = codec.decode_scene(tmp_path / "mixed.pln")
+    assert [n.name for n in back.nodes] == ["L", "open"] and header.error_bound <= TOL
+    m = back.nodes[0].mesh
+    assert is_closed_manifold(m.faces, len(m.vertices))
+    assert abs(signed_volume(m.vertices, m.faces) - 1.5) <= 1.5e-6
+    o = back.nodes[1].mesh
+    assert abs(area(o.vertices, o.faces) - 5.0) <= 5e-6
