@@ -16,15 +16,18 @@ Encoding a mesh (:func:`encode_mesh`):
    whose faces cover less than ``delta`` of the total area.
 3. The mesh is split into bodies (edge-connected pieces). Each body goes to
    the first strategy of :data:`BODY_STRATEGIES` that takes it; a strategy
-   returns the body's part groups. Today there is one: a closed, outward,
-   convex body (within the tolerance) becomes one ``CONVEX`` group.
+   returns the body's part groups: a closed, outward, convex body (within
+   the tolerance) one ``CONVEX`` group; any other body what
+   :func:`planefmt.bodies.encode_body` makes of it (a ``BSP`` group for a
+   closed solid, else pseudo-convex / pseudo-concave patches).
 4. The triplet coding is chosen and **verified**: candidate codings are tried
    cheapest first (quantized at increasing widths, then float32, then
    float64); each candidate's planes go through :func:`quantize.roundtrip`
    (exactly what a reader gets back), are decoded, and the two-sided
    Hausdorff distance between decoded and source surface is measured
    (:func:`planefmt.hausdorff.hausdorff`). The first that meets the tolerance
-   wins; its measured error is the header's ``error_bound``. A first-order
+   wins; its measured error is the header's ``error_bound``. A candidate
+   must also keep the source's structure (:func:`structure_kept`). A first-order
    prediction of the vertex displacement (planes re-intersected at each
    decoded vertex) skips widths that cannot pass without decoding them: where
    faces meet at a small angle the vertex error grows like ``1 / sin angle``,
@@ -48,7 +51,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from . import quantize
 from .errors import CODES, FormatError, GeometryError, PlnError
-from .halfspace import decode_convex, resolve_vertices
+from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
 from .model import Coding, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup, Quantization, Scene, Units
 from .bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
@@ -258,14 +261,31 @@ def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: Plane
 
 
 def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes (spec §8.2.2)."""
+    """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes (spec §8.2.2).
+
+    Small patches are intersected in numpy (:mod:`planefmt.polytopes`); where that finds no
+    polytope, Qhull (:func:`planefmt.halfspace.intersect`) decides: near-duplicate bounding
+    planes (TestScene.gltf's floor: two copies of one normal, h 3e-7 apart) defeat the former's
+    vertex tests but not the latter's hull.
+    """
     omega, h = from_triplets(planes)
+    face = ~np.asarray(group.bounding, dtype=bool)
+    concave = int(group.kind) == GroupKind.PSEUDO_CONCAVE
     try:
-        (v, t, inc_v, inc_r), = decode_patch_groups(
-            omega, h, [len(h)], ~np.asarray(group.bounding, dtype=bool),
-            np.array([int(group.kind) == GroupKind.PSEUDO_CONCAVE]))
-    except GeometryError as exc:
-        raise GeometryError(f"part group {label}: {exc.reason.split(': ', 1)[-1]}", code=exc.code) from None
+        (v, t, inc_v, inc_r), = decode_patch_groups(omega, h, [len(h)], face, np.array([concave]))
+    except GeometryError:
+        poly = intersect(omega, h, group=label)
+        t = poly.triangles[face[poly.triangle_plane]]
+        if concave:
+            t = t[:, ::-1]
+        used, local = np.unique(t, return_inverse=True)
+        inc_v, inc_r = poly.incidences
+        on = np.isin(inc_v, used)
+        v, t = poly.vertices[used], local.reshape(-1, 3)
+        inc_v, inc_r = np.searchsorted(used, inc_v[on]), inc_r[on]
+    if len(t) == 0:
+        raise GeometryError(f"part group {label}: no face of the patch lies on a face plane",
+                            code="EMPTY_POLYTOPE")
     return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64))
 
 
@@ -415,9 +435,9 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     then ``tolerance`` bounds the error the *coding* adds to the simplified
     planes' own, and the total is measured and recorded.
 
-    Raises ``GeometryError``: ``DEGENERATE_GEOMETRY`` for malformed input or a
-    body no strategy takes (today: anything not convex), ``TOLERANCE_NOT_MET``
-    when no coding meets the tolerance.
+    Raises ``GeometryError``: ``DEGENERATE_GEOMETRY`` for malformed input,
+    ``TOLERANCE_NOT_MET`` when no coding meets the tolerance and keeps the
+    source's structure.
     """
     obj = _prepare(vertices, faces, np.eye(4), tolerance, delta, tau)
     choice = _choose([obj], tolerance, coding, bits)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -73,16 +74,21 @@ def test_truncated_file_keeps_everything_before_the_cut():
     assert isinstance(got.part_groups[0], PartGroup)
 
 
+def damaged_file(folder: Path) -> Path:
+    """ten_groups() with a flipped byte inside group 4's chunk, written to ``folder``."""
+    data = bytearray(ten_groups())
+    data[grup_offsets(bytes(data))[4] + 30] ^= 0xFF
+    path = folder / "damaged.pln"
+    path.write_bytes(bytes(data))
+    return path
+
+
 def test_cli_info_salvage_lists_losses_and_exits_1(tmp_path):
     import json
     import subprocess
     import sys
 
-    data = bytearray(ten_groups())
-    pos = grup_offsets(bytes(data))[4]
-    data[pos + 30] ^= 0xFF
-    path = tmp_path / "damaged.pln"
-    path.write_bytes(bytes(data))
+    path = damaged_file(tmp_path)
     cmd = [sys.executable, "-m", "planefmt_converters.cli", "info"]
     plain = subprocess.run([*cmd, str(path)], capture_output=True, text=True)
     assert plain.returncode == 2 and "CRC mismatch" in plain.stderr
@@ -99,11 +105,7 @@ def test_cli_convert_salvage_writes_the_intact_objects_and_lists_the_lost(tmp_pa
 
     import trimesh
 
-    data = bytearray(ten_groups())
-    pos = grup_offsets(bytes(data))[4]
-    data[pos + 30] ^= 0xFF
-    path = tmp_path / "damaged.pln"
-    path.write_bytes(bytes(data))
+    path = damaged_file(tmp_path)
     out = tmp_path / "rescued.glb"
     cmd = [sys.executable, "-m", "planefmt_converters.cli", "convert"]
     plain = subprocess.run([*cmd, str(path), str(out)], capture_output=True, text=True)
