@@ -55,7 +55,7 @@ import numpy as np
 from scipy.optimize import linprog
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import ConvexHull, QhullError
+from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .errors import GeometryError
 from .planes import from_triplets
@@ -76,6 +76,10 @@ MERGE_CAP = 1e-2
 #: Relative margin below which a point is not strictly inside, and a
 #: Chebyshev radius below which the intersection has no interior.
 _INTERIOR_EPS = 1e-12
+#: Dual facets closer to the origin than this (relative to the dual points' size) are vertices at
+#: infinity: above the joggle of "QJ" (~1e-11), so that joggling never makes an unbounded set look
+#: bounded (a vertex 1e9 times farther than the nearest plane is not one a mesh has).
+_UNBOUNDED_EPS = 1e-9
 
 
 @dataclass(frozen=True)
@@ -138,47 +142,136 @@ def intersect(omega: np.ndarray, h: np.ndarray, *, group: object = None,
     h = h / length
 
     c = _interior_point(omega, h, label)
+    # Near-copies of one plane (all but the innermost redundant) would put clusters of dual points
+    # closer than Qhull's joggle: one copy each.
+    kept = _distinct(omega, h - omega @ c)
+    n_all = len(h)
+    omega, h = omega[kept], h[kept]
     slack = h - omega @ c
     dual = omega / slack[:, None]
     if len(h) < 4:
         raise _unbounded(label, "fewer than four planes never bound a solid")
-    try:
-        # "Qt" alone: scipy's default adds Qbb/Qz/Q12, which serve Delaunay input and cost ~40%.
-        hull = ConvexHull(dual, qhull_options="Qt")
-    except QhullError:
-        raise _unbounded(label, "the plane normals do not span space") from None
-    # Offsets are -1/|u| for vertex c + u: a facet through (or near) the origin is a vertex at
-    # infinity, i.e. a direction in which the solid does not end.
-    offsets = hull.equations[:, 3]
-    if not (offsets < -_INTERIOR_EPS * np.abs(dual).max()).all():
-        raise _unbounded(label, "the intersection extends to infinity")
-
-    simplices = hull.simplices.astype(np.int64)
-    candidates = -hull.equations[:, :3] / offsets[:, None]
-    extent = float(np.linalg.norm(np.ptp(candidates, axis=0)))
-    radius = float(np.linalg.norm(candidates + c, axis=1).max())
-    merge = max(MERGE_TOLERANCE * extent, min(MERGE_CAP * extent, merge_limit,
-                                              MERGE_SPREAD * (plane_error[0] * radius + plane_error[1])))
-    vertex = _merge_adjacent(candidates, hull.neighbors, merge)
+    rhs = h - omega @ c
+    simplices, candidates, reliable, vertex, merge = _vertices(omega, rhs, dual, c, label, plane_error,
+                                                               merge_limit, joggle=True)
+    if vertex is None:
+        # Some vertex is only known from loose triples (planes nearly dependent three at a time,
+        # and no group of them pins a point): Qhull's own merging decides, at O(k^2) for k
+        # planes through one point.
+        simplices, candidates, reliable, vertex, merge = _vertices(omega, rhs, dual, c, label, plane_error,
+                                                                   merge_limit, joggle=False)
     nv = int(vertex.max()) + 1
 
     # Incidences (vertex, plane), each once.
     key = np.unique(np.repeat(vertex, 3) * np.int64(len(h)) + simplices.reshape(-1))
     inc = np.column_stack(np.divmod(key, np.int64(len(h))))
-    positions = _refine(omega, h - omega @ c, candidates, vertex, nv, inc) + c
+    positions = _refine(omega, rhs, candidates, reliable, vertex, nv, inc) + c
 
     offsets_out, order, polygon_plane = _faces(omega, positions, inc)
     if len(polygon_plane) < 4:
         raise GeometryError(f"{label}: the solid collapses to a point, segment or polygon when "
                             f"vertices closer than {merge:.3g} merge", code="EMPTY_POLYTOPE")
     tri, tri_plane = _fan(offsets_out, order, polygon_plane)
+    polygon_plane, tri_plane = kept[polygon_plane], kept[tri_plane]
     used_vertices, remap = np.unique(tri, return_inverse=True)
-    used = np.zeros(len(h), dtype=bool)
+    used = np.zeros(n_all, dtype=bool)
     used[polygon_plane] = True
     return Polytope(vertices=positions[used_vertices], triangles=remap.reshape(-1, 3),
                     triangle_plane=tri_plane, polygon_offsets=offsets_out,
                     polygon_vertices=np.searchsorted(used_vertices, order),
                     polygon_plane=polygon_plane, redundant=np.flatnonzero(~used), interior=c)
+
+
+#: Planes whose unit normals and distances (relative to the largest distance from the interior
+#: point) differ by less than this are copies of one plane.
+DUPLICATE_TOLERANCE = 1e-10
+
+
+def _innermost(slack: np.ndarray, label: np.ndarray, candidates: np.ndarray) -> np.ndarray:
+    """Of ``candidates``, the one with the least slack per label."""
+    order = candidates[np.lexsort((slack[candidates], label[candidates]))]
+    first = np.ones(len(order), dtype=bool)
+    first[1:] = label[order][1:] != label[order][:-1]
+    return order[first]
+
+
+def _distinct(omega: np.ndarray, slack: np.ndarray) -> np.ndarray:
+    """Indices of the planes to intersect: of each group of near-copies, the innermost.
+
+    Planes first fall into grid cells of side :data:`DUPLICATE_TOLERANCE` (one copy per cell),
+    then copies in neighbouring cells are joined: at most 3^4 cells lie within reach of one, so
+    the pair search stays linear however many copies a file repeats.
+    """
+    key = np.column_stack([omega, slack / float(slack.max())])
+    cell = np.unique(np.floor(key / DUPLICATE_TOLERANCE).astype(np.int64), axis=0, return_inverse=True)[1]
+    rep = np.sort(_innermost(slack, cell.reshape(-1), np.arange(len(slack))))
+    pairs = cKDTree(key[rep]).query_pairs(DUPLICATE_TOLERANCE, output_type="ndarray")
+    if not len(pairs):
+        return rep
+    label = connected_components(coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])),
+                                            shape=(len(rep),) * 2), directed=False)[1]
+    full = np.zeros(len(slack), dtype=np.int64)
+    full[rep] = label
+    return np.sort(_innermost(slack, full, rep))
+
+
+def _vertices(omega: np.ndarray, rhs: np.ndarray, dual: np.ndarray, c: np.ndarray, label: str,
+              plane_error: tuple[float, float], merge_limit: float, *, joggle: bool):
+    """Dual hull, candidate points and vertex labels: ``(simplices, points, reliable, labels, merge)``.
+
+    ``joggle``: Qhull's "QJ" (O(m log m) also for k planes through one point, whose cost under
+    Qhull's coplanar merging is O(k^2): 6.6 s for k = 10^4), the points solved from the planes
+    and merged by :func:`_merge_vertices`; ``labels`` is None where a vertex stays known only
+    from loose triples. Otherwise "Qt": the merged facets' points, merged by distance.
+    """
+    try:
+        hull = ConvexHull(dual, qhull_options="QJ" if joggle else "Qt")
+    except QhullError:
+        raise _unbounded(label, "the plane normals do not span space") from None
+    # Offsets are -1/|u| for vertex c + u: a facet through (or near) the origin is a vertex at
+    # infinity, i.e. a direction in which the solid does not end.
+    offsets = hull.equations[:, 3]
+    if not (offsets < -_UNBOUNDED_EPS * np.abs(dual).max()).all():
+        raise _unbounded(label, "the intersection extends to infinity")
+    simplices = hull.simplices.astype(np.int64)
+    facet_points = -hull.equations[:, :3] / offsets[:, None]
+    if joggle:
+        points, reliable = _triple_points(omega, rhs, simplices, facet_points)
+    else:
+        points, reliable = facet_points, np.ones(len(simplices), dtype=bool)
+    extent = float(np.linalg.norm(np.ptp(points[reliable] if reliable.any() else points, axis=0)))
+    radius = float(np.linalg.norm(points + c, axis=1).max())
+    merge = max(MERGE_TOLERANCE * extent, min(MERGE_CAP * extent, merge_limit,
+                                              MERGE_SPREAD * (plane_error[0] * radius + plane_error[1])))
+    if not joggle:
+        return simplices, points, reliable, _merge_adjacent(points, hull.neighbors, merge), merge
+    labels = _merge_vertices(omega, rhs, points, reliable, simplices, hull.neighbors, merge)
+    if not _pinned(omega, reliable, simplices, labels):
+        labels = None
+    return simplices, points, reliable, labels, merge
+
+
+def _pinned(omega: np.ndarray, reliable: np.ndarray, simplices: np.ndarray, labels: np.ndarray) -> bool:
+    """Whether every vertex has a reliable point or planes that pin one (as resolve_vertices needs)."""
+    k = int(labels.max()) + 1
+    loose = np.bincount(labels, weights=reliable, minlength=k) == 0
+    if not loose.any():
+        return True
+    sel = loose[labels]
+    inc = np.unique(np.column_stack([np.repeat(labels[sel], 3), simplices[sel].reshape(-1)]), axis=0)
+    w = omega[inc[:, 1]]
+    ata = np.zeros((k, 3, 3))
+    np.add.at(ata, inc[:, 0], w[:, :, None] * w[:, None, :])
+    return bool((np.linalg.det(ata[loose]) > 1e-12).all())
+
+
+def _merge_adjacent(points: np.ndarray, neighbors: np.ndarray, tol: float) -> np.ndarray:
+    """Labels ``0..k-1`` merging points of adjacent dual triangles that lie within ``tol``."""
+    n = len(points)
+    a = np.repeat(np.arange(n), 3)
+    b = neighbors.reshape(-1)
+    close = (b > a) & (np.linalg.norm(points[a] - points[np.maximum(b, 0)], axis=1) <= tol)
+    return _components(n, a[close], b[close])
 
 
 def _unbounded(label: str, why: str) -> GeometryError:
@@ -213,29 +306,121 @@ def _interior_point(omega: np.ndarray, h: np.ndarray, label: str) -> np.ndarray:
     return x
 
 
-def _merge_adjacent(points: np.ndarray, neighbors: np.ndarray, tol: float) -> np.ndarray:
-    """Labels ``0..k-1`` merging points of adjacent dual triangles that lie within ``tol``."""
-    n = len(points)
-    a = np.repeat(np.arange(n), 3)
-    b = neighbors.reshape(-1)
-    close = (b > a) & (np.linalg.norm(points[a] - points[np.maximum(b, 0)], axis=1) <= tol)
-    if not close.any():
+#: A triple of unit normals spanning less volume than this pins its point too loosely to place
+#: a vertex by it (a float64 solve then errs by ~1e-16 / this of the coordinates' size).
+RELIABLE_DET = 1e-6
+
+
+def _triple_points(omega: np.ndarray, rhs: np.ndarray, simplices: np.ndarray,
+                   fallback: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The point of each dual triangle's three planes (relative to the interior point), and
+    whether it is reliable.
+
+    Solved from the planes themselves, not from the joggled facet. A triple whose normals are
+    nearly dependent (:data:`RELIABLE_DET`) is not: its point, solved or the facet's
+    ``fallback``, only serves until a neighbour's reliable point takes its place.
+    """
+    a = omega[simplices]
+    det = np.abs(np.linalg.det(a))
+    solvable = det > 1e-12
+    out = fallback.copy()
+    if solvable.any():
+        out[solvable] = np.linalg.solve(a[solvable], rhs[simplices[solvable]][:, :, None])[:, :, 0]
+    return out, det >= RELIABLE_DET
+
+
+def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    if not len(a):
         return np.arange(n)
-    graph = coo_matrix((np.ones(int(close.sum()), dtype=np.int8), (a[close], b[close])), shape=(n, n))
+    graph = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n, n))
     return connected_components(graph, directed=False)[1].astype(np.int64)
 
 
-def _refine(omega: np.ndarray, rhs: np.ndarray, candidates: np.ndarray, vertex: np.ndarray,
-            nv: int, inc: np.ndarray) -> np.ndarray:
+def _merge_vertices(omega: np.ndarray, rhs: np.ndarray, points: np.ndarray, reliable: np.ndarray,
+                    simplices: np.ndarray, neighbors: np.ndarray, tol: float) -> np.ndarray:
+    """Labels ``0..k-1`` of the dual triangles' points: one label per vertex of the polytope.
+
+    Points of adjacent dual triangles are one vertex when closer than ``tol``. Copies of a
+    vertex on many planes, solved from nearly dependent triples (:func:`_triple_points`), can
+    be far apart along the direction those triples leave free (the apex of a cone of 10^5
+    planes: up to half the extent) while every plane of the vertex passes through the vertex.
+    Two more rules join them, each tried only where the previous one left points apart: a
+    reliable point lying within ``tol`` of the neighbour's three planes; then adjacent
+    unreliable triangles. A group a rule joins is kept only if its planes pin one point (their
+    normals span space: smallest eigenvalue of the normal matrix at least 1e-6 of the largest)
+    lying within ``tol`` of all of them; otherwise its points keep their previous labels.
+    """
+    n = len(points)
+    a = np.repeat(np.arange(n), 3)
+    b = neighbors.reshape(-1)
+    live = b > a
+    a, b = a[live], b[live]
+    near = np.linalg.norm(points[a] - points[b], axis=1) <= tol
+
+    def off_planes(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+        tri = simplices[q]
+        return np.abs(rhs[tri] - np.einsum("ijk,ik->ij", omega[tri], points[p])).max(axis=1)
+
+    labels = _components(n, a[near], b[near])
+    edges = near
+    for rule in (lambda: (reliable[a] & (off_planes(a, b) <= tol)) | (reliable[b] & (off_planes(b, a) <= tol)),
+                 lambda: ~reliable[a] & ~reliable[b]):
+        extra = ~edges & rule()
+        if not extra.any():
+            continue
+        edges = edges | extra
+        labels = _accept(omega, rhs, points, reliable, simplices, _components(n, a[edges], b[edges]), labels, tol)
+    return labels
+
+
+def _accept(omega: np.ndarray, rhs: np.ndarray, points: np.ndarray, reliable: np.ndarray,
+            simplices: np.ndarray, joined: np.ndarray, previous: np.ndarray, tol: float) -> np.ndarray:
+    """``joined`` labels where a joined group's planes pin one point within ``tol``, else ``previous``."""
+    k = int(joined.max()) + 1
+    representative = np.full(k, -1, dtype=np.int64)
+    representative[joined[::-1]] = previous[::-1]
+    changed = np.zeros(k, dtype=bool)
+    changed[joined[previous != representative[joined]]] = True
+    group = np.flatnonzero(changed)
+    if not len(group):
+        return previous
+    member = changed[joined]
+    inc = np.unique(np.column_stack([np.repeat(joined[member], 3), simplices[member].reshape(-1)]), axis=0)
+    w = omega[inc[:, 1]]
+    normal = np.zeros((k, 3, 3))
+    np.add.at(normal, inc[:, 0], w[:, :, None] * w[:, None, :])
+    eig = np.linalg.eigvalsh(normal[group])
+    spans = eig[:, 0] >= 1e-6 * eig[:, 2]
+    local = np.full(k, -1, dtype=np.int64)
+    local[group] = np.arange(len(group))
+    inc_local = local[inc[:, 0]]
+    start = _group_means(points, reliable, joined, k)[group]
+    position = resolve_vertices(start, inc_local, inc[:, 1], omega, rhs)
+    resid = np.zeros(len(group))
+    np.maximum.at(resid, inc_local, np.abs(rhs[inc[:, 1]] - np.einsum("ij,ij->i", w, position[inc_local])))
+    accepted = np.zeros(k, dtype=bool)
+    accepted[group[spans & (resid <= tol)]] = True
+    key = np.where(accepted[joined] | ~changed[joined], joined, k + previous)
+    return np.unique(key, return_inverse=True)[1].astype(np.int64)
+
+
+def _group_means(points: np.ndarray, reliable: np.ndarray, label: np.ndarray, k: int) -> np.ndarray:
+    """Mean point of each label, over its reliable points where it has any."""
+    has = np.bincount(label, weights=reliable, minlength=k) > 0
+    weight = np.where(reliable | ~has[label], 1.0, 0.0)
+    count = np.bincount(label, weights=weight, minlength=k)
+    total = np.column_stack([np.bincount(label, weights=weight * points[:, i], minlength=k) for i in range(3)])
+    return total / np.maximum(count, 1e-300)[:, None]
+
+
+def _refine(omega: np.ndarray, rhs: np.ndarray, candidates: np.ndarray, reliable: np.ndarray,
+            vertex: np.ndarray, nv: int, inc: np.ndarray) -> np.ndarray:
     """Vertex positions relative to the interior point (``rhs`` is ``h - omega . c``).
 
-    Starts from the mean of each vertex's merged candidates and re-solves it
-    from all its incident planes (:func:`resolve_vertices`).
+    Starts from the mean of each vertex's merged candidates (its reliable ones where it has
+    any) and re-solves it from all its incident planes (:func:`resolve_vertices`).
     """
-    count = np.bincount(vertex, minlength=nv).astype(np.float64)
-    start = np.column_stack([np.bincount(vertex, weights=candidates[:, i], minlength=nv)
-                             for i in range(3)]) / count[:, None]
-    return resolve_vertices(start, inc[:, 0], inc[:, 1], omega, rhs)
+    return resolve_vertices(_group_means(candidates, reliable, vertex, nv), inc[:, 0], inc[:, 1], omega, rhs)
 
 
 def resolve_vertices(start: np.ndarray, inc_vertex: np.ndarray, inc_plane: np.ndarray,
