@@ -307,8 +307,10 @@ def _interior_point(omega: np.ndarray, h: np.ndarray, label: str) -> np.ndarray:
 
 
 #: A triple of unit normals spanning less volume than this pins its point too loosely to place
-#: a vertex by it (a float64 solve then errs by ~1e-16 / this of the coordinates' size).
-RELIABLE_DET = 1e-6
+#: a vertex by it (a float64 solve then errs by up to ~1e-16 / this of the coordinates' size,
+#: which the least-squares refinement over all the vertex's planes removes). 1e-6 sent
+#: float32-coded sphere hulls to the slow path for triples that were accurate to 1e-10.
+RELIABLE_DET = 1e-9
 
 
 def _triple_points(omega: np.ndarray, rhs: np.ndarray, simplices: np.ndarray,
