@@ -10,9 +10,8 @@ inputs: area), and encode / decode / measure times. Encoding uses float64
 planes (the lossless coding); the codec's coding choice is not part of this
 bench.
 
-Loading: ``trimesh.load(path, force="mesh")`` (which merges vertices as
-trimesh does), then vertices merged by exact position; USD files, which
-trimesh cannot read, through the project's converters.
+Loading: through the project's converters (``registry.read``, scene
+flattened to world coordinates), then vertices merged by exact position.
 
 Usage::
 
@@ -48,20 +47,19 @@ MEASURE_PIECES = 400_000
 
 
 def load(path: str) -> tuple[np.ndarray, np.ndarray]:
-    """A corpus mesh as ``(vertices, faces)``, vertices merged by exact position."""
-    if path.lower().endswith((".usd", ".usda", ".usdc", ".usdz")):
-        from planefmt_converters import registry
-        from planefmt_converters.assemble import flatten
+    """A corpus mesh as ``(vertices, faces)`` in world coordinates, vertices merged by exact position.
 
-        scene, _ = registry.detect(path).read(path)
-        mesh = flatten(scene)
-        return weld(mesh.vertices, mesh.faces)
-    import trimesh
+    Through the project's own readers, as ``pln convert`` reads it (``trimesh.load`` needs PIL
+    for the textured OBJ and PLY files of the corpus).
+    """
+    from planefmt_converters import registry
+    from planefmt_converters.assemble import flatten
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        mesh = trimesh.load(path, force="mesh")
-    return weld(np.asarray(mesh.vertices), np.asarray(mesh.faces))
+        scene, _ = registry.read(path)
+    mesh = flatten(scene)
+    return weld(mesh.vertices, mesh.faces)
 
 
 def corpus_files() -> list[str]:
