@@ -53,7 +53,8 @@ from . import quantize
 from .errors import CODES, FormatError, GeometryError, PlnError
 from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
-from .model import Coding, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup, Quantization, Scene, Units
+from .model import (Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup, Quantization, Scene,
+                    Units)
 from .bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
 from .patches import PlaneTable, decode_patch_groups
 from .planes import from_triplets, to_triplets, transform_points
@@ -133,6 +134,7 @@ class DecodedGroup:
     inc_vertex: np.ndarray  # (I,) vertex of each incidence
     inc_ref: np.ndarray  # (I,) local reference (index into group.refs) of each incidence
     redundant: np.ndarray  # local references that bound no face
+    triangle_ref: np.ndarray  # (T,) local reference each triangle lies on
 
 
 @dataclass(frozen=True)
@@ -247,7 +249,7 @@ def decode_convex_group(planes: np.ndarray, group: GroupLike, label: object,
     """A ``CONVEX`` group: the intersection of all its inner half-spaces (spec §8.2.1)."""
     poly = decode_convex(planes, group=label, plane_error=error.of(planes), merge_limit=error.merge_limit)
     inc_vertex, inc_ref = poly.incidences
-    return DecodedGroup(poly.vertices, poly.triangles, inc_vertex, inc_ref, poly.redundant)
+    return DecodedGroup(poly.vertices, poly.triangles, inc_vertex, inc_ref, poly.redundant, poly.triangle_plane)
 
 
 def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
@@ -255,9 +257,9 @@ def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: Plane
     if group.tree is None:
         raise GeometryError(f"part group {label}: a BSP group without a tree", code="BAD_GROUP_STRUCTURE")
     omega, h = from_triplets(planes)
-    v, t, inc_v, inc_r = decode_bsp_group(omega, h, np.asarray(group.tree, dtype=np.uint32),
-                                          ~np.asarray(group.bounding, dtype=bool))
-    return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64))
+    v, t, inc_v, inc_r, t_ref = decode_bsp_group(omega, h, np.asarray(group.tree, dtype=np.uint32),
+                                                 ~np.asarray(group.bounding, dtype=bool))
+    return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64), t_ref)
 
 
 def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
@@ -272,10 +274,11 @@ def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: Pla
     face = ~np.asarray(group.bounding, dtype=bool)
     concave = int(group.kind) == GroupKind.PSEUDO_CONCAVE
     try:
-        (v, t, inc_v, inc_r), = decode_patch_groups(omega, h, [len(h)], face, np.array([concave]))
+        (v, t, inc_v, inc_r, t_ref), = decode_patch_groups(omega, h, [len(h)], face, np.array([concave]))
     except GeometryError:
         poly = intersect(omega, h, group=label)
-        t = poly.triangles[face[poly.triangle_plane]]
+        on_face = face[poly.triangle_plane]
+        t, t_ref = poly.triangles[on_face], poly.triangle_plane[on_face]
         if concave:
             t = t[:, ::-1]
         used, local = np.unique(t, return_inverse=True)
@@ -286,7 +289,7 @@ def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: Pla
     if len(t) == 0:
         raise GeometryError(f"part group {label}: no face of the patch lies on a face plane",
                             code="EMPTY_POLYTOPE")
-    return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64))
+    return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64), t_ref)
 
 
 #: Decoder of each part-group kind: ``decode(planes, group, label, error)`` with ``planes`` the
@@ -419,6 +422,7 @@ class _Object:
     volume: float  # model units cubed, local coordinates
     euler: int
     area: float  # model units squared, local coordinates
+    plane_colours: np.ndarray | None  # (planes, 4) uint8 RGBA: a source face's colour on each plane
 
 
 def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1e-6,
@@ -448,7 +452,7 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
 
 
 def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, tolerance: float,
-             delta: float | None, tau: float | None) -> _Object:
+             delta: float | None, tau: float | None, face_colours: np.ndarray | None = None) -> _Object:
     if not (math.isfinite(tolerance) and tolerance > 0):
         raise GeometryError(f"tolerance must be a positive fraction of the diagonal, not {tolerance}")
     for name, value in (("delta", delta), ("tau", tau)):
@@ -476,11 +480,18 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     index = np.full(len(h), -1, dtype=np.int64)
     index[order] = np.arange(len(order))
     groups = [GroupSpec(g.kind, index[g.refs], g.bounding, g.cells, g.tree) for g in groups]
+    plane_colours = None
+    if face_colours is not None:
+        # Each plane takes the colour of the first source face on it; bounding planes have none.
+        plane_colours = np.zeros((len(order), 4), dtype=np.uint8)
+        on = np.flatnonzero(face_plane >= 0)[::-1]
+        mapped = index[face_plane[on]]
+        plane_colours[mapped[mapped >= 0]] = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[on][mapped >= 0]
     return _Object(vertices=poly.vertices, faces=poly.faces, triplets=to_triplets(omega[order], h[order]),
                    groups=tuple(groups), world=world, simplified=simplified, fit=poly.max_distance,
                    closed=is_closed_manifold(poly.faces, len(poly.vertices)),
                    volume=signed_volume(poly.vertices, poly.faces), euler=euler_characteristic(poly.faces),
-                   area=_area(poly.vertices, poly.faces))
+                   area=_area(poly.vertices, poly.faces), plane_colours=plane_colours)
 
 
 def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
@@ -787,7 +798,7 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     :func:`encode_mesh`.
     """
     worlds = _world_transforms(scene.nodes)
-    prepared = [(i, _prepare(n.mesh.vertices, n.mesh.faces, worlds[i], tolerance, delta, tau))
+    prepared = [(i, _prepare(n.mesh.vertices, n.mesh.faces, worlds[i], tolerance, delta, tau, n.mesh.face_colours))
                 for i, n in enumerate(scene.nodes) if n.mesh is not None and len(n.mesh.faces)]
     if not prepared:
         raise GeometryError("the scene has no mesh to encode")
@@ -819,7 +830,9 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
             if refs.max() >= w.plane_count:
                 w.add_planes(rows[w.plane_count:refs.max() + 1])
             for g in o.groups:
-                w.add_group(obj_index, g.kind, refs[g.refs], g.bounding, cells=g.cells, tree=g.tree)
+                k = w.add_group(obj_index, g.kind, refs[g.refs], g.bounding, cells=g.cells, tree=g.tree)
+                if o.plane_colours is not None:
+                    w.add_colours(k, o.plane_colours[g.refs])
     return header
 
 
@@ -842,12 +855,16 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
 
     Streams: part groups are decoded one at a time as they are read.
     """
-    parts: dict[int, list[DecodedGroup]] = {}
+    parts: dict[int, list[tuple[int, DecodedGroup]]] = {}
+    colours: dict[int, np.ndarray] = {}
     with Reader(source) as r:
         error = header_plane_error(r.header)
-        for g in r.part_groups():
-            parts.setdefault(g.object, []).append(decode_group(g.planes, g, g.index, error))
-        return _assemble(r.objects, parts, r.header.units)
+        for rec in r:
+            if isinstance(rec, PartGroup):
+                parts.setdefault(rec.object, []).append((rec.index, decode_group(rec.planes, rec, rec.index, error)))
+            elif isinstance(rec, Colours):
+                colours[rec.group] = rec.rgba
+        return _assemble(r.objects, parts, r.header.units, colours)
 
 
 def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str]]:
@@ -866,22 +883,38 @@ def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str
     lost = [f"{x.message}" + ("" if x.offset is None else f" (byte {x.offset})") for x in got.losses]
     error = header_plane_error(got.header)
     objects = [r for r in got.records if isinstance(r, ObjectRecord)]
-    parts: dict[int, list[DecodedGroup]] = {}
+    parts: dict[int, list[tuple[int, DecodedGroup]]] = {}
     for g in got.part_groups:
         try:
-            parts.setdefault(g.object, []).append(decode_group(g.planes, g, g.index, error))
+            parts.setdefault(g.object, []).append((g.index, decode_group(g.planes, g, g.index, error)))
         except GeometryError as exc:
             lost.append(f"part group {g.index} lost: {exc.reason}")
-    return _assemble(objects, parts, got.header.units), lost
+    colours = {r.group: r.rgba for r in got.records if isinstance(r, Colours)}
+    return _assemble(objects, parts, got.header.units, colours), lost
 
 
-def _assemble(objects: Sequence[ObjectRecord], parts: dict[int, list[DecodedGroup]], units: Units) -> Scene:
+#: Face colour of decoded triangles whose group has no cOLR, in an object where others have one.
+UNCOLOURED = np.array([200, 200, 200, 255], dtype=np.uint8)
+
+
+def _assemble(objects: Sequence[ObjectRecord], parts: dict[int, list[tuple[int, DecodedGroup]]], units: Units,
+              colours: dict[int, np.ndarray]) -> Scene:
     # Salvaged objects may have gaps in their indices; nodes are numbered by position.
     position = {o.index: i for i, o in enumerate(objects)}
     nodes = tuple(Node(name=o.name, parent=None if o.parent is None else position[o.parent], transform=o.transform,
-                       mesh=_concatenate(parts[o.index]) if o.index in parts else None)
+                       mesh=_object_mesh(parts[o.index], colours) if o.index in parts else None)
                   for o in objects)
     return Scene(nodes=nodes, units=units)
+
+
+def _object_mesh(parts: list[tuple[int, DecodedGroup]], colours: dict[int, np.ndarray]) -> Mesh:
+    """The groups of one object joined; face colours from their cOLR chunks (spec §8.5), if any."""
+    mesh = _concatenate([d for _, d in parts])
+    if not any(k in colours for k, _ in parts):
+        return mesh
+    face = np.concatenate([colours[k][d.triangle_ref] if k in colours else np.tile(UNCOLOURED, (len(d.triangles), 1))
+                           for k, d in parts]).astype(np.uint8)
+    return Mesh(mesh.vertices, mesh.faces, face_colours=face)
 
 
 def check_group(group: PartGroup, reader: Reader) -> list[Finding]:

@@ -683,7 +683,8 @@ def decode_patch_faces(omega: np.ndarray, h: np.ndarray, owner: np.ndarray, coun
 
 def decode_patch_groups(omega: np.ndarray, h: np.ndarray, sizes: list[int], face: np.ndarray,
                         concave: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
-    """Decode patch groups in one batch: per group ``(vertices, triangles, inc_vertex, inc_ref)``.
+    """Decode patch groups in one batch: per group ``(vertices, triangles, inc_vertex, inc_ref,
+    triangle_ref)``.
 
     ``omega``, ``h``, ``face`` hold the stored planes and roles of every
     group's references, group after group (``sizes`` references each);
@@ -721,11 +722,12 @@ def decode_patch_groups(omega: np.ndarray, h: np.ndarray, sizes: list[int], face
     out = []
     for g in range(count):
         t = tris[t_order[t_split[g]:t_split[g + 1]]]
+        t_ref = row[t_order[t_split[g]:t_split[g + 1]]] - start[g]
         used, local = np.unique(t, return_inverse=True)
         iv = inc_v[i_order[i_split[g]:i_split[g + 1]]]
         ir = inc_row[i_order[i_split[g]:i_split[g + 1]]] - start[g]
         pos = np.searchsorted(used, iv)
         on = (pos < len(used)) & (used[np.minimum(pos, len(used) - 1)] == iv)
         pairs = np.unique(np.column_stack([pos[on], ir[on]]), axis=0)
-        out.append((poly.vertices[used], local.reshape(-1, 3), pairs[:, 0], pairs[:, 1]))
+        out.append((poly.vertices[used], local.reshape(-1, 3), pairs[:, 0], pairs[:, 1], t_ref))
     return out

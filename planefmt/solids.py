@@ -200,12 +200,12 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
 
 
 def decode_bsp_group(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
-                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """A BSP group as the codec wants it: ``(vertices, triangles, inc_vertex, inc_ref)``.
+                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A BSP group as the codec wants it: ``(vertices, triangles, inc_vertex, inc_ref, triangle_ref)``.
 
     Incidences pair each vertex with the reference of every surface triangle
-    around it (the planes it lies on).
+    around it (the planes it lies on); ``triangle_ref`` is each triangle's.
     """
     vertices, triangles, plane = decode_tree(omega, h, tokens, face)
     inc = np.unique(np.column_stack([triangles.reshape(-1), np.repeat(plane, 3)]), axis=0)
-    return vertices, triangles, inc[:, 0], inc[:, 1]
+    return vertices, triangles, inc[:, 0], inc[:, 1], plane

@@ -8,6 +8,7 @@ import pytest
 import trimesh
 
 from planefmt import codec
+from planefmt import open as planefmt_open
 from planefmt.bodies import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.errors import GeometryError
 from planefmt.hausdorff import hausdorff
@@ -86,3 +87,27 @@ def test_file_round_trip_of_a_mixed_scene(tmp_path):
     assert abs(signed_volume(m.vertices, m.faces) - 1.5) <= 1.5e-6
     o = back.nodes[1].mesh
     assert abs(area(o.vertices, o.faces) - 5.0) <= 5e-6
+
+
+def _colour_by_normal(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    n = np.round(trimesh.Trimesh(v, f, process=False).face_normals).astype(int)
+    return np.column_stack([(n + 1) * 100, np.full(len(f), 255)]).astype(np.uint8)
+
+
+@pytest.mark.parametrize("make", [lambda: (np.asarray(trimesh.creation.box().vertices),
+                                           np.asarray(trimesh.creation.box().faces)),
+                                  l_prism,
+                                  lambda: (np.asarray(trimesh.creation.box().vertices),
+                                           np.asarray(trimesh.creation.box().faces)[:-2])],
+                         ids=["convex", "BSP", "patches"])
+def test_face_colours_survive_as_colour_chunks(make, tmp_path):
+    from planefmt.model import Mesh, Node, Scene
+
+    v, f = make()
+    colours = _colour_by_normal(v, f)
+    codec.encode_scene(Scene(nodes=(Node("m", mesh=Mesh(v, f, face_colours=colours)),)), tmp_path / "c.pln")
+    with planefmt_open(tmp_path / "c.pln") as r:
+        assert any(type(rec).__name__ == "Colours" for rec in r)
+    m = codec.decode_scene(tmp_path / "c.pln").nodes[0].mesh
+    # Every decoded triangle carries the colour of the source faces on its plane.
+    assert m.face_colours is not None and np.array_equal(m.face_colours, _colour_by_normal(m.vertices, m.faces))
