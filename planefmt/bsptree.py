@@ -33,6 +33,7 @@ import numpy as np
 from .clipping import split_polygons
 from .errors import GeometryError
 from .model import BSP_IN, BSP_MAX_SPLIT, BSP_OUT
+from .planes import in_plane_basis
 
 #: Leaf classes of :class:`Tree` nodes.
 SPLIT, IN, OUT = 0, 1, 2
@@ -112,7 +113,7 @@ def sub_hyperplanes(tree: Tree, omega: np.ndarray, h: np.ndarray, size: float,
         in_piece[start:ends[start]] = True
     nodes = nodes[~in_piece[nodes]]
     w = omega[tree.plane[nodes]]
-    e1, e2 = _basis(w)
+    e1, e2 = in_plane_basis(w)
     centre = h[tree.plane[nodes]][:, None] * w
     for c, (a, b) in enumerate(((1, 1), (-1, 1), (-1, -1), (1, -1))):
         pts[nodes, c] = centre + size * (a * e1 + b * e2)
@@ -214,7 +215,7 @@ def _clipped_piece(rows: list[tuple[int, int]], depth: int, omega: np.ndarray, h
     for k in range(depth, len(rows)):
         j = rows[k][0]
         w = omega[j][None]
-        e1, e2 = _basis(w)
+        e1, e2 = in_plane_basis(w)
         c = h[j] * omega[j]
         sq = np.stack([c + size * (a * e1[0] + b * e2[0]) for a, b in ((1, 1), (-1, 1), (-1, -1), (1, -1))])
         pts, cnt, lab = sq[None], np.array([4]), np.array([[-1, -2, -3, -4]])
@@ -229,15 +230,6 @@ def _clipped_piece(rows: list[tuple[int, int]], depth: int, omega: np.ndarray, h
             z = np.zeros(1, dtype=np.int64)
             parts.append(_Batch(pts, lab, cnt, z + k - depth, z + 3, z + 1, z))
     return _concat(parts) if parts else _empty()
-
-
-def _basis(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit vectors ``e1, e2`` with ``(e1, e2, w)`` right-handed, for normals ``w`` (n, 3)."""
-    axis = np.zeros_like(w)
-    axis[np.arange(len(w)), np.argmin(np.abs(w), axis=1)] = 1.0
-    e1 = np.cross(w, axis)
-    e1 /= np.linalg.norm(e1, axis=1)[:, None]
-    return e1, np.cross(w, e1)
 
 
 @dataclass

@@ -878,8 +878,8 @@ def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str
     got = salvage(source)
     if got.header is None:
         raise FormatError("no intact PHDR chunk: nothing to salvage", code="MISSING_HEADER",
-                          file=getattr(source, "name", None) if not isinstance(source, (str, os.PathLike))
-                          else os.fspath(source))
+                          file=os.fspath(source) if isinstance(source, (str, os.PathLike))
+                          else getattr(source, "name", None))
     lost = [f"{x.message}" + ("" if x.offset is None else f" (byte {x.offset})") for x in got.losses]
     error = header_plane_error(got.header)
     objects = [r for r in got.records if isinstance(r, ObjectRecord)]

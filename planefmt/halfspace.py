@@ -58,7 +58,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from .errors import GeometryError
-from .planes import from_triplets
+from .planes import from_triplets, in_plane_basis
 
 #: Candidate vertices of adjacent dual triangles closer than this fraction of
 #: the diagonal are one vertex. Far above the ~1e-15 relative error of a
@@ -144,14 +144,13 @@ def intersect(omega: np.ndarray, h: np.ndarray, *, group: object = None,
     c = _interior_point(omega, h, label)
     # Near-copies of one plane (all but the innermost redundant) would put clusters of dual points
     # closer than Qhull's joggle: one copy each.
-    kept = _distinct(omega, h - omega @ c)
-    n_all = len(h)
-    omega, h = omega[kept], h[kept]
     slack = h - omega @ c
-    dual = omega / slack[:, None]
+    kept = _distinct(omega, slack)
+    n_all = len(h)
+    omega, h, rhs = omega[kept], h[kept], slack[kept]
+    dual = omega / rhs[:, None]
     if len(h) < 4:
         raise _unbounded(label, "fewer than four planes never bound a solid")
-    rhs = h - omega @ c
     simplices, candidates, reliable, vertex, merge = _vertices(omega, rhs, dual, c, label, plane_error,
                                                                merge_limit, joggle=True)
     if vertex is None:
@@ -257,12 +256,21 @@ def _pinned(omega: np.ndarray, reliable: np.ndarray, simplices: np.ndarray, labe
     loose = np.bincount(labels, weights=reliable, minlength=k) == 0
     if not loose.any():
         return True
-    sel = loose[labels]
-    inc = np.unique(np.column_stack([np.repeat(labels[sel], 3), simplices[sel].reshape(-1)]), axis=0)
-    w = omega[inc[:, 1]]
-    ata = np.zeros((k, 3, 3))
-    np.add.at(ata, inc[:, 0], w[:, :, None] * w[:, None, :])
-    return bool((np.linalg.det(ata[loose]) > 1e-12).all())
+    inc = _label_planes(labels, simplices, loose[labels])
+    return bool((np.linalg.det(_normal_matrices(omega, inc[:, 0], inc[:, 1], k)[loose]) > 1e-12).all())
+
+
+def _label_planes(labels: np.ndarray, simplices: np.ndarray, sel: np.ndarray) -> np.ndarray:
+    """``(label, plane)`` pairs, each once, of the dual triangles ``sel``."""
+    return np.unique(np.column_stack([np.repeat(labels[sel], 3), simplices[sel].reshape(-1)]), axis=0)
+
+
+def _normal_matrices(omega: np.ndarray, owner: np.ndarray, plane: np.ndarray, k: int) -> np.ndarray:
+    """``sum omega omega^T`` (k, 3, 3) over the planes of each owner."""
+    w = omega[plane]
+    out = np.zeros((k, 3, 3))
+    np.add.at(out, owner, w[:, :, None] * w[:, None, :])
+    return out
 
 
 def _merge_adjacent(points: np.ndarray, neighbors: np.ndarray, tol: float) -> np.ndarray:
@@ -386,12 +394,9 @@ def _accept(omega: np.ndarray, rhs: np.ndarray, points: np.ndarray, reliable: np
     group = np.flatnonzero(changed)
     if not len(group):
         return previous
-    member = changed[joined]
-    inc = np.unique(np.column_stack([np.repeat(joined[member], 3), simplices[member].reshape(-1)]), axis=0)
+    inc = _label_planes(joined, simplices, changed[joined])
     w = omega[inc[:, 1]]
-    normal = np.zeros((k, 3, 3))
-    np.add.at(normal, inc[:, 0], w[:, :, None] * w[:, None, :])
-    eig = np.linalg.eigvalsh(normal[group])
+    eig = np.linalg.eigvalsh(_normal_matrices(omega, inc[:, 0], inc[:, 1], k)[group])
     spans = eig[:, 0] >= 1e-6 * eig[:, 2]
     local = np.full(k, -1, dtype=np.int64)
     local[group] = np.arange(len(group))
@@ -440,8 +445,7 @@ def resolve_vertices(start: np.ndarray, inc_vertex: np.ndarray, inc_plane: np.nd
     nv = len(start)
     w = omega[inc_plane]
     resid = h[inc_plane] - np.einsum("ij,ij->i", w, start[inc_vertex])
-    ata = np.zeros((nv, 3, 3))
-    np.add.at(ata, inc_vertex, w[:, :, None] * w[:, None, :])
+    ata = _normal_matrices(omega, inc_vertex, inc_plane, nv)
     atr = np.column_stack([np.bincount(inc_vertex, weights=w[:, i] * resid, minlength=nv)
                            for i in range(3)])
     ok = np.linalg.det(ata) > 1e-12
@@ -466,21 +470,12 @@ def _faces(omega: np.ndarray, positions: np.ndarray,
                               for i in range(3)])
     with np.errstate(invalid="ignore", divide="ignore"):
         centre /= counts[:, None]
-    e1, e2 = _basis(omega)
+    e1, e2 = in_plane_basis(omega)
     d = positions[vi] - centre[pi]
     angle = np.arctan2(np.einsum("ij,ij->i", d, e2[pi]), np.einsum("ij,ij->i", d, e1[pi]))
     order = np.lexsort((angle, pi))
     planes, size = np.unique(pi[order], return_counts=True)
     return np.concatenate([[0], np.cumsum(size)]), vi[order], planes
-
-
-def _basis(omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit vectors ``e1, e2`` with ``(e1, e2, omega)`` right-handed (``e1 x e2 = omega``)."""
-    axis = np.zeros_like(omega)
-    axis[np.arange(len(omega)), np.argmin(np.abs(omega), axis=1)] = 1.0
-    e1 = np.cross(omega, axis)
-    e1 /= np.linalg.norm(e1, axis=1)[:, None]
-    return e1, np.cross(omega, e1)
 
 
 def _fan(offsets: np.ndarray, order: np.ndarray, plane: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

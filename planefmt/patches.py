@@ -495,7 +495,6 @@ class _Geometry:
         inside by half the patch's extent.
         """
         xs = self.v[np.unique(self.f[patch.triangles])]
-        centre = xs.mean(axis=0)
         margin = 0.5 * float(np.linalg.norm(np.ptp(xs, axis=0))) + self.tol
         if planes == 1:
             sign = 1.0 if patch.kind == 3 else -1.0

@@ -146,3 +146,13 @@ def transform_points(points: np.ndarray, matrix: np.ndarray) -> np.ndarray:
     """Points ``(n, 3)`` mapped by the affine 4x4 ``matrix`` acting on column vectors."""
     m = np.asarray(matrix, dtype=np.float64)
     return np.asarray(points, dtype=np.float64) @ m[:3, :3].T + m[:3, 3]
+
+
+def in_plane_basis(omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit vectors ``e1, e2`` (n, 3) with ``(e1, e2, omega)`` right-handed, for unit normals
+    ``omega`` (n, 3): angles measured in that basis run counter-clockwise seen from outside."""
+    axis = np.zeros_like(omega)
+    axis[np.arange(len(omega)), np.argmin(np.abs(omega), axis=1)] = 1.0
+    e1 = np.cross(omega, axis)
+    e1 /= np.linalg.norm(e1, axis=1)[:, None]
+    return e1, np.cross(omega, e1)

@@ -35,6 +35,7 @@ from scipy.spatial import cKDTree
 
 from .errors import GeometryError
 from .halfspace import intersect
+from .planes import in_plane_basis
 
 #: Polytopes with at most this many planes are computed by triple enumeration.
 SMALL = 14
@@ -217,7 +218,7 @@ def _faces(omega: np.ndarray, x: np.ndarray, vi: np.ndarray, key: np.ndarray, ow
     face = np.repeat(np.arange(len(first)), cnt)
     centre = np.column_stack([np.bincount(face, weights=x[vi, c]) for c in range(3)]) / cnt[:, None]
     row_first, owner_first = row[first], owner[first]
-    e1, e2 = _basis(omega[row_first])
+    e1, e2 = in_plane_basis(omega[row_first])
     d = x[vi] - centre[face]
     angle = np.arctan2(np.einsum("ij,ij->i", d, e2[face]), np.einsum("ij,ij->i", d, e1[face]))
     order = np.lexsort((angle, face))
@@ -267,15 +268,6 @@ def _strictly_convex(vi: np.ndarray, d: np.ndarray, face: np.ndarray, cnt: np.nd
         vi, d, face = vi[keep], d[keep], face[keep]
         cnt = np.bincount(face, minlength=len(cnt))
     return vi, d, face, cnt
-
-
-def _basis(omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Unit vectors ``e1, e2`` with ``(e1, e2, omega)`` right-handed."""
-    axis = np.zeros_like(omega)
-    axis[np.arange(len(omega)), np.argmin(np.abs(omega), axis=1)] = 1.0
-    e1 = np.cross(omega, axis)
-    e1 /= np.linalg.norm(e1, axis=1)[:, None]
-    return e1, np.cross(omega, e1)
 
 
 def _qhull(omega: np.ndarray, h: np.ndarray, first: int, k: int, p: int, tol: float,
