@@ -353,7 +353,7 @@ def _merge_vertices(omega: np.ndarray, rhs: np.ndarray, points: np.ndarray, reli
     Points of adjacent dual triangles are one vertex when closer than ``tol``. Copies of a
     vertex on many planes, solved from nearly dependent triples (:func:`_triple_points`), can
     be far apart along the direction those triples leave free (the apex of a cone of 10^5
-    planes: up to half the extent) while every plane of the vertex passes through the vertex.
+    planes: 0.5 apart on a cone 1.4 across) while every plane of the vertex passes through the vertex.
     Two more rules join them, each tried only where the previous one left points apart: a
     reliable point lying within ``tol`` of the neighbour's three planes; then adjacent
     unreliable triangles. A group a rule joins is kept only if its planes pin one point (their
