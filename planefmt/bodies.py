@@ -193,11 +193,11 @@ def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
     source = TriangleIndex(vertices, faces)
     reasons = []
     for seed in SEEDS:
-        part = partition(omega, h, x[f], fp, eps, reflex, seed=seed)
-        used, local = np.unique(part.tokens[part.tokens <= np.uint32(0xFFFFFFEF)], return_inverse=True)
-        tokens = part.tokens.copy()
-        tokens[part.tokens <= np.uint32(0xFFFFFFEF)] = local.astype(np.uint32)
         try:
+            part = partition(omega, h, x[f], fp, eps, reflex, seed=seed)
+            used, local = np.unique(part.tokens[part.tokens <= np.uint32(0xFFFFFFEF)], return_inverse=True)
+            tokens = part.tokens.copy()
+            tokens[part.tokens <= np.uint32(0xFFFFFFEF)] = local.astype(np.uint32)
             dv, dt, _ = decode_tree(omega[used], h[used], tokens, np.ones(len(used), dtype=bool))
         except GeometryError as err:
             reasons.append(f"seed {seed}: {err.reason}")

@@ -18,9 +18,9 @@ splitting plane, so they still tile the solid.
   naive boundary extraction quadratic). Otherwise the splitter is the best of
   a few random non-supporting ("reflex") planes by ``3 * splits + imbalance``.
 * Leaves. A child with no fragment is uniformly inside or outside; it is IN
-  when it lies on the inner side of the splitter whose fragments bound it,
-  because a face's inner side is the solid. This holds for one closed,
-  outward, non-self-intersecting body; bodies are encoded one by one, and
+  when it lies on the side the splitter's fragments face away from, by net
+  area (coincident opposite faces, zero-thickness fins, cancel). This holds
+  for one closed, outward, non-self-intersecting body; bodies are encoded one by one, and
   the encoder verifies the decoded surface, so a body where it fails
   (self-intersection, self-contact) is caught and encoded otherwise.
 * Output. The IN cells, each pruned to its non-redundant half-spaces
@@ -46,6 +46,7 @@ from .clipping import clip_triangles, vertex_sides
 from .errors import GeometryError
 from .bsptree import boundary, parse
 from .model import BSP_IN, BSP_OUT
+from .polygonize import edge_adjacency
 from .seams import Planes, stitch
 
 #: Splitter candidates evaluated per node.
@@ -125,11 +126,33 @@ def partition(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.n
                 plist.append(ps[src])
         tin, tout = np.concatenate(ins), np.concatenate(outs)
         tokens.append(int(p))
+        inner_in = True
+        if not (len(tin) and len(tout)):
+            inner_in = _inner_is_solid(t[on], omega[p])
         # Pushed outer first so that the inner subtree is emitted first (preorder, spec §8.4). A side
-        # without fragments is one leaf: inside when it is the splitter's inner side.
-        stack.append((tout, np.concatenate(outp)) if len(tout) else BSP_OUT)
-        stack.append((tin, np.concatenate(inp)) if len(tin) else BSP_IN)
+        # without fragments is one leaf, inside or outside as the splitter's fragments say.
+        stack.append((tout, np.concatenate(outp)) if len(tout) else (BSP_OUT if inner_in else BSP_IN))
+        stack.append((tin, np.concatenate(inp)) if len(tin) else (BSP_IN if inner_in else BSP_OUT))
     return Partition(tokens=np.asarray(tokens, dtype=np.uint32), splits=splits, pieces=pieces, chain=chain)
+
+
+def _inner_is_solid(on: np.ndarray, normal: np.ndarray) -> bool:
+    """Whether the inner side of a splitting plane is the solid next to its fragments ``on`` (n, 3, 3).
+
+    Crossing the plane along ``normal`` the winding number drops by one per
+    fragment facing that way and rises by one per fragment facing back; for a
+    body whose winding number is 0 or 1 the jump has one sign all over the
+    plane, so the sign of the net area tells a fragment-free side's class.
+    Coincident opposite faces (a zero-thickness fin, as where a shaft's cap
+    meets a head's top) cancel; only faces the plane's own way would claim
+    the wrong side there.
+    """
+    net = float(np.einsum("nj,j->", np.cross(on[:, 1] - on[:, 0], on[:, 2] - on[:, 0]), normal))
+    total = float(np.linalg.norm(np.cross(on[:, 1] - on[:, 0], on[:, 2] - on[:, 0]), axis=1).sum())
+    if not abs(net) > 1e-9 * total:
+        raise GeometryError("a splitting plane's fragments cancel: its empty side has no class",
+                            code="DEGENERATE_GEOMETRY")
+    return net > 0
 
 
 def _choose_splitter(omega: np.ndarray, h: np.ndarray, t: np.ndarray, pool: np.ndarray, eps: float,
@@ -165,9 +188,13 @@ def _reach(omega: np.ndarray, h: np.ndarray, points: np.ndarray) -> np.ndarray:
 #: every decision is made as exact arithmetic would make it (features of planes that nearly meet
 #: at one point are resolved consistently, not snapped).
 SPLIT_EPS = 4e-13
-#: Vertex welding distance of the decoder, relative to the largest |h|: above the rounding of
-#: points computed along different clip sequences from well-conditioned planes.
-WELD_TOL = 4e-11
+#: Vertex welding distances of the decoder, relative to the largest |h|, tried in turn until the
+#: surface is a closed 2-manifold. The first is above the rounding of points computed along
+#: different clip sequences from well-conditioned planes; the others close the sub-tolerance edges
+#: where four or more planes nearly meet at one point (pins.glb: cylinder facets and a cap, two
+#: corners 2.7e-8 apart at |h| 200, that welding by error estimate joined one way in one cell and
+#: the other way in its neighbour).
+WELD_TOL = (4e-11, 1e-9, 1e-8)
 
 
 def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
@@ -194,9 +221,14 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
     pts, count, labels, plane = pts[keep], count[keep], labels[keep], plane[keep]
     slot = np.arange(pts.shape[1])[None, :] < count[:, None]
     offsets = np.concatenate([[0], np.cumsum(count)])
-    vertices, triangles, polygon = stitch(pts[slot], offsets, np.arange(int(count.sum())), Planes(omega, h),
-                                          plane, labels[slot], WELD_TOL * reach, reach)
-    return vertices, triangles, plane[polygon]
+    first = None
+    for weld in WELD_TOL:
+        vertices, triangles, polygon = stitch(pts[slot], offsets, np.arange(int(count.sum())), Planes(omega, h),
+                                              plane, labels[slot], weld * reach, reach)
+        if edge_adjacency(triangles, len(vertices)).closed:
+            return vertices, triangles, plane[polygon]
+        first = first or (vertices, triangles, plane[polygon])
+    return first
 
 
 def decode_bsp_group(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray

@@ -73,3 +73,30 @@ def test_info_exit_1_on_warnings(tmp_path):
     p = subprocess.run([*PLN, "info", str(path), "--json"], capture_output=True, text=True)
     assert p.returncode == 1
     assert {f["code"] for f in json.loads(p.stdout)["findings"]} == {"NEWER_MINOR_VERSION", "SKIPPED_GROUP_KIND"}
+
+
+def test_info_planes_per_group_and_bytes_per_source_triangle(tmp_path):
+    """A corpus mesh converted, then described against its source: bytes per source triangle."""
+    import pytest
+    from pathlib import Path
+
+    src = Path(__file__).resolve().parents[2] / "shared" / "corpus" / "cad" / "angle_block.STL"
+    if not src.exists():
+        pytest.skip(f"no corpus mesh {src}")
+    out = tmp_path / "angle_block.pln"
+    p = subprocess.run([*PLN, "convert", str(src), str(out)], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    p = subprocess.run([*PLN, "info", str(out), "--source", str(src), "--json"], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    info = json.loads(p.stdout)
+    triangles = (src.stat().st_size - 84) // 50  # binary STL: 84-byte header, 50 bytes a triangle
+    assert info["source"]["triangles"] == triangles
+    assert info["source"]["bytes_per_triangle"] == pytest.approx(out.stat().st_size / triangles)
+    g = info["groups"]
+    assert sum(g["by_kind"].values()) == g["total"] >= 1
+    for kind, n in g["by_kind"].items():
+        assert 1 <= g["largest_by_kind"][kind] <= g["plane_refs_by_kind"][kind]
+    text = subprocess.run([*PLN, "info", str(out), "--source", str(src)], capture_output=True, text=True).stdout
+    assert f"{triangles} triangles, {out.stat().st_size / triangles:.2f} bytes per triangle" in text
+    print(f"angle_block.STL: {triangles} triangles, {out.stat().st_size} bytes, "
+          f"{out.stat().st_size / triangles:.2f} bytes per triangle")

@@ -148,3 +148,32 @@ def test_cut_planes_carry_no_surface() -> None:
     assert shapes.area(dv, df) == pytest.approx(6.0)
     assert signed_volume(dv, df) == pytest.approx(1.0)
     assert 6 not in plane
+
+
+def _corpus_node(relative: str, name: str) -> tuple[np.ndarray, np.ndarray]:
+    from pathlib import Path
+
+    from planefmt_converters import registry
+
+    path = Path(__file__).resolve().parents[2] / "shared" / "corpus" / relative
+    if not path.exists():
+        pytest.skip(f"no corpus mesh {path}")
+    scene, _ = registry.read(str(path))
+    mesh = next(n.mesh for n in scene.nodes if n.name == name)
+    return mesh.vertices, mesh.faces
+
+
+def test_zero_thickness_fin_leaves_are_classed_by_net_area() -> None:
+    """bolt.usda: the shaft's cap lies in the head's top, a downward face on the top plane.
+
+    A splitter on that cap plane used to call its empty far side solid (an IN
+    leaf without end); by net area the up-facing top outweighs it.
+    """
+    v, f = _corpus_node("usd/bolt.usda", "bolt")
+    assert check_solid(v, f)["kinds"] == ["solid"]
+
+
+def test_nearly_concurrent_planes_weld_into_one_closed_surface() -> None:
+    """pins.glb, a dowel: cylinder facets and a cap meet in corners 2.7e-8 apart at |h| 200."""
+    v, f = _corpus_node("gltf_scene/pins.glb", "dowel#1:9:6:8:7")
+    assert check_solid(v, f)["kinds"] == ["solid"]

@@ -1,4 +1,8 @@
-"""``pln info FILE``: header, objects, part groups by kind and bytes per chunk type."""
+"""``pln info FILE``: header, objects, part groups by kind (planes per group) and bytes per chunk type.
+
+With ``--source MESH`` (the mesh the file was made from, any format ``pln
+convert`` reads) it also gives the file's bytes per source triangle.
+"""
 
 from __future__ import annotations
 
@@ -16,6 +20,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("info", help="describe a .pln file", description=__doc__)
     p.add_argument("file", help="a .pln file, or - for standard input")
     p.add_argument("--json", action="store_true", help="print one JSON object")
+    p.add_argument("--source", metavar="MESH",
+                   help="the mesh the file was encoded from: report bytes per source triangle")
     p.add_argument("--salvage", action="store_true",
                    help="recover every intact part group of a damaged file and list what was lost")
     p.set_defaults(func=run)
@@ -28,6 +34,7 @@ class _Summary:
         self.objects: dict[int, dict] = {}
         self.kinds: Counter[str] = Counter()
         self.planes_by_kind: Counter[str] = Counter()
+        self.largest_by_kind: Counter[str] = Counter()
         self.bounding = 0
         self.planes = 0
         self.groups = 0
@@ -44,6 +51,7 @@ class _Summary:
                 else f"kind{rec.kind}"
             self.kinds[kind] += 1
             self.planes_by_kind[kind] += len(rec.refs)
+            self.largest_by_kind[kind] = max(self.largest_by_kind[kind], len(rec.refs))
             self.bounding += int(rec.bounding.sum())
             self.groups += 1
             if rec.object in self.objects:
@@ -93,7 +101,8 @@ def _render_dict(name: str, h, summary: _Summary, chunks: dict, file_bytes: int 
         "planes": summary.planes,
         "objects": [summary.objects[k] for k in sorted(summary.objects)],
         "groups": {"total": summary.groups, "by_kind": dict(summary.kinds),
-                   "plane_refs_by_kind": dict(summary.planes_by_kind), "bounding_refs": summary.bounding},
+                   "plane_refs_by_kind": dict(summary.planes_by_kind),
+                   "largest_by_kind": dict(summary.largest_by_kind), "bounding_refs": summary.bounding},
         "chunks": chunks,
         "file_bytes": file_bytes,
         "findings": findings,
@@ -104,8 +113,21 @@ def _num(v: float) -> float | None:
     return None if math.isnan(v) else v
 
 
+def source_triangles(path: str) -> int:
+    """Triangles of a mesh file as ``pln convert`` reads it (all nodes, polygons triangulated)."""
+    from planefmt_converters import registry
+
+    scene, _ = registry.read(path)
+    return sum(len(n.mesh.faces) for n in scene.nodes if n.mesh is not None)
+
+
 def run(args: argparse.Namespace) -> int:
     info = describe_salvaged(args.file) if args.salvage else describe(args.file)
+    if args.source:
+        triangles = source_triangles(args.source)
+        info["source"] = {"file": args.source, "triangles": triangles,
+                          "bytes_per_triangle": None if not triangles or info["file_bytes"] is None
+                          else info["file_bytes"] / triangles}
     if args.json:
         json.dump(info, sys.stdout, indent=2)
         sys.stdout.write("\n")
@@ -139,7 +161,15 @@ def render(info: dict) -> str:
     g = info["groups"]
     lines.append(f"groups:      {g['total']}")
     for kind, n in sorted(g["by_kind"].items()):
-        lines.append(f"  {kind:<15} {n:>8} groups {g['plane_refs_by_kind'][kind]:>10} plane refs")
+        refs = g["plane_refs_by_kind"][kind]
+        lines.append(f"  {kind:<15} {n:>8} groups {refs:>10} plane refs   planes per group: "
+                     f"mean {refs / n:.1f}, max {g['largest_by_kind'][kind]}")
+    if g["bounding_refs"]:
+        lines.append(f"  bounding (cut) plane refs: {g['bounding_refs']}")
+    src = info.get("source")
+    if src is not None:
+        per = "-" if src["bytes_per_triangle"] is None else f"{src['bytes_per_triangle']:.2f}"
+        lines.append(f"source:      {src['file']}: {src['triangles']} triangles, {per} bytes per triangle")
     lines.append("chunks:")
     for name, c in sorted(info["chunks"].items(), key=lambda kv: -kv[1]["bytes"]):
         lines.append(f"  {name}  {c['count']:>8} x  {c['bytes']:>12} bytes")
