@@ -21,7 +21,7 @@ import numpy as np
 from . import records, schema
 from .chunks import ChunkStream, Limits, RawChunk, is_ancillary
 from .errors import FormatError, PlnError
-from .model import Colours, Header, ObjectRecord, PartGroup, PlaneBlock, Record, UnknownChunk
+from .model import ObjectRecord, PartGroup, Record, UnknownChunk
 
 
 class Reader:
