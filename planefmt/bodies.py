@@ -37,6 +37,9 @@ from .trianglegeom import TriangleIndex
 
 #: Splitter seeds tried before a closed body falls back to patches.
 SEEDS = (0, 1, 2)
+#: Coplanarity of the planes a closed body's second BSP attempt uses (fraction of the diagonal):
+#: float64 rounding of the faces' own planes, far below any tolerance.
+EXACT_COPLANAR = 1e-12
 #: Volume agreement required of a decoded solid (relative).
 VOLUME_TOLERANCE = 1e-6
 
@@ -171,6 +174,16 @@ def reflex_planes(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarra
         d = np.einsum("ij,ij->i", omega[pl[ok]], vertices[far[ok]]) - h[pl[ok]]
         out[pl[ok][d > tol]] = True
     return out
+
+
+def exact_planes(vertices: np.ndarray, faces: np.ndarray, table: PlaneTable) -> np.ndarray:
+    """Each face's plane in a polygonization that merges only coplanar faces (within
+    :data:`EXACT_COPLANAR` of the diagonal), added to ``table``; -1 for faces of no area."""
+    from .polygonize import polygonize
+
+    poly = polygonize(vertices, faces, tolerance=EXACT_COPLANAR)
+    index = np.array([table.add(w, float(c)) for w, c in zip(poly.omega, poly.h)], dtype=np.int64)
+    return np.where(poly.face_plane >= 0, index[np.maximum(poly.face_plane, 0)], -1)
 
 
 def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray, omega: np.ndarray,
@@ -309,6 +322,14 @@ def encode_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray,
         groups = []
         if is_closed_manifold(faces, len(vertices)) and signed_volume(vertices, faces) > 0:
             solid = encode_solid(vertices, faces, face_plane, omega[:table.base], h[:table.base], target, report)
+            if solid is None:
+                # Merged planes pass near, not through, their vertices: where many meet (smooth
+                # surfaces), or nearly parallel ones meet, the cells' corners stray or leave
+                # cracks. Planes of exactly coplanar faces only pass through them all.
+                first = report.note
+                exact = exact_planes(vertices, faces, table)
+                solid = encode_solid(vertices, faces, exact, *table.arrays(), target, report)
+                report.note = f"{first}; exact planes: {report.note}" if solid is None else "exact planes"
             if solid is not None:
                 report.kind = "solid"
                 groups = [solid]

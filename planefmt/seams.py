@@ -21,6 +21,8 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from .polygonize import edge_adjacency
+
 
 def weld(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
     """Merge points closer than ``tol`` (transitively): ``(merged (k, 3), label (n,))``.
@@ -204,3 +206,29 @@ def _triangulate(vertices: np.ndarray, seq: np.ndarray, owner: np.ndarray, grown
     tris = np.concatenate([tri_plain, tri_grown]).astype(np.int64)
     polygon = np.concatenate([p, owner[idx]])
     return np.concatenate([vertices, centre]), tris, polygon
+
+
+def close_cracks(vertices: np.ndarray, triangles: np.ndarray, reaches: tuple[float, ...]
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """Weld only the vertices of edges not shared by exactly two triangles, at each reach in turn
+    (model units), until every edge is: ``(vertices, triangles, kept)`` (``kept`` selects the input
+    triangles that did not collapse), or None if no reach closes the surface.
+
+    Where several nearly concurrent planes meet, the corners of neighbouring cells differ by more
+    than any global welding distance that keeps the rest of the surface intact; the cracks they
+    leave are bounded by such edges, and only their vertices move.
+    """
+    e = np.sort(np.column_stack([triangles.reshape(-1), triangles[:, [1, 2, 0]].reshape(-1)]), axis=1)
+    edges, count = np.unique(e, axis=0, return_counts=True)
+    loose = np.unique(edges[count != 2])
+    if len(loose) == 0:
+        return vertices, triangles, np.ones(len(triangles), dtype=bool)
+    tree = cKDTree(vertices[loose])
+    for reach in reaches:
+        pairs = loose[tree.query_pairs(reach, output_type="ndarray")]
+        merged, label = _merge(vertices, pairs.reshape(-1, 2))
+        t = label[triangles]
+        kept = (t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 2] != t[:, 0])
+        if edge_adjacency(t[kept], len(merged)).closed:
+            return merged, t[kept], kept
+    return None
