@@ -308,9 +308,12 @@ def _interior_point(omega: np.ndarray, h: np.ndarray, label: str) -> np.ndarray:
     if res.status != 0 or res.x is None:
         raise GeometryError(f"{label}: no interior point found ({res.message})", code="EMPTY_POLYTOPE")
     x, r = res.x[:3], res.x[3]
-    if not r > _INTERIOR_EPS * max(scale, float(np.abs(x).max())):
+    # The solver's own feasibility tolerance (about 1e-7) can leave its point on or past a plane
+    # when the solid is that thin: the margin that counts is the point's, not the reported radius.
+    margin = float((h - omega @ x).min())
+    if not min(r, margin) > _INTERIOR_EPS * max(scale, float(np.abs(x).max())):
         raise GeometryError(f"{label}: the half-spaces have an empty intersection or one without "
-                            f"interior (largest inscribed ball radius {r:.3g})", code="EMPTY_POLYTOPE")
+                            f"interior (largest inscribed ball radius {min(r, margin):.3g})", code="EMPTY_POLYTOPE")
     return x
 
 
