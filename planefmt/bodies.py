@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
+from scipy.spatial import QhullError, cKDTree
 
 from .errors import GeometryError
 from .model import GroupKind
@@ -214,6 +214,11 @@ def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
             dv, dt, _ = decode_tree(omega[used], h[used], tokens, np.ones(len(used), dtype=bool))
         except GeometryError as err:
             reasons.append(f"seed {seed}: {err.reason}")
+            continue
+        except (ArithmeticError, ValueError, np.linalg.LinAlgError, QhullError) as err:
+            # What a file's decoder would report as DEGENERATE_GEOMETRY (codec.decode_group): not
+            # this tree.
+            reasons.append(f"seed {seed}: the tree does not decode ({type(err).__name__}: {err})")
             continue
         why = _check_solid(vertices, faces, dv, dt, volume, chi, source, target)
         report.details[f"seed{seed}"] = {"splits": part.splits, "pieces": part.pieces, "tokens": len(tokens),
