@@ -31,6 +31,7 @@ from scipy.spatial import QhullError, cKDTree
 from .errors import GeometryError
 from .model import GroupKind
 from .patches import Patch, PatchReport, PlaneTable, encode_patches
+from .planes import from_triplets, to_triplets
 from .polygonize import edge_adjacency
 from .solids import decode_tree, partition
 from .trianglegeom import TriangleIndex
@@ -211,7 +212,9 @@ def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
             used, local = np.unique(part.tokens[part.tokens <= np.uint32(0xFFFFFFEF)], return_inverse=True)
             tokens = part.tokens.copy()
             tokens[part.tokens <= np.uint32(0xFFFFFFEF)] = local.astype(np.uint32)
-            dv, dt, _ = decode_tree(omega[used], h[used], tokens, np.ones(len(used), dtype=bool))
+            # Decoded from the planes as a float64 file holds them, (nu, phi, h): the surface a reader makes.
+            w, c = from_triplets(to_triplets(omega[used], h[used]))
+            dv, dt, _ = decode_tree(w, c, tokens, np.ones(len(used), dtype=bool))
         except GeometryError as err:
             reasons.append(f"seed {seed}: {err.reason}")
             continue
