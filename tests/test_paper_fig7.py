@@ -83,7 +83,7 @@ def test_fig7_block_as_pseudo_convex_and_pseudo_concave_patches(tmp_path) -> Non
         kinds = sorted({GroupKind(g.kind).name.lower() for g in r if isinstance(g, planefmt.PartGroup)})
     codec_bytes = codec_path.stat().st_size
 
-    print(f"\nFig. 7 block, 16 vertices, 14 quads, 28 triangles:")
+    print("\nFig. 7 block, 16 vertices, 14 quads, 28 triangles:")
     print(f"  paper, plane coding:   {PAPER_PLANE_BYTES} bytes (22 float32 planes: 1 pseudo-convex + "
           f"1 pseudo-concave part)")
     print(f"  paper, quad mesh:      {PAPER_QUAD_MESH_BYTES} bytes")
