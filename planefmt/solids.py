@@ -147,8 +147,9 @@ def _inner_is_solid(on: np.ndarray, normal: np.ndarray) -> bool:
     meets a head's top) cancel; only faces the plane's own way would claim
     the wrong side there.
     """
-    net = float(np.einsum("nj,j->", np.cross(on[:, 1] - on[:, 0], on[:, 2] - on[:, 0]), normal))
-    total = float(np.linalg.norm(np.cross(on[:, 1] - on[:, 0], on[:, 2] - on[:, 0]), axis=1).sum())
+    area = np.cross(on[:, 1] - on[:, 0], on[:, 2] - on[:, 0])
+    net = float((area @ normal).sum())
+    total = float(np.linalg.norm(area, axis=1).sum())
     if not abs(net) > 1e-9 * total:
         raise GeometryError("a splitting plane's fragments cancel: its empty side has no class",
                             code="DEGENERATE_GEOMETRY")
