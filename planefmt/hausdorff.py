@@ -68,6 +68,7 @@ import numpy as np
 
 from .errors import GeometryError
 from .planarpatches import ConvexPatches
+from .stars import VertexStars
 from .trianglegeom import TriangleIndex, check_mesh, closest_distance, point_triangle_distance
 
 __all__ = ["HausdorffResult", "closest_distance", "hausdorff", "point_triangle_distance", "relative_hausdorff"]
@@ -119,6 +120,7 @@ class _Direction:
         self.frozen_upper = 0.0
         self.pieces = f
         self.bound = np.empty(0)
+        self.stars: VertexStars | None = None
 
     @property
     def upper(self) -> float:
@@ -156,7 +158,19 @@ class _Direction:
             need, cands, dist_to, slack = need[keep], cands[keep], dist_to[keep], slack[keep]
         if len(need):
             bound[need] = np.minimum(bound[need], self._cut_bound(corners[need], f[need], cands, dist_to, slack))
+            need = need[bound[need] > threshold]
+        if len(need):
+            bound[need] = np.minimum(bound[need], self._star_bound(corners[need], centroid[need], threshold))
         self.bound = bound + self.margin
+
+    def _star_bound(self, corners: np.ndarray, centroid: np.ndarray, threshold: float) -> np.ndarray:
+        """Wedge bound around the target vertex nearest to each piece's centroid (:mod:`planefmt.stars`).
+
+        Vertices joined by edges no longer than the first threshold asked for form one star's cluster.
+        """
+        if self.stars is None:
+            self.stars = VertexStars(self.index.vertices, self.index.faces, self.patches, threshold)
+        return self.stars.bound(corners, self.index.nearest_vertex(centroid))
 
     def _nearest_triangle_bound(self, corners: np.ndarray, d: np.ndarray, f: np.ndarray, fg: np.ndarray) -> np.ndarray:
         # A corner whose own nearest triangle is fg already has its distance to it.

@@ -241,6 +241,10 @@ class TriangleIndex:
         self._vf_faces = incidence // 3
         self._vf_ptr = np.searchsorted(f.ravel()[incidence], np.arange(len(v) + 1))
 
+    def nearest_vertex(self, points: np.ndarray) -> np.ndarray:
+        """Index of a mesh vertex (one that a face uses) nearest to each point."""
+        return self._kd_vertex[self._kd.query(np.asarray(points, dtype=np.float64).reshape(-1, 3))[1]]
+
     def closest_points(self, points: np.ndarray, tri_ids: np.ndarray) -> np.ndarray:
         """The point of triangle ``tri_ids[i]`` nearest to ``points[i]``."""
         return table_closest_points(points, self.table, np.asarray(tri_ids))
