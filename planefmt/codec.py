@@ -444,7 +444,8 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     ``TOLERANCE_NOT_MET`` when no coding meets the tolerance and keeps the
     source's structure.
     """
-    obj = _prepare(vertices, faces, np.eye(4), tolerance, delta, tau)
+    forced = coding is not None or bits is not None
+    obj = _prepare(vertices, faces, np.eye(4), tolerance, delta, tau, diagonal=None if forced else 0.0)
     choice = _choose([obj], tolerance, coding, bits)
     return Encoded(triplets=obj.triplets, groups=obj.groups, coding=choice.coding,
                    quantization=choice.quantization, bbox=choice.bbox, tolerance=float(tolerance),
@@ -453,7 +454,16 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
 
 
 def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, tolerance: float,
-             delta: float | None, tau: float | None, face_colours: np.ndarray | None = None) -> _Object:
+             delta: float | None, tau: float | None, face_colours: np.ndarray | None = None,
+             diagonal: float | None = None) -> _Object:
+    """One node's mesh polygonized and encoded body by body.
+
+    ``diagonal``: the diagonal of the whole source in world units (0 for a
+    single mesh: its own), when the polygon fit is to be held to the
+    tolerance before the bodies are encoded (an unforced lossless encode);
+    :func:`_choose` checks the same against a diagonal no larger, so this
+    only fails sooner.
+    """
     if not (math.isfinite(tolerance) and tolerance > 0):
         raise GeometryError(f"tolerance must be a positive fraction of the diagonal, not {tolerance}")
     for name, value in (("delta", delta), ("tau", tau)):
@@ -466,6 +476,11 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     if delta:
         face_plane = drop_planes(poly, face_plane, delta)
     simplified = bool(tau) or bool(delta)
+    if diagonal is not None and not simplified:
+        world_diag = max(diagonal, _diagonal(transform_points(poly.vertices, world)))
+        fit = poly.max_distance * float(np.linalg.norm(world[:3, :3], 2))
+        if fit > tolerance * world_diag * (1.0 + 1e-9):
+            raise _fit_error(fit / world_diag, tolerance)
     body_of_face = _bodies(poly)
     by_body = np.argsort(body_of_face, kind="stable")
     groups: list[GroupSpec] = []
@@ -696,9 +711,7 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
 
     allowance, _ = limit(base_meshes)
     if not forced and max(base_err) > allowance:
-        raise GeometryError(
-            f"the fitted polygon planes are {max(base_err) / diag_src:.3g} of the diagonal from the "
-            f"source vertices, above the tolerance {tolerance:g}", code="TOLERANCE_NOT_MET")
+        raise _fit_error(max(base_err) / diag_src, tolerance)
 
     failed = 0
     for cod, q in _candidates(coding, bits, table, radius):
@@ -739,6 +752,11 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
     raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g} (two-sided Hausdorff distance; "
                         f"closed sources must also decode closed, with their volume and Euler characteristic, "
                         f"open ones with their area, within {STRUCTURE_TOLERANCE:g})", code="TOLERANCE_NOT_MET")
+
+
+def _fit_error(relative: float, tolerance: float) -> GeometryError:
+    return GeometryError(f"the fitted polygon planes are {relative:.3g} of the diagonal from the source vertices, "
+                         f"above the tolerance {tolerance:g}", code="TOLERANCE_NOT_MET")
 
 
 def _diagonal(points: np.ndarray) -> float:
@@ -801,8 +819,10 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     :func:`encode_mesh`.
     """
     worlds = _world_transforms(scene.nodes)
-    prepared = [(i, _prepare(n.mesh.vertices, n.mesh.faces, worlds[i], tolerance, delta, tau, n.mesh.face_colours))
-                for i, n in enumerate(scene.nodes) if n.mesh is not None and len(n.mesh.faces)]
+    meshes = [i for i, n in enumerate(scene.nodes) if n.mesh is not None and len(n.mesh.faces)]
+    diagonal = _scene_diagonal(scene, worlds, meshes) if coding is None and bits is None else None
+    prepared = [(i, _prepare(scene.nodes[i].mesh.vertices, scene.nodes[i].mesh.faces, worlds[i], tolerance, delta,
+                             tau, scene.nodes[i].mesh.face_colours, diagonal)) for i in meshes]
     if not prepared:
         raise GeometryError("the scene has no mesh to encode")
     objects = [o for _, o in prepared]
@@ -837,6 +857,19 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
                 if o.plane_colours is not None:
                     w.add_colours(k, o.plane_colours[g.refs])
     return header
+
+
+def _scene_diagonal(scene: Scene, worlds: list[np.ndarray], meshes: list[int]) -> float | None:
+    """World bbox diagonal of the used vertices of the nodes ``meshes``; None if some mesh is malformed."""
+    points = []
+    for i in meshes:
+        v, f = np.asarray(scene.nodes[i].mesh.vertices), np.asarray(scene.nodes[i].mesh.faces)
+        if v.ndim != 2 or v.shape[1] != 3 or f.ndim != 2 or not np.issubdtype(f.dtype, np.integer) \
+                or f.min() < 0 or f.max() >= len(v):
+            return None
+        points.append(transform_points(v[np.unique(f)].astype(np.float64), worlds[i]))
+    d = _diagonal(np.concatenate(points)) if points else 0.0
+    return d if math.isfinite(d) else None
 
 
 def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool) -> Writer:

@@ -3,6 +3,8 @@ each held to the tolerance and to the source's structure (closed, volume, Euler 
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -111,3 +113,21 @@ def test_face_colours_survive_as_colour_chunks(make, tmp_path):
     m = codec.decode_scene(tmp_path / "c.pln").nodes[0].mesh
     # Every decoded triangle carries the colour of the source faces on its plane.
     assert m.face_colours is not None and np.array_equal(m.face_colours, _colour_by_normal(m.vertices, m.faces))
+
+
+@pytest.mark.skipif(not Path("/work/shared/corpus/usd/King_geom.usd").is_file(), reason="shared corpus not available")
+def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkeypatch):
+    """King_geom.usd's polygon planes fit 1.42e-6 of the diagonal: refused after polygonizing, not after encoding."""
+    from planefmt_converters import registry
+    from planefmt_converters.assemble import flatten
+
+    scene, _ = registry.read("/work/shared/corpus/usd/King_geom.usd")
+    mesh = flatten(scene)
+
+    def no_body(*args, **kwargs):
+        raise AssertionError("a body was encoded")
+
+    monkeypatch.setattr(codec, "_encode_body", no_body)
+    with pytest.raises(GeometryError, match="fitted polygon planes are 1.42e-06") as err:
+        codec.encode_mesh(mesh.vertices, mesh.faces, tolerance=1e-6)
+    assert err.value.code == "TOLERANCE_NOT_MET"
