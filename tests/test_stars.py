@@ -116,7 +116,8 @@ def test_smooth_mesh_against_its_moved_planes_certifies_only_with_stars(monkeypa
     target = 1e-6
     with_stars = hd.hausdorff(*a, *b, target=target, max_pieces=300_000)
     assert with_stars.certified and with_stars.upper <= target
-    monkeypatch.setattr(hd._Direction, "_star_bound", lambda self, corners, centroid, threshold: np.full(len(corners), np.inf))
+    monkeypatch.setattr(hd._Direction, "_star_bound",
+                        lambda self, corners, centroid, threshold: np.full(len(corners), np.inf))
     without = hd.hausdorff(*a, *b, target=target, max_pieces=300_000)
     assert not without.certified
     assert without.lower == with_stars.lower
