@@ -34,6 +34,12 @@ refined by midpoint 4-splits, level by level, only where needed.
     patch at its corners, including the points on the plane. This certifies
     pieces that straddle the line where the nearest face changes (a sliver
     bridging a concave corner, a chamfer) without refining along that line.
+  - Star: half-planes through an axis at the vertex of B nearest to g (or
+    the centroid of its cluster of vertices joined by edges no longer than
+    the threshold) cut P into convex wedge parts, each bounded by convexity
+    against the patches on its two spokes (:mod:`planefmt.stars`). This
+    certifies pieces over a vertex where several nearly coplanar faces meet,
+    as on every vertex of a decoded smooth mesh.
 
   Every bound adds a margin of ``64 * eps`` times the coordinates' magnitude
   for rounding (the region certificate also a rim of a few such margins times
