@@ -325,12 +325,12 @@ class _Geometry:
         """The polygon of triangles ``tris`` on plane ``p`` as ``(e1e2 (2, 3), equations (k, 3), tol)``:
         2D half-planes ``a u + b v + c <= 0``; None unless the triangles form one convex polygon
         (their 2D hull has their area)."""
+        if len(tris) == 1 and tris[0] in self._tri_hull:
+            return self._tri_hull[tris[0]]
         pts = self.v[self.f[tris]].reshape(-1, 3)
         e = np.stack(_basis(self.omega[p]))
         uv = pts @ e.T
         slack = self.tol + self.drift[p]
-        if len(tris) == 1 and tris[0] in self._tri_hull:
-            return self._tri_hull[tris[0]]
         if len(tris) == 1:
             # A triangle is its own hull: its three edge lines, outward, as a u + b v + c <= 0.
             a, b = uv, uv[[1, 2, 0]]
