@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    := out
 
-.PHONY: setup demo test bench clean
+.PHONY: setup demo test bench benchmarks clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -29,6 +29,11 @@ bench: $(STAMP)
 	$(BIN)/python -m pip install -q -e '.[bench]'
 	$(BIN)/python bench/bench_read.py
 	$(BIN)/python bench/bench_pipe_rss.py
+
+# docs/benchmarks.md: .pln against Draco, GLB and PLY over the whole corpus (hours; see bench/compare.py)
+benchmarks: $(STAMP)
+	$(BIN)/python -m pip install -q -e '.[bench]'
+	$(BIN)/python bench/compare.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis

@@ -517,16 +517,24 @@ def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
 
 #: Relative volume (closed sources) or area (open ones) a lossless decoding must keep.
 STRUCTURE_TOLERANCE = 1e-6
+#: Tolerances up to this (fraction of the diagonal) are lossless: volume and area within STRUCTURE_TOLERANCE.
+LOSSLESS_TOLERANCE = 1e-6
 
 
-def structure_kept(mesh: Mesh, obj: _Object) -> bool:
+def structure_kept(mesh: Mesh, obj: _Object, distance: float = 0.0) -> bool:
     """Whether a decoding keeps the source's structure: a closed source decodes closed, with its
     Euler characteristic and volume; an open one keeps its area (both within
-    :data:`STRUCTURE_TOLERANCE`, relative)."""
+    :data:`STRUCTURE_TOLERANCE`, relative).
+
+    ``distance`` (model units, local coordinates): the Hausdorff distance a lossy tolerance allows.
+    Two closed surfaces that far apart enclose volumes differing by at most the volume of the
+    band of that half-width around the source, about ``2 * area * distance``; the volume test
+    allows that much where it is more than the relative one.
+    """
     if obj.closed:
+        allowed = max(STRUCTURE_TOLERANCE * abs(obj.volume), 2.0 * obj.area * distance)
         return (is_closed_manifold(mesh.faces, len(mesh.vertices)) and euler_characteristic(mesh.faces) == obj.euler
-                and abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume)
-                <= STRUCTURE_TOLERANCE * abs(obj.volume))
+                and abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume) <= allowed)
     return abs(_area(mesh.vertices, mesh.faces) - obj.area) <= STRUCTURE_TOLERANCE * obj.area
 
 
@@ -713,6 +721,8 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
     if not forced and max(base_err) > allowance:
         raise _fit_error(max(base_err) / diag_src, tolerance)
 
+    # Lossless keeps the volume to STRUCTURE_TOLERANCE; a lossy tolerance lets it move with the surface.
+    band = tolerance if tolerance > LOSSLESS_TOLERANCE else 0.0
     failed = 0
     for cod, q in _candidates(coding, bits, table, radius):
         if cod == Coding.FLOAT64:
@@ -735,7 +745,8 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                     raise
                 failed += 1
                 continue
-        if not forced and not simplified and not all(structure_kept(m, o) for m, o in zip(meshes, objects)):
+        if not forced and not simplified and not all(structure_kept(m, o, band * diag_src / sc)
+                                                     for m, o, sc in zip(meshes, objects, scale)):
             failed += cod == Coding.QUANTIZED
             continue
         bound, world = limit(meshes)

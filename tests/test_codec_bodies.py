@@ -131,3 +131,20 @@ def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkey
     with pytest.raises(GeometryError, match="fitted polygon planes are 1.42e-06") as err:
         codec.encode_mesh(mesh.vertices, mesh.faces, tolerance=1e-6)
     assert err.value.code == "TOLERANCE_NOT_MET"
+
+
+def test_a_lossy_tolerance_lets_the_volume_move_with_the_surface():
+    """At 1e-4 a sphere's coarse planes change its volume by more than 1e-6 relative, and that is
+    within what a surface 1e-4 of the diagonal away may enclose: the codec quantizes instead of
+    falling back to float32 planes."""
+    m = trimesh.creation.icosphere(subdivisions=3)
+    v, f = np.asarray(m.vertices), np.asarray(m.faces)
+    enc = codec.encode_mesh(v, f, tolerance=1e-4)
+    assert enc.coding == codec.Coding.QUANTIZED
+    assert enc.error_bound <= 1e-4
+    obj = codec._prepare(v, f, np.eye(4), 1e-4, None, None)
+    change = abs(signed_volume(enc.mesh.vertices, enc.mesh.faces) - obj.volume)
+    diag = float(np.linalg.norm(np.ptp(v, axis=0)))
+    assert 1e-6 * abs(obj.volume) < change <= 2 * obj.area * 1e-4 * diag
+    assert not codec.structure_kept(enc.mesh, obj)
+    assert codec.structure_kept(enc.mesh, obj, 1e-4 * diag)

@@ -1,0 +1,326 @@
+""".pln against Draco, GLB and PLY on the corpus: bytes, error, speed and memory, measured in one run.
+
+For every corpus mesh (the scene flattened to world coordinates, vertices
+merged by exact position) and every codec:
+
+* ``draco-11``, ``draco-14``: DracoPy (Google's Draco), quantization 11 and
+  14 bits, compression level 10 (its smallest);
+* ``glb`` (trimesh's binary glTF), ``ply`` (binary PLY, trimesh) and
+  ``ply.gz`` (that PLY through gzip level 9): float32 positions, lossless up
+  to float32 rounding;
+* ``pln@T``: ``planefmt.codec.encode_scene`` at tolerance T (fraction of the
+  bbox diagonal), the whole file with its chunks and object records; the
+  codec picks its coding (quantized or float64 planes) as ``pln convert``
+  does. The source scene is encoded (nodes keep their transforms) and the
+  decoded scene flattened again.
+
+Measured per codec: file bytes; bits per source triangle; the error, the
+certified upper bound of the two-sided Hausdorff distance between the
+decoded and the source surface (``planefmt.hausdorff.relative_hausdorff``,
+stopping once its bounds are 1e-7 apart, relative to the source's bbox
+diagonal), the same measure for every codec; encode and decode wall time;
+peak memory, the rise of the resident set above its level when the
+measurement started (``VmHWM`` reset through ``/proc/self/clear_refs``), of
+encode and decode. Each measurement runs in a forked child, so one codec's
+memory is not another's and a timeout (``--timeout``) can stop it; a codec
+that fails or times out is reported as such, never dropped.
+
+The summary gives, per corpus category, the median of ``pln@T`` bytes over
+``draco-14`` bytes (over the meshes both encoded), how often pln is the
+smaller of the two, and how often its measured error is no larger.
+
+Usage::
+
+    python bench/compare.py                               # whole corpus -> docs/benchmarks.md
+    python bench/compare.py --categories cad,convex       # some categories
+    python bench/compare.py --tolerances 1e-6,1e-5 --out -   # print instead of writing
+"""
+
+from __future__ import annotations
+
+import argparse
+import gzip
+import io
+import multiprocessing
+import os
+import platform
+import statistics
+import sys
+import time
+import traceback
+import warnings
+from importlib import metadata
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+CORPUS = os.path.join(HERE, "..", "..", "shared", "corpus")
+DEFAULT_OUT = os.path.join(HERE, "..", "docs", "benchmarks.md")
+#: Corpus folders and the category each reports under.
+CATEGORIES = {"cad": "CAD", "convex": "convex", "nonconvex_watertight": "non-convex watertight", "open": "open",
+              "smooth_dense": "smooth dense", "gltf_scene": "scenes", "usd": "scenes"}
+DEFAULT_TOLERANCES = (1e-6, 1e-5, 1e-4)
+#: Stop gap of the Hausdorff measure, relative to the diagonal.
+MEASURE_GAP = 1e-7
+MEASURE_PIECES = 2_000_000
+
+
+def load(path: str):
+    """The corpus file as a scene and as one world-space mesh ``(vertices, faces)``, welded."""
+    from planefmt.polygonize import weld
+    from planefmt_converters import registry
+    from planefmt_converters.assemble import flatten
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene, _ = registry.read(path)
+    mesh = flatten(scene)
+    v, f = weld(mesh.vertices, mesh.faces)
+    return scene, v, f
+
+
+def _peak_reset() -> int:
+    with open("/proc/self/clear_refs", "w") as fh:
+        fh.write("5")
+    return _status("VmRSS")
+
+
+def _status(key: str) -> int:
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith(key + ":"):
+                return int(line.split()[1]) * 1024
+    return 0
+
+
+def _draco(bits: int):
+    def encode(scene, v, f):
+        import DracoPy
+
+        return DracoPy.encode(v, f, quantization_bits=bits, compression_level=10)
+
+    def decode(data):
+        import DracoPy
+
+        m = DracoPy.decode(data)
+        return np.asarray(m.points, dtype=np.float64), np.asarray(m.faces, dtype=np.int64)
+
+    return encode, decode
+
+
+def _trimesh_format(kind: str, compress: bool = False):
+    def encode(scene, v, f):
+        import trimesh
+
+        data = trimesh.Trimesh(v, f, process=False).export(file_type=kind)
+        return gzip.compress(data, 9) if compress else data
+
+    def decode(data):
+        import trimesh
+
+        raw = gzip.decompress(data) if compress else data
+        m = trimesh.load(io.BytesIO(raw), file_type=kind, force="mesh", process=False)
+        return np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int64)
+
+    return encode, decode
+
+
+def _pln(tolerance: float):
+    def encode(scene, v, f):
+        from planefmt import codec
+
+        buf = io.BytesIO()
+        codec.encode_scene(scene, buf, tolerance=tolerance)
+        return buf.getvalue()
+
+    def decode(data):
+        from planefmt import codec
+        from planefmt_converters.assemble import flatten
+
+        mesh = flatten(codec.decode_scene(io.BytesIO(data)))
+        return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces, dtype=np.int64)
+
+    return encode, decode
+
+
+def codecs(tolerances: tuple[float, ...]) -> dict:
+    table = {"draco-11": _draco(11), "draco-14": _draco(14), "glb": _trimesh_format("glb"),
+             "ply": _trimesh_format("ply"), "ply.gz": _trimesh_format("ply", compress=True)}
+    for t in tolerances:
+        table[f"pln@{t:g}"] = _pln(t)
+    return table
+
+
+def _measure(path: str, name: str, tolerances: tuple[float, ...], conn) -> None:
+    """In the child: load, encode, decode, measure; send one result dict."""
+    try:
+        from planefmt.hausdorff import relative_hausdorff
+
+        scene, v, f = load(path)
+        encode, decode = codecs(tolerances)[name]
+        base = _peak_reset()
+        t0 = time.perf_counter()
+        data = encode(scene, v, f)
+        t1 = time.perf_counter()
+        dv, df = decode(data)
+        t2 = time.perf_counter()
+        peak = _status("VmHWM") - base
+        r = relative_hausdorff((v, f), (dv, df), tolerance=MEASURE_GAP, max_pieces=MEASURE_PIECES)
+        conn.send({"bytes": len(data), "encode": t1 - t0, "decode": t2 - t1, "peak": peak,
+                   "error": r.upper, "certified": r.certified, "triangles": len(f)})
+    except Exception as exc:  # noqa: BLE001 - a codec's failure is a result of the bench, reported in its row
+        conn.send({"failed": f"{type(exc).__name__}: {str(exc).splitlines()[0][:120] if str(exc) else ''}",
+                   "trace": traceback.format_exc(limit=3)})
+    finally:
+        conn.close()
+
+
+def measure(path: str, name: str, tolerances: tuple[float, ...], timeout: float) -> dict:
+    ctx = multiprocessing.get_context("fork")
+    parent, child = ctx.Pipe(duplex=False)
+    proc = ctx.Process(target=_measure, args=(path, name, tolerances, child))
+    t = time.perf_counter()
+    proc.start()
+    child.close()
+    result = {"failed": f"timeout after {timeout:g} s"}
+    if parent.poll(timeout):
+        try:
+            result = parent.recv()
+        except EOFError:
+            result = {"failed": "the measuring process died"}
+    proc.kill() if proc.is_alive() else None
+    proc.join()
+    result["wall"] = time.perf_counter() - t
+    return result
+
+
+def corpus_files(categories: list[str]) -> list[tuple[str, str]]:
+    out = []
+    for folder in categories:
+        d = os.path.join(CORPUS, folder)
+        for name in sorted(os.listdir(d)):
+            if not name.endswith((".md", ".bin")):
+                out.append((folder, os.path.join(d, name)))
+    return out
+
+
+def _fmt_err(r: dict) -> str:
+    if "failed" in r:
+        return "–"
+    return f"{r['error']:.2g}" + ("" if r["certified"] else " (uncert.)")
+
+
+def report(rows: list[dict], names: list[str], tolerances: tuple[float, ...], args) -> str:
+    lines = ["# planefmt against Draco, GLB and PLY", "",
+             "Generated by `python bench/compare.py" + (f" --categories {args.categories}" if args.categories else "")
+             + (f" --tolerances {args.tolerances}" if args.tolerances else "") + "`; the script's docstring says "
+             "what is measured and how.", "", _machine(), ""]
+    lines += ["## Summary per category", "",
+              "Median of pln bytes / draco-14 bytes over the meshes both encoded; *smaller*: meshes where the pln "
+              "file is the smaller; *error ≤*: meshes where pln's measured error is no larger than draco-14's.", ""]
+    head = "| category | meshes | " + " | ".join(f"pln@{t:g} median ratio | smaller | error ≤" for t in tolerances)
+    lines += [head + " |", "|" + "---|" * (2 + 3 * len(tolerances))]
+    cats = list(dict.fromkeys(r["category"] for r in rows))
+    for cat in cats + ["all"]:
+        mine = [r for r in rows if cat in ("all", r["category"])]
+        cells = [cat, str(len(mine))]
+        for t in tolerances:
+            key = f"pln@{t:g}"
+            both = [r for r in mine if "failed" not in r[key] and "failed" not in r["draco-14"]]
+            ratios = [r[key]["bytes"] / r["draco-14"]["bytes"] for r in both]
+            cells.append(f"{statistics.median(ratios):.2f}" if ratios else "–")
+            cells.append(f"{sum(x < 1 for x in ratios)}/{len(mine)}")
+            cells.append(f"{sum(r[key]['error'] <= r['draco-14']['error'] for r in both)}/{len(mine)}")
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "A codec that failed or ran out of time counts against it in *smaller* and *error ≤* "
+              "(the denominators are all meshes).", ""]
+    lines += ["## Bytes and measured error per mesh", "",
+              "Bytes (bits per source triangle) and the certified Hausdorff upper bound relative to the bbox "
+              "diagonal; *uncert.*: the bound's budget ran out, the value is still an upper bound.", ""]
+    lines += ["| mesh | triangles | " + " | ".join(names) + " |", "|" + "---|" * (2 + len(names))]
+    for r in rows:
+        cells = [f"{r['category']}/{r['file']}", str(r["triangles"])]
+        for n in names:
+            c = r[n]
+            cells.append(f"{c['failed'][:60]}" if "failed" in c else
+                         f"{c['bytes']:,} ({8 * c['bytes'] / max(r['triangles'], 1):.1f}) {_fmt_err(c)}")
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", "## Speed and memory per mesh", "",
+              "Encode / decode wall time in ms, and peak memory (MB above the start of the measurement).", ""]
+    lines += ["| mesh | " + " | ".join(names) + " |", "|" + "---|" * (1 + len(names))]
+    for r in rows:
+        cells = [f"{r['category']}/{r['file']}"]
+        for n in names:
+            c = r[n]
+            cells.append("–" if "failed" in c else
+                         f"{1e3 * c['encode']:.0f} / {1e3 * c['decode']:.0f}, {c['peak'] / 2**20:.0f} MB")
+        lines.append("| " + " | ".join(cells) + " |")
+    failures = [(r, n) for r in rows for n in names if "failed" in r[n]]
+    if failures:
+        lines += ["", "## Failures", ""]
+        lines += [f"- {r['category']}/{r['file']}, {n}: {r[n]['failed']}" for r, n in failures]
+    return "\n".join(lines) + "\n"
+
+
+def _machine() -> str:
+    cpu = platform.processor() or platform.machine()
+    try:
+        with open("/proc/cpuinfo") as fh:
+            cpu = next(line.split(":", 1)[1].strip() for line in fh if line.startswith("model name"))
+    except (OSError, StopIteration):
+        pass
+    versions = ", ".join(f"{p} {_version(p)}" for p in ("planefmt", "DracoPy", "trimesh", "numpy", "scipy"))
+    return (f"Machine: {cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, {platform.system()}; "
+            f"{versions}; run {time.strftime('%Y-%m-%d')}, one measurement at a time.")
+
+
+def _version(package: str) -> str:
+    try:
+        return metadata.version(package)
+    except metadata.PackageNotFoundError:
+        return "?"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--categories", help="comma-separated corpus folders (default: all): " + ", ".join(CATEGORIES))
+    ap.add_argument("--tolerances", help="comma-separated pln tolerances (default 1e-6,1e-5,1e-4)")
+    ap.add_argument("--timeout", type=float, default=900.0, help="seconds per measurement (default 900)")
+    ap.add_argument("--out", default=DEFAULT_OUT, help="markdown file to write, - for stdout")
+    args = ap.parse_args(argv)
+    folders = args.categories.split(",") if args.categories else list(CATEGORIES)
+    unknown = [c for c in folders if c not in CATEGORIES]
+    if unknown:
+        ap.error(f"unknown categories: {', '.join(unknown)}")
+    tolerances = tuple(float(t) for t in args.tolerances.split(",")) if args.tolerances else DEFAULT_TOLERANCES
+    names = list(codecs(tolerances))
+    # Imported once here, so that every forked measurement starts with them loaded.
+    import DracoPy  # noqa: F401
+    import trimesh  # noqa: F401
+
+    import planefmt.codec  # noqa: F401
+    import planefmt.hausdorff  # noqa: F401
+    import planefmt_converters.registry  # noqa: F401
+    rows = []
+    for folder, path in corpus_files(folders):
+        row = {"category": CATEGORIES[folder], "file": os.path.basename(path), "triangles": 0}
+        for n in names:
+            r = measure(path, n, tolerances, args.timeout)
+            row[n] = r
+            row["triangles"] = max(row["triangles"], r.get("triangles", 0))
+            status = r["failed"] if "failed" in r else f"{r['bytes']} B, error {r['error']:.2g}"
+            print(f"{folder}/{os.path.basename(path)} {n}: {status} ({r['wall']:.1f} s)", file=sys.stderr, flush=True)
+        rows.append(row)
+    text = report(rows, names, tolerances, args)
+    if args.out == "-":
+        sys.stdout.write(text)
+    else:
+        os.makedirs(os.path.dirname(os.path.abspath(args.out)), exist_ok=True)
+        with open(args.out, "w") as fh:
+            fh.write(text)
+        print(f"wrote {args.out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
