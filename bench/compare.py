@@ -9,9 +9,10 @@ merged by exact position) and every codec:
   ``ply.gz`` (that PLY through gzip level 9): float32 positions, lossless up
   to float32 rounding;
 * ``pln@T``: ``planefmt.codec.encode_scene`` at tolerance T (fraction of the
-  bbox diagonal), the whole file with its chunks and object records; the
-  codec picks its coding (quantized or float64 planes) as ``pln convert``
-  does. The source scene is encoded (nodes keep their transforms) and the
+  bbox diagonal), the whole file with its chunks and object records, plane
+  and group payloads deflated where that saves bytes (spec §6, ``pln convert
+  --compress``); the codec picks its coding (quantized or float planes) as
+  ``pln convert`` does. The source scene is encoded (nodes keep their transforms) and the
   decoded scene flattened again.
 
 Measured per codec: file bytes; bits per source triangle; the error, the
@@ -130,7 +131,7 @@ def _pln(tolerance: float):
         from planefmt import codec
 
         buf = io.BytesIO()
-        codec.encode_scene(scene, buf, tolerance=tolerance)
+        codec.encode_scene(scene, buf, tolerance=tolerance, compress=True)
         return buf.getvalue()
 
     def decode(data):
