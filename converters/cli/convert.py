@@ -40,7 +40,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="largest error allowed, a fraction of the bbox diagonal (default 1e-6)")
     g.add_argument("--bits", type=int, help="force quantized coding with this many bits per component")
     g.add_argument("--coding", choices=["float32", "float64", "quantized"], help="force a triplet coding")
-    g.add_argument("--compress", action="store_true", help="deflate plane and group payloads")
+    g.add_argument("--compress", action=argparse.BooleanOptionalAction, default=True,
+                   help="deflate plane and group payloads where that saves bytes (spec §6; the default)")
     g.add_argument("--lossy", action="store_true", help="allow the paper's lossy options below")
     g.add_argument("--delta", type=float, help="lossy: drop planes of faces under delta x total area")
     g.add_argument("--tau", type=float, help="lossy: merge neighbour planes whose normals differ < tau radians")
