@@ -20,18 +20,20 @@ Encoding a mesh (:func:`encode_mesh`):
    the tolerance) one ``CONVEX`` group; any other body what
    :func:`planefmt.bodies.encode_body` makes of it (a ``BSP`` group for a
    closed solid, else pseudo-convex / pseudo-concave patches).
-4. The triplet coding is chosen and **verified**: candidate codings are tried
-   cheapest first (quantized at increasing widths, then float32, then
-   float64); each candidate's planes go through :func:`quantize.roundtrip`
-   (exactly what a reader gets back), are decoded, and the two-sided
-   Hausdorff distance between decoded and source surface is measured
-   (:func:`planefmt.hausdorff.hausdorff`). The first that meets the tolerance
-   wins; its measured error is the header's ``error_bound``. A candidate
-   must also keep the source's structure (:func:`structure_kept`). A first-order
-   prediction of the vertex displacement (planes re-intersected at each
-   decoded vertex) skips widths that cannot pass without decoding them: where
-   faces meet at a small angle the vertex error grows like ``1 / sin angle``,
-   so the angles, not ``h``, set the widths.
+4. The triplet coding is chosen and **verified**: each candidate's planes go
+   through :func:`quantize.roundtrip` (exactly what a reader gets back), are
+   decoded, and the two-sided Hausdorff distance between decoded and source
+   surface is measured (:func:`planefmt.hausdorff.hausdorff`); a candidate
+   must meet the tolerance and keep the source's structure
+   (:func:`structure_kept`). A first-order prediction of the vertex
+   displacement (planes re-intersected at each decoded vertex) skips widths
+   that cannot pass without decoding them: where faces meet at a small angle
+   the vertex error grows like ``1 / sin angle``, so the angles, not ``h``,
+   set the widths. Among the remaining quantized widths the narrowest that
+   passes is found by bisection (coarse planes can drop a thin cell of a BSP
+   solid where finer ones keep it, so a few failures at the narrow end say
+   nothing of the rest); if none passes, float32, then float64. The winner's
+   measured error is the header's ``error_bound``.
 
 Decoding dispatches on ``group.kind`` through :data:`DECODERS`.
 """
@@ -68,16 +70,15 @@ from .writer import Writer
 #: Quantized widths tried for nu and phi.
 MIN_BITS, MAX_BITS = 2, 32
 
-#: Verifications of quantized candidates that may fail before the float codings are tried.
-_MAX_FAILED = 3
-
 #: Attempts at a certified Hausdorff bound with a rising target (each 1.1x the last at least).
 _MEASURE_STEPS = 64
 
-#: Refinement budget of a pass/fail verification: a candidate whose bound cannot be certified
-#: within it counts as failed (the next, finer coding certifies far sooner). Float64, the last,
-#: gets ``DEFAULT_MAX_PIECES`` (plate_holes.STL: certified with 2M pieces in 24 s, not with 200k).
-_VERIFY_PIECES = 100_000
+#: Refinement budget of a pass/fail verification of a quantized coding: a candidate whose bound
+#: cannot be certified within it counts as failed. 1002_tray_bottom.STL at tolerance 1e-4, 22-bit
+#: angles (true error 7e-7): uncertified with 100k pieces, certified with 2M, both in about 16 s.
+#: Float64, the last, gets ``DEFAULT_MAX_PIECES`` (plate_holes.STL: certified with 2M pieces in 24 s,
+#: not with 200k).
+_VERIFY_PIECES = 1_000_000
 
 #: Rounds of mutual-best-pair merging for ``tau`` (each merges at least the closest pair).
 _TAU_ROUNDS = 64
@@ -723,19 +724,12 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
 
     # Lossless keeps the volume to STRUCTURE_TOLERANCE; a lossy tolerance lets it move with the surface.
     band = tolerance if tolerance > LOSSLESS_TOLERANCE else 0.0
-    failed = 0
-    for cod, q in _candidates(coding, bits, table, radius):
+
+    def attempt(cod: Coding, q: Quantization | None, rt: np.ndarray | None) -> _Choice | None:
+        """The choice of this coding if its decoding keeps the structure and verifies; None if not."""
         if cod == Coding.FLOAT64:
             meshes = base_meshes
         else:
-            rt = quantize.roundtrip(table, cod, q)
-            if not forced and cod == Coding.QUANTIZED:
-                # Half the room for the prediction: the certified bound the verification needs
-                # comes quickly only with a margin between the true error and the target.
-                predicted = max((0.0 if simplified else e) + s * _displacement(d, rt[a:b], o)
-                                for e, s, d, (a, b), o in zip(base_err, scale, base, spans, objects))
-                if failed >= _MAX_FAILED or predicted > 0.5 * (allowance - extra):
-                    continue
             try:
                 error = plane_error(cod, q, tolerance, diag_src)
                 meshes = [_concatenate(_decode_object(rt[a:b], o, error)) for (a, b), o in zip(spans, objects)]
@@ -743,23 +737,54 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                 # Coarse planes can lose a face or the solid altogether: not this coding.
                 if forced:
                     raise
-                failed += 1
-                continue
+                return None
         if not forced and not simplified and not all(structure_kept(m, o, band * diag_src / sc)
                                                      for m, o, sc in zip(meshes, objects, scale)):
-            failed += cod == Coding.QUANTIZED
-            continue
+            return None
         bound, world = limit(meshes)
         # Float64 is the finest coding, with no next one to certify sooner: it gets the full budget.
         pieces = DEFAULT_MAX_PIECES if cod == Coding.FLOAT64 else _VERIFY_PIECES
         errors = [_measure(m, o, bound, exact=forced, pieces=pieces) for m, o in zip(meshes, objects)]
-        if forced or max(errors) <= bound:
-            diagonal = _diagonal(world)
-            error_bound = max(errors) / diagonal
-            return _Choice(coding=cod, quantization=q, meshes=meshes,
-                           bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,
-                           error_bound=error_bound, lossy=simplified or error_bound > tolerance)
-        failed += cod == Coding.QUANTIZED
+        if not forced and max(errors) > bound:
+            return None
+        diagonal = _diagonal(world)
+        error_bound = max(errors) / diagonal
+        return _Choice(coding=cod, quantization=q, meshes=meshes,
+                       bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,
+                       error_bound=error_bound, lossy=simplified or error_bound > tolerance)
+
+    candidates = _candidates(coding, bits, table, radius)
+    if forced:
+        cod, q = candidates[0]
+        return attempt(cod, q, None if cod == Coding.FLOAT64 else quantize.roundtrip(table, cod, q))
+    quantized = []
+    for cod, q in candidates:
+        if cod != Coding.QUANTIZED:
+            continue
+        rt = quantize.roundtrip(table, cod, q)
+        # Half the room for the prediction: the certified bound the verification needs
+        # comes quickly only with a margin between the true error and the target.
+        predicted = max((0.0 if simplified else e) + s * _displacement(d, rt[a:b], o)
+                        for e, s, d, (a, b), o in zip(base_err, scale, base, spans, objects))
+        if predicted <= 0.5 * (allowance - extra):
+            quantized.append((q, rt))
+    # The narrowest widths that pass, by bisection: finer planes decode closer to the source (the
+    # search assumes so; whatever it picks is verified like any other).
+    lo, hi, best = 0, len(quantized) - 1, None
+    while lo <= hi:
+        mid = (lo + hi) // 2
+        found = attempt(Coding.QUANTIZED, *quantized[mid])
+        if found is None:
+            lo = mid + 1
+        else:
+            best, hi = found, mid - 1
+    if best is not None:
+        return best
+    for cod, q in candidates:
+        if cod in (Coding.FLOAT32, Coding.FLOAT64):
+            found = attempt(cod, q, None if cod == Coding.FLOAT64 else quantize.roundtrip(table, cod, q))
+            if found is not None:
+                return found
     raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g} (two-sided Hausdorff distance; "
                         f"closed sources must also decode closed, with their volume and Euler characteristic, "
                         f"open ones with their area, within {STRUCTURE_TOLERANCE:g})", code="TOLERANCE_NOT_MET")
