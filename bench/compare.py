@@ -189,7 +189,8 @@ def measure(path: str, name: str, tolerances: tuple[float, ...], timeout: float)
             result = parent.recv()
         except EOFError:
             result = {"failed": "the measuring process died"}
-    proc.kill() if proc.is_alive() else None
+    if proc.is_alive():
+        proc.kill()
     proc.join()
     result["wall"] = time.perf_counter() - t
     return result

@@ -732,12 +732,12 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
     # Lower bounds (fractions of the bound) of quantized candidates whose verification ran out of pieces.
     undecided: dict[int, float] = {}
 
-    def attempt(cod: Coding, q: Quantization | None, rt: np.ndarray | None,
-                pieces: int = _VERIFY_PIECES, key: int = -1) -> _Choice | None:
+    def attempt(cod: Coding, q: Quantization | None, pieces: int = _VERIFY_PIECES, key: int = -1) -> _Choice | None:
         """The choice of this coding if its decoding keeps the structure and verifies; None if not."""
         if cod == Coding.FLOAT64:
             meshes = base_meshes
         else:
+            rt = quantize.roundtrip(table, cod, q)
             try:
                 error = plane_error(cod, q, tolerance, diag_src)
                 meshes = [_concatenate(_decode_object(rt[a:b], o, error)) for (a, b), o in zip(spans, objects)]
@@ -769,8 +769,7 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
 
     candidates = _candidates(coding, bits, table, radius)
     if forced:
-        cod, q = candidates[0]
-        return attempt(cod, q, None if cod == Coding.FLOAT64 else quantize.roundtrip(table, cod, q))
+        return attempt(*candidates[0])
     quantized = []
     for cod, q in candidates:
         if cod != Coding.QUANTIZED:
@@ -781,13 +780,13 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
         predicted = max((0.0 if simplified else e) + s * _displacement(d, rt[a:b], o)
                         for e, s, d, (a, b), o in zip(base_err, scale, base, spans, objects))
         if predicted <= 0.5 * (allowance - extra):
-            quantized.append((q, rt))
+            quantized.append(q)
     # The narrowest widths that pass, by bisection: finer planes decode closer to the source (the
     # search assumes so; whatever it picks is verified like any other).
     lo, hi, best = 0, len(quantized) - 1, None
     while lo <= hi:
         mid = (lo + hi) // 2
-        found = attempt(Coding.QUANTIZED, *quantized[mid], key=mid)
+        found = attempt(Coding.QUANTIZED, quantized[mid], key=mid)
         if found is None:
             lo = mid + 1
         else:
@@ -800,12 +799,12 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
     # and the retry cost 1002_tray_bottom.STL 302 s instead of 108 s.
     likely = sorted(k for k, ratio in undecided.items() if ratio <= _LIKELY_PASS)
     if likely and tolerance > LOSSLESS_TOLERANCE:
-        found = attempt(Coding.QUANTIZED, *quantized[likely[0]], pieces=_RETRY_PIECES)
+        found = attempt(Coding.QUANTIZED, quantized[likely[0]], pieces=_RETRY_PIECES)
         if found is not None:
             return found
     for cod, q in candidates:
         if cod in (Coding.FLOAT32, Coding.FLOAT64):
-            found = attempt(cod, q, None if cod == Coding.FLOAT64 else quantize.roundtrip(table, cod, q))
+            found = attempt(cod, q)
             if found is not None:
                 return found
     raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g} (two-sided Hausdorff distance; "
