@@ -26,13 +26,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import QhullError, cKDTree
+from scipy.spatial import QhullError
 
 from .errors import GeometryError
 from .model import GroupKind
 from .patches import Patch, PatchReport, PlaneTable, encode_patches
 from .planes import from_triplets, to_triplets
 from .polygonize import edge_adjacency
+from .repair import merge_close_vertices
 from .solids import decode_tree, partition
 from .trianglegeom import TriangleIndex
 
@@ -67,26 +68,6 @@ class BodyReport:
     error: float = 0.0  # verified bound, model units (vertex screen for solids)
     seconds: float = 0.0
     details: dict = field(default_factory=dict)
-
-
-def weld_close(vertices: np.ndarray, faces: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
-    """Merge vertices closer than ``tol`` (model units); drop faces that collapse.
-
-    Closes the cracks of meshes whose coincident vertices differ by rounding
-    (ASCII STL with ``-0`` next to ``1e-33``); moves no vertex by more than
-    ``tol`` per merge.
-    """
-    v = np.asarray(vertices, dtype=np.float64)
-    pairs = cKDTree(v).query_pairs(tol, output_type="ndarray")
-    if len(pairs) == 0:
-        return v, np.asarray(faces, dtype=np.int64)
-    n = len(v)
-    g = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    label = connected_components(g, directed=False)[1]
-    _, first = np.unique(label, return_index=True)
-    f = label[np.asarray(faces, dtype=np.int64)]
-    keep = (f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 2] != f[:, 0])
-    return v[first], f[keep]
 
 
 def body_labels(faces: np.ndarray, vertex_count: int) -> np.ndarray:
@@ -380,7 +361,7 @@ def encode_groups(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float =
 
     v = np.asarray(vertices, dtype=np.float64)
     diag = float(np.linalg.norm(np.ptp(v[np.unique(faces)], axis=0)))
-    v, f = weld_close(v, faces, 1e-3 * tolerance * diag)
+    v, f, _, _ = merge_close_vertices(v, faces, 1e-3 * tolerance * diag)
     # As the codec does: merging nearly coplanar triangles keeps the BSP free of thin wedges; where
     # a merged plane strays too far for a patch, the patch falls back to the triangle's own plane.
     poly = polygonize(v, f, tolerance=min(coplanar or COPLANAR_TOLERANCE, tolerance / 2))

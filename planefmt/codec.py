@@ -60,7 +60,8 @@ from .model import (Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord
 from .bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
 from .patches import PlaneTable, decode_patch_groups
 from .planes import from_triplets, to_triplets, transform_points
-from .polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize
+from .polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize, weld
+from .repair import mend_cracks
 from .reader import Reader
 from .solids import decode_bsp_group
 from .salvage import salvage
@@ -83,6 +84,13 @@ _VERIFY_PIECES = 100_000
 #: pieces, certified with 2M, both in about 16 s.
 _LIKELY_PASS = 0.25
 _RETRY_PIECES = DEFAULT_MAX_PIECES
+
+#: Closing the cracks of open meshes (:func:`planefmt.repair.mend_cracks`), as fractions of the tolerance: vertices
+#: closer than ``_MERGE`` of it (capped at the lossless tolerance) are one point written with two
+#: roundings (angle_block.STL: 46 pairs 6e-17 apart, so the solid looked open and took 24x the
+#: bytes as patches); T-vertices within ``_SPLIT`` of it of an edge split that edge.
+_MERGE = 1e-3
+_SPLIT = 0.1
 
 #: Rounds of mutual-best-pair merging for ``tau`` (each merges at least the closest pair).
 _TAU_ROUNDS = 64
@@ -424,6 +432,7 @@ class _Object:
     world: np.ndarray
     simplified: bool
     fit: float  # model units
+    mended: float  # model units: how far closing cracks moved the source (planefmt.repair)
     closed: bool  # the source is a closed 2-manifold: its decoding must be one, of the same volume
     volume: float  # model units cubed, local coordinates
     euler: int
@@ -474,6 +483,18 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     for name, value in (("delta", delta), ("tau", tau)):
         if value is not None and not (math.isfinite(value) and value >= 0):
             raise GeometryError(f"{name} must be a non-negative number, not {value}")
+    vertices, faces = weld(vertices, faces)
+    closed = is_closed_manifold(faces, len(vertices))
+    mended = 0.0
+    if not closed:
+        # An open mesh may be a solid with cracks: closed, it can be stored as one. What it must
+        # keep is still an open mesh's (its area): a decoding as patches remains acceptable.
+        size = _diagonal(vertices)
+        repaired = mend_cracks(vertices, faces, merge=_MERGE * min(tolerance, LOSSLESS_TOLERANCE) * size,
+                               split=_SPLIT * tolerance * size)
+        vertices, faces, mended = repaired.vertices, repaired.faces, repaired.offset
+        if face_colours is not None:
+            face_colours = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[repaired.origin]
     poly = polygonize(vertices, faces, tolerance=min(COPLANAR_TOLERANCE, tolerance / 2))
     omega, h, face_plane = poly.omega, poly.h, poly.face_plane
     if tau:
@@ -510,7 +531,7 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
         plane_colours[mapped[mapped >= 0]] = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[on][mapped >= 0]
     return _Object(vertices=poly.vertices, faces=poly.faces, triplets=to_triplets(omega[order], h[order]),
                    groups=tuple(groups), world=world, simplified=simplified, fit=poly.max_distance,
-                   closed=is_closed_manifold(poly.faces, len(poly.vertices)),
+                   mended=mended, closed=closed,
                    volume=signed_volume(poly.vertices, poly.faces), euler=euler_characteristic(poly.faces),
                    area=_area(poly.vertices, poly.faces), plane_colours=plane_colours)
 
@@ -715,7 +736,7 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
         extra = max(base_err)
     else:
         # Lossless: what float64 planes lose is the polygon fit; measured with the chosen coding.
-        base_err = [o.fit * s for o, s in zip(objects, scale)]
+        base_err = [(o.fit + o.mended) * s for o, s in zip(objects, scale)]
         extra = 0.0
 
     def limit(meshes: list[Mesh]) -> tuple[float, np.ndarray]:
@@ -841,8 +862,15 @@ def _verify(mesh: Mesh, obj: _Object, target: float, pieces: int) -> tuple[float
     when it is not at most ``target``."""
     a = transform_points(mesh.vertices, obj.world)
     b = transform_points(obj.vertices, obj.world)
-    r = hausdorff(a, mesh.faces, b, obj.faces, target=target, max_pieces=pieces)
-    return (float(r.upper) if r.upper <= target else math.inf), float(r.lower)
+    shift = _mended(obj)
+    r = hausdorff(a, mesh.faces, b, obj.faces, target=target - shift, max_pieces=pieces)
+    upper = float(r.upper) + shift
+    return (upper if upper <= target else math.inf), max(float(r.lower) - shift, 0.0)
+
+
+def _mended(obj: _Object) -> float:
+    """How far (world units) the source the decoding is measured against lies from the input."""
+    return obj.mended * float(np.linalg.norm(obj.world[:3, :3], 2))
 
 
 def _measure(mesh: Mesh, obj: _Object, target: float) -> float:
@@ -856,13 +884,14 @@ def _measure(mesh: Mesh, obj: _Object, target: float) -> float:
     """
     a = transform_points(mesh.vertices, obj.world)
     b = transform_points(obj.vertices, obj.world)
+    shift = _mended(obj)
     target = max(target, 1.1 * float(closest_distance(a, b, obj.faces)[0].max(initial=0.0)))
     for _ in range(_MEASURE_STEPS):
         r = hausdorff(a, mesh.faces, b, obj.faces, target=target, max_pieces=DEFAULT_MAX_PIECES)
         if r.upper <= target:
-            return float(r.upper)
+            return float(r.upper) + shift
         target = 1.1 * max(target, float(r.lower))
-    return float(r.upper)
+    return float(r.upper) + shift
 
 
 # -- scenes and files -------------------------------------------------------------------------
