@@ -9,11 +9,14 @@ merged by exact position) and every codec:
   ``ply.gz`` (that PLY through gzip level 9): float32 positions, lossless up
   to float32 rounding;
 * ``pln@T``: ``planefmt.codec.encode_scene`` at tolerance T (fraction of the
-  bbox diagonal), the whole file with its chunks and object records, plane
-  and group payloads deflated where that saves bytes (spec §6, ``pln convert
-  --compress``); the codec picks its coding (quantized or float planes) as
-  ``pln convert`` does. The source scene is encoded (nodes keep their transforms) and the
-  decoded scene flattened again.
+  bbox diagonal), the whole file with its chunks and object records, as
+  ``pln convert`` writes it: version 2.0 (spec/pln-2.md: predicted plane
+  codes, varint group bodies, ``--compact``), payloads deflated where that
+  saves bytes (spec §6, ``--compress``); the codec picks its coding
+  (quantized or float planes). The source scene is encoded (nodes keep their
+  transforms) and the decoded scene flattened again.
+* ``pln@d14``: the same at a tolerance per mesh, draco-14's measured error on
+  that mesh: what planes cost at an error no larger than Draco's.
 
 Measured per codec: file bytes; bits per source triangle; the error, the
 certified upper bound of the two-sided Hausdorff distance between the
@@ -131,7 +134,7 @@ def _pln(tolerance: float):
         from planefmt import codec
 
         buf = io.BytesIO()
-        codec.encode_scene(scene, buf, tolerance=tolerance, compress=True)
+        codec.encode_scene(scene, buf, tolerance=tolerance, compress=True, compact=True)
         return buf.getvalue()
 
     def decode(data):
@@ -152,13 +155,22 @@ def codecs(tolerances: tuple[float, ...]) -> dict:
     return table
 
 
-def _measure(path: str, name: str, tolerances: tuple[float, ...], conn) -> None:
+#: The pln codec whose tolerance is draco-14's measured error on the mesh.
+MATCHED = "pln@d14"
+
+
+def _measure(path: str, name: str, tolerances: tuple[float, ...], matched: float | None, conn) -> None:
     """In the child: load, encode, decode, measure; send one result dict."""
     try:
         from planefmt.hausdorff import relative_hausdorff
 
         scene, v, f = load(path)
-        encode, decode = codecs(tolerances)[name]
+        if name == MATCHED:
+            if matched is None:
+                raise RuntimeError("draco-14 gave no measured error to match")
+            encode, decode = _pln(matched)
+        else:
+            encode, decode = codecs(tolerances)[name]
         base = _peak_reset()
         t0 = time.perf_counter()
         data = encode(scene, v, f)
@@ -176,10 +188,11 @@ def _measure(path: str, name: str, tolerances: tuple[float, ...], conn) -> None:
         conn.close()
 
 
-def measure(path: str, name: str, tolerances: tuple[float, ...], timeout: float) -> dict:
+def measure(path: str, name: str, tolerances: tuple[float, ...], timeout: float,
+            matched: float | None = None) -> dict:
     ctx = multiprocessing.get_context("fork")
     parent, child = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_measure, args=(path, name, tolerances, child))
+    proc = ctx.Process(target=_measure, args=(path, name, tolerances, matched, child))
     t = time.perf_counter()
     proc.start()
     child.close()
@@ -220,14 +233,14 @@ def report(rows: list[dict], names: list[str], tolerances: tuple[float, ...], ar
     lines += ["## Summary per category", "",
               "Median of pln bytes / draco-14 bytes over the meshes both encoded; *smaller*: meshes where the pln "
               "file is the smaller; *error ≤*: meshes where pln's measured error is no larger than draco-14's.", ""]
-    head = "| category | meshes | " + " | ".join(f"pln@{t:g} median ratio | smaller | error ≤" for t in tolerances)
-    lines += [head + " |", "|" + "---|" * (2 + 3 * len(tolerances))]
+    keys = [f"pln@{t:g}" for t in tolerances] + [MATCHED]
+    head = "| category | meshes | " + " | ".join(f"{k} median ratio | smaller | error ≤" for k in keys)
+    lines += [head + " |", "|" + "---|" * (2 + 3 * len(keys))]
     cats = list(dict.fromkeys(r["category"] for r in rows))
     for cat in cats + ["all"]:
         mine = [r for r in rows if cat in ("all", r["category"])]
         cells = [cat, str(len(mine))]
-        for t in tolerances:
-            key = f"pln@{t:g}"
+        for key in keys:
             both = [r for r in mine if "failed" not in r[key] and "failed" not in r["draco-14"]]
             ratios = [r[key]["bytes"] / r["draco-14"]["bytes"] for r in both]
             cells.append(f"{statistics.median(ratios):.2f}" if ratios else "–")
@@ -235,7 +248,8 @@ def report(rows: list[dict], names: list[str], tolerances: tuple[float, ...], ar
             cells.append(f"{sum(r[key]['error'] <= r['draco-14']['error'] for r in both)}/{len(mine)}")
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", "A codec that failed or ran out of time counts against it in *smaller* and *error ≤* "
-              "(the denominators are all meshes).", ""]
+              f"(the denominators are all meshes). {MATCHED}: pln at draco-14's measured error as its "
+              "tolerance, mesh by mesh.", ""]
     lines += ["## Bytes and measured error per mesh", "",
               "Bytes (bits per source triangle) and the certified Hausdorff upper bound relative to the bbox "
               "diagonal; *uncert.*: the bound's budget ran out, the value is still an upper bound.", ""]
@@ -296,7 +310,7 @@ def main(argv: list[str] | None = None) -> int:
     if unknown:
         ap.error(f"unknown categories: {', '.join(unknown)}")
     tolerances = tuple(float(t) for t in args.tolerances.split(",")) if args.tolerances else DEFAULT_TOLERANCES
-    names = list(codecs(tolerances))
+    names = list(codecs(tolerances)) + [MATCHED]
     # Imported once here, so that every forked measurement starts with them loaded.
     import DracoPy  # noqa: F401
     import trimesh  # noqa: F401
@@ -308,7 +322,8 @@ def main(argv: list[str] | None = None) -> int:
     for folder, path in corpus_files(folders):
         row = {"category": CATEGORIES[folder], "file": os.path.basename(path), "triangles": 0}
         for n in names:
-            r = measure(path, n, tolerances, args.timeout)
+            d14 = row.get("draco-14", {})
+            r = measure(path, n, tolerances, args.timeout, None if "failed" in d14 else d14.get("error"))
             row[n] = r
             row["triangles"] = max(row["triangles"], r.get("triangles", 0))
             status = r["failed"] if "failed" in r else f"{r['bytes']} B, error {r['error']:.2g}"

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planefmt import records, schema
-from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization
+from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization, Units
 
 from . import reference
 from .build import CUBE, SPEC_HEADER, Layout, box, finish, frame, offsets
@@ -287,9 +287,16 @@ def _():
 
 # -- header (spec §5) --------------------------------------------------------------------------
 
-@case("xhdr_major2", "UNSUPPORTED_VERSION", "version 2.0")
+@case("xhdr_major3", "UNSUPPORTED_VERSION", "version 3.0")
 def _():
-    return file(cube(PHDR=header(version=(2, 0))))
+    return file(cube(PHDR=header(version=(3, 0))))
+
+
+@case("xhdr_predicted_v1", "UNSUPPORTED_CODING", "coding 3 (predicted, version 2.0) in a version 1.0 header")
+def _():
+    h = bytearray(header(coding=Coding.QUANTIZED, quantization=Quantization(16, 16, 16, 0.0, 1.0)))
+    h[4] = 3
+    return file(cube(PHDR=bytes(h)))
 
 
 @case("xhdr_major0", "UNSUPPORTED_VERSION", "version 0.9")
@@ -452,6 +459,91 @@ def _():
 def _():
     z = zlib.compress(CUBE.astype("<f4").tobytes(), 9) + b"\0\0"
     return file(cube(PLNS=plns_raw(z, compression=1, raw_size=72)))
+
+
+# -- version 2.0 (spec/pln-2.md) ----------------------------------------------------------------
+
+V2_HEAD = Header(version=(2, 0), coding=Coding.PREDICTED, quantization=Quantization(16, 16, 16, 0.0, 1.0),
+                 units=Units.METRE)
+
+
+def v2(PLNS: bytes | None = None, GRUP: bytes | None = None) -> bytes:
+    """The cube as a version 2.0 file, predicted 16/16/16 over [0, 1], with one payload replaced."""
+    head = header(version=(2, 0), coding=Coding.PREDICTED, quantization=V2_HEAD.quantization)
+    planes = records.encode_planes(0, CUBE, V2_HEAD, False) if PLNS is None else PLNS
+    group = GRUP or records.encode_group(PartGroup(0, 0, 0, np.arange(6, dtype=np.uint32), np.zeros(6, bool)),
+                                         False, 2)
+    return file(cube(PHDR=head, PLNS=planes, GRUP=group))
+
+
+def v2_planes(streams: bytes, raw_size: int | None = None) -> bytes:
+    return plns_raw(streams, 6, raw_size=raw_size)
+
+
+#: The cube's predicted streams (a valid file with them is checked below): 6 nu, 6 phi, 6 h varints.
+V2_STREAMS = records.encode_planes(0, CUBE, V2_HEAD, False)[schema.PLANE_BLOCK_HEAD:]
+#: Bytes of the streams' first varint (the first plane's nu code, 2^14, zigzagged: 3 bytes).
+V2_FIRST = next(i for i, b in enumerate(V2_STREAMS) if b < 0x80) + 1
+
+
+@case("xv2_predicted_truncated", "BAD_PAYLOAD",
+      "version 2.0, predicted planes: the last h varint has its continuation bit set, the data ends inside it")
+def _():
+    return v2(v2_planes(V2_STREAMS[:-1] + bytes([V2_STREAMS[-1] | 0x80])))
+
+
+@case("xv2_predicted_extra", "SIZE_MISMATCH", "version 2.0, predicted planes: one byte after the 18 varints")
+def _():
+    return v2(v2_planes(V2_STREAMS + b"\x00"))
+
+
+@case("xv2_predicted_raw_size", "SIZE_MISMATCH",
+      "version 2.0, predicted planes: raw_size 17, under the 3 bytes a plane the varints need at least")
+def _():
+    return v2(v2_planes(V2_STREAMS[:17]))
+
+
+@case("xv2_predicted_negative", "BAD_TRIPLET",
+      "version 2.0, predicted planes: the first nu difference is -1 (zigzag 1), a negative nu code")
+def _():
+    return v2(v2_planes(b"\x01" + V2_STREAMS[V2_FIRST:]))
+
+
+@case("xv2_predicted_big", "BAD_PAYLOAD", "version 2.0, predicted planes: a varint of 2^33, over the streams' limit")
+def _():
+    big = bytes([0x80, 0x80, 0x80, 0x80, 0x20])
+    return v2(v2_planes(big + V2_STREAMS[V2_FIRST:]))
+
+
+@case("xv2_varint_overlong", "BAD_PAYLOAD",
+      "version 2.0 group body: ref_count 6 written as 86 00, a varint that is not minimal")
+def _():
+    return v2(GRUP=grup_raw(b"\x86\x00" + bytes(6) + b"\x00"))
+
+
+@case("xv2_ref_range", "BAD_PLANE_REFERENCE",
+      "version 2.0 group body: references 0 1 2 3 4 as differences, then a difference of 2 reaching plane 6")
+def _():
+    return v2(GRUP=grup_raw(b"\x06\x00\x01\x01\x01\x01\x02\x00"))
+
+
+@case("xv2_tree_token", "BAD_GROUP_STRUCTURE",
+      "version 2.0 BSP body over 6 references: token 8 would split on local reference 6")
+def _():
+    return v2(GRUP=grup_raw(b"\x06\x00\x01\x01\x01\x01\x01\x00" + b"\x03\x08\x00\x01", kind=2))
+
+
+@case("xv2_tree_count", "BAD_GROUP_STRUCTURE",
+      "version 2.0 BSP body: token_count 200, more tokens than bytes left")
+def _():
+    return v2(GRUP=grup_raw(b"\x06\x00\x01\x01\x01\x01\x01\x00" + b"\xc8\x01\x02\x00\x01", kind=2))
+
+
+@case("xv2_v1_body", "BAD_PAYLOAD",
+      "a version 1.0 group body (u32 fields) in a version 2.0 file: read as varints, ref_count 6 and six zero "
+      "differences, a role byte, then 21 bytes a convex group cannot have")
+def _():
+    return v2(GRUP=grup())
 
 
 @case("xgrup_deflate_bomb", "LIMIT_EXCEEDED", "a deflated GRUP body declaring raw_size 2^32-1 (a deflate bomb)",

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import planefmt
+import planefmt.quantize
 from planefmt import records, schema
 from planefmt.model import (Coding, Colours, GroupKind, Header, ObjectRecord, PartGroup, Quantization,
                             Units)
@@ -168,7 +169,7 @@ def assembled(case: ValidCase, header: Header) -> bytes:
         elif isinstance(op, Group):
             rec = PartGroup(groups, op.obj, op.kind, np.array(op.refs, dtype=np.uint32), _role_bits(op),
                             cells=_cells(op), tree=_tree(op), extra=op.extra)
-            layout.append((schema.GRUP, records.encode_group(rec, case.compress)))
+            layout.append((schema.GRUP, records.encode_group(rec, case.compress, header.version[0])))
             groups += 1
         elif isinstance(op, Colour):
             layout.append((schema.COLR, records.encode_colours(Colours(op.group, op.rgba))))
@@ -307,6 +308,23 @@ _scene_planes_leg = np.array([
 _rgba = np.array([[255, 0, 0, 255], [0, 255, 0, 255], [0, 0, 255, 255], [255, 255, 0, 128],
                   [0, 255, 255, 0], [255, 0, 255, 255]], dtype=np.uint8)
 
+def _sorted_l() -> tuple[np.ndarray, tuple[int, ...]]:
+    """The L's eight face planes sorted by their 8/8/8 codes over [-1, 2] (as a version 2 writer
+    sorts them), and its tree renumbered to match."""
+    q = Quantization(8, 8, 8, -1.0, 2.0)
+    codes = planefmt.quantize.quantize(L_PLANES[:8], q)
+    order = np.lexsort((codes[:, 2], codes[:, 1], codes[:, 0]))
+    rank = np.empty(8, dtype=np.int64)
+    rank[order] = np.arange(8)
+    return L_PLANES[:8][order], tuple(int(rank[t]) if t < 8 else t for t in L_TREE)
+
+
+L_SORTED, L_SORTED_TREE = _sorted_l()
+#: Version 2.0 headers: the predicted coding, or float64.
+V2_L = Header(version=(2, 0), lossy=True, coding=Coding.PREDICTED,
+              quantization=Quantization(8, 8, 8, -1.0, 2.0), units=Units.METRE)
+V2_F64 = Header(version=(2, 0), coding=Coding.FLOAT64, units=Units.METRE)
+
 CASES = [
     ValidCase("cube_float32", "the unit cube of spec §12, float32, metres, with index: the 401 bytes printed there",
               SPEC_HEADER, cube_ops()),
@@ -398,6 +416,22 @@ CASES = [
                Group(0, GroupKind.PSEUDO_CONVEX, tuple(range(6)), bounding=(4,))),
               decoded_bbox=True, assembled_only=True, header_flags=0x0100,
               findings=("SKIPPED_GROUP_KIND",), findings_optional=("NEWER_MINOR_VERSION",)),
+    ValidCase("l_v2_predicted", "version 2.0: the L of bsp_l in the predicted coding 8/8/8 over h in [-1, 2] "
+              "(every plane exact), sorted by code so that runs of one nu and of one normal occur, and its tree "
+              "as varint tokens", V2_L,
+              (Obj("L"), Planes(L_SORTED), Group(0, GroupKind.BSP, tuple(range(8)), tree=L_SORTED_TREE)),
+              decoded_bbox=True, index=False),
+    ValidCase("cells_l_v2", "version 2.0: the L of cells_l, float64, its cells as varints, the body deflated",
+              V2_F64, (Obj("L"), Planes(L_PLANES),
+                       Group(0, GroupKind.CELLS, tuple(range(9)), bounding=(8,), cells=L_CELLS)),
+              decoded_bbox=True, compress=True),
+    ValidCase("gem_v2_predicted", "version 2.0: the gem of gem_q11_13_17 in the predicted coding, unsorted "
+              "(a new nu at every plane: phi and h stored plain), and a patch group with a repeated reference "
+              "(a zero difference)",
+              dataclasses.replace(quantized((11, 13, 17), (-1.0, 2.0)), version=(2, 0), coding=Coding.PREDICTED),
+              (Obj("gem"), Planes(GEM), Group(0, 0, tuple(range(10))),
+               Group(0, GroupKind.PSEUDO_CONVEX, (0, 2, 3, 4, 5, 6, 7, 8, 9, 9))),
+              decoded_bbox=True, findings_optional=("REDUNDANT_PLANE",)),
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),
 ]

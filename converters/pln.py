@@ -22,10 +22,11 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
 
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
-          delta: float | None = None, tau: float | None = None, compress: bool = False) -> list[str]:
+          delta: float | None = None, tau: float | None = None, compress: bool = False,
+          compact: bool = False) -> list[str]:
     """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane."""
     from planefmt import codec
 
     codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta, tau=tau,
-                       compress=compress)
+                       compress=compress, compact=compact)
     return []

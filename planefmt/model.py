@@ -27,6 +27,13 @@ class Coding(IntEnum):
     FLOAT32 = 0
     FLOAT64 = 1
     QUANTIZED = 2
+    #: Version 2: the codes of QUANTIZED, each predicted from the previous plane's (spec 2.0 §7.4).
+    PREDICTED = 3
+
+    @property
+    def quantized(self) -> bool:
+        """Whether planes are integer codes of the header's widths and h range (codings 2 and 3)."""
+        return self in (Coding.QUANTIZED, Coding.PREDICTED)
 
 
 class Units(IntEnum):

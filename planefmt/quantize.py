@@ -1,4 +1,5 @@
-"""Plane triplet payloads: float32 / float64 records and the quantized bit stream (spec §7).
+"""Plane triplet payloads: float32 / float64 records, the quantized bit stream and the predicted
+varint streams (spec §7).
 
 Everything here is vectorized: a PLNS payload is viewed with
 ``numpy.frombuffer`` and never parsed element by element.
@@ -10,8 +11,10 @@ import math
 
 import numpy as np
 
+from . import varint
 from .errors import FormatError, PlnError
 from .model import Coding, Quantization
+from .schema import PREDICTED_LIMIT
 
 TWO_PI = 2.0 * math.pi
 #: float32 nearest to pi and 2*pi; both round *up*, so float32 ranges end there.
@@ -90,8 +93,15 @@ def roundtrip(triplets: np.ndarray, coding: Coding, q: Quantization | None = Non
     return decode_payload(encode_payload(triplets, coding, q), len(triplets), coding, q)
 
 
-def payload_size(count: int, coding: Coding, q: Quantization | None) -> int:
-    """Exact byte size of the uncompressed triplet data of ``count`` planes."""
+#: Largest varint of a predicted stream: codes are below 2^32, their zigzag differences below 2^33.
+MAX_PREDICTED = PREDICTED_LIMIT
+
+
+def payload_size(count: int, coding: Coding, q: Quantization | None) -> int | None:
+    """Exact byte size of the uncompressed triplet data of ``count`` planes; None for the predicted
+    coding, whose size depends on the planes (3 to 15 bytes a plane)."""
+    if coding == Coding.PREDICTED and q is not None:
+        return None
     if coding == Coding.FLOAT32:
         return 12 * count
     if coding == Coding.FLOAT64:
@@ -108,7 +118,7 @@ def _widths(q: Quantization) -> tuple[int, int, int]:
 def encode_payload(triplets: np.ndarray, coding: Coding, q: Quantization | None = None) -> bytes:
     """Uncompressed PLNS triplet data for ``triplets`` (validated first)."""
     t = np.asarray(triplets, dtype=np.float64)
-    check_triplets(t, Coding.FLOAT64 if coding == Coding.QUANTIZED else coding)
+    check_triplets(t, Coding.FLOAT64 if coding.quantized else coding)
     if coding == Coding.FLOAT64:
         return t.astype("<f8").tobytes()
     if coding == Coding.FLOAT32:
@@ -122,6 +132,8 @@ def encode_payload(triplets: np.ndarray, coding: Coding, q: Quantization | None 
             [((codes[:, c, None] >> np.arange(w, dtype=np.uint64)) & 1).astype(np.uint8)
              for c, w in enumerate(_widths(q))], axis=1)
         return np.packbits(bits.ravel(), bitorder="little").tobytes()
+    if coding == Coding.PREDICTED and q is not None:
+        return _predict(quantize(t, q).astype(np.int64))
     raise PlnError(f"unsupported triplet coding {int(coding)}", code="UNSUPPORTED_CODING")
 
 
@@ -133,6 +145,8 @@ def decode_payload(data: bytes, count: int, coding: Coding, q: Quantization | No
     non-zero padding bits and ``PlnError(BAD_TRIPLET)`` on out-of-range floats.
     """
     expected = payload_size(count, coding, q)
+    if coding == Coding.PREDICTED and q is not None:
+        return dequantize(_check_codes(_unpredict(data, count), q), q)
     if len(data) != expected:
         raise FormatError(f"triplet data is {len(data)} bytes, {count} planes need {expected}",
                           code="SIZE_MISMATCH")
@@ -143,12 +157,67 @@ def decode_payload(data: bytes, count: int, coding: Coding, q: Quantization | No
         check_triplets(t, coding)
         return t
     assert q is not None
-    codes = unpack_codes(np.frombuffer(data, dtype=np.uint8), count, _widths(q))
-    if count and codes[:, 0].max() > (1 << (q.bits_nu - 1)):
-        i = int(np.argmax(codes[:, 0]))
-        raise PlnError(f"plane {i}: nu code {int(codes[i, 0])} exceeds 2^(bits_nu-1) = {1 << (q.bits_nu - 1)}",
-                       code="BAD_TRIPLET")
-    return dequantize(codes, q)
+    return dequantize(_check_codes(unpack_codes(np.frombuffer(data, dtype=np.uint8), count, _widths(q)), q), q)
+
+
+def _check_codes(codes: np.ndarray, q: Quantization) -> np.ndarray:
+    """The codes, if each is in its component's range (``BAD_TRIPLET`` otherwise)."""
+    if not len(codes):
+        return codes
+    limits = (1 << (q.bits_nu - 1), (1 << q.bits_phi) - 1, (1 << q.bits_h) - 1)
+    for c, (name, top) in enumerate(zip(("nu", "phi", "h"), limits)):
+        col = codes[:, c].astype(np.int64)
+        if col.min() < 0 or col.max() > top:
+            i = int(np.flatnonzero((col < 0) | (col > top))[0])
+            raise PlnError(f"plane {i}: {name} code {int(col[i])} is outside 0..{top}", code="BAD_TRIPLET")
+    return codes
+
+
+def _predict(codes: np.ndarray) -> bytes:
+    """The three varint streams of the predicted coding (spec 2.0 §7.4) for ``(n, 3)`` codes.
+
+    nu: zigzag difference from the previous plane's code (0 before the first); phi: the
+    difference if nu equals the previous nu, else the code itself; h: the difference if nu and
+    phi both equal the previous ones, else the code. Planes sorted by code (the writer's order)
+    make runs of one normal, which cost a zero and a small h difference each.
+    """
+    prev = np.vstack([np.zeros((1, 3), dtype=np.int64), codes[:-1]])
+    first = np.zeros(len(codes), dtype=bool)
+    first[:1] = True
+    same_nu = ~first & (codes[:, 0] == prev[:, 0])
+    same_normal = same_nu & (codes[:, 1] == prev[:, 1])
+    d = codes - prev
+    nu = varint.zigzag(d[:, 0])
+    phi = np.where(same_nu, varint.zigzag(d[:, 1]), codes[:, 1].astype(np.uint64))
+    h = np.where(same_normal, varint.zigzag(d[:, 2]), codes[:, 2].astype(np.uint64))
+    return varint.encode(nu) + varint.encode(phi) + varint.encode(h)
+
+
+def _unpredict(data: bytes, count: int) -> np.ndarray:
+    """Codes ``(count, 3)`` int64 from the predicted streams, which must fill ``data`` exactly."""
+    raw = np.frombuffer(data, dtype=np.uint8)
+    values, used = varint.decode(raw, 3 * count, "predicted triplets")
+    if used != len(raw):
+        raise FormatError(f"predicted triplet data is {len(raw)} bytes, its {3 * count} varints take {used}",
+                          code="SIZE_MISMATCH")
+    if count and values.max() >= MAX_PREDICTED:
+        raise FormatError("a predicted triplet varint is 2^33 or more", code="BAD_PAYLOAD")
+    v = values.astype(np.int64).reshape(3, count)
+    codes = np.empty((count, 3), dtype=np.int64)
+    codes[:, 0] = np.cumsum(varint.unzigzag(v[0]))
+    idx = np.arange(count)
+    same_nu = np.r_[False, codes[1:, 0] == codes[:-1, 0]] if count else np.zeros(0, dtype=bool)
+    codes[:, 1] = _runs(np.where(same_nu, varint.unzigzag(v[1]), v[1]), same_nu, idx)
+    same_normal = same_nu & np.r_[False, codes[1:, 1] == codes[:-1, 1]] if count else same_nu
+    codes[:, 2] = _runs(np.where(same_normal, varint.unzigzag(v[2]), v[2]), same_normal, idx)
+    return codes
+
+
+def _runs(values: np.ndarray, continued: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Running sums restarting wherever ``continued`` is False (there the value itself)."""
+    total = np.cumsum(values)
+    start = np.maximum.accumulate(np.where(continued, 0, idx))
+    return total - total[start] + values[start]
 
 
 def unpack_codes(raw: np.ndarray, count: int, widths: tuple[int, ...]) -> np.ndarray:

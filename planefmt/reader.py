@@ -150,7 +150,8 @@ class Reader:
         if t == schema.GRUP:
             group, found = records.decode_group(
                 raw.payload, expected_index=self._group_count, objects=len(self.objects),
-                planes=self._plane_count, minor=self.header.version[1], limits=self.limits)
+                planes=self._plane_count, minor=self.header.version[1], limits=self.limits,
+                major=self.header.version[0])
             self.findings.extend(found)
             self._listed.append((raw.offset, t, group.index))
             self._group_refs[group.index] = len(group.refs)

@@ -13,13 +13,17 @@ import zlib
 import construct as cs
 import numpy as np
 
-from . import quantize, schema
+from . import quantize, schema, varint
 from .chunks import Limits
 from .errors import FormatError, LimitError, PlnError, VersionError
-from .model import (BSP_IN, BSP_MAX_SPLIT, NO_PARENT, Coding, Colours, GroupKind, Header,
+from .model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, Coding, Colours, GroupKind, Header,
                     ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
 
 VERSION = (1, 0)
+#: Major versions read, each with the newest minor version this reader knows.
+VERSIONS = {1: 0, 2: 0}
+#: Triplet codings each major version allows (spec §5; 2.0 §7.4).
+CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 
 
@@ -58,20 +62,21 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
     if len(payload) < 2:
         raise FormatError("PHDR is too short to hold a version", code="BAD_PAYLOAD")
     major, minor = payload[0], payload[1]
-    if major != VERSION[0]:
-        raise VersionError(f"major version {major} is not supported (this reader reads 1.x)")
+    if major not in VERSIONS:
+        raise VersionError(f"major version {major} is not supported (this reader reads 1.x and 2.x)")
     if len(payload) < schema.HEADER_SIZE:
-        raise FormatError(f"PHDR is {len(payload)} bytes, version 1 needs {schema.HEADER_SIZE}",
+        raise FormatError(f"PHDR is {len(payload)} bytes, version {major} needs {schema.HEADER_SIZE}",
                           code="BAD_PAYLOAD")
     findings = []
-    if minor > VERSION[1]:
-        findings.append(("NEWER_MINOR_VERSION", f"file is version 1.{minor}; read as 1.{VERSION[1]}"))
+    if minor > VERSIONS[major]:
+        findings.append(("NEWER_MINOR_VERSION", f"file is version {major}.{minor}; read as {major}.{VERSIONS[major]}"))
     r = _parse(schema.Header, payload, "PHDR")
-    if r.coding not in (0, 1, 2):
-        raise VersionError(f"triplet coding {r.coding} is not supported", code="UNSUPPORTED_CODING")
+    if r.coding not in CODINGS[major]:
+        raise VersionError(f"triplet coding {r.coding} is not supported in a version {major} file",
+                           code="UNSUPPORTED_CODING")
     coding = Coding(r.coding)
     q = None
-    if coding == Coding.QUANTIZED:
+    if coding.quantized:
         q = Quantization(r.bits_nu, r.bits_phi, r.bits_h, r.h_min, r.h_max)
         quantize.check_quantization(q)
     units = Units(r.units) if r.units in Units._value2member_map_ else None
@@ -151,7 +156,13 @@ def decode_planes(payload: bytes, header: Header, expected_first: int, limits: L
     if r.first + r.count > limits.max_planes:
         raise LimitError(f"plane table would exceed {limits.max_planes} planes")
     expected = quantize.payload_size(r.count, header.coding, header.quantization)
-    if r.raw_size != expected:
+    if expected is None:
+        # Predicted: three varints of 1 to 5 bytes a plane (codes below 2^33).
+        low, high = schema.PREDICTED_BYTES
+        if not low * r.count <= r.raw_size <= high * r.count:
+            raise FormatError(f"raw size {r.raw_size} is outside 3..15 bytes a plane for {r.count} planes",
+                              code="SIZE_MISMATCH")
+    elif r.raw_size != expected:
         raise FormatError(f"raw size {r.raw_size} != {expected} bytes for {r.count} planes",
                           code="SIZE_MISMATCH")
     raw = unpack(r.compression, memoryview(payload)[schema.PLANE_BLOCK_HEAD:], r.raw_size, limits)
@@ -193,9 +204,41 @@ def decode_object(payload: bytes, expected_index: int) -> ObjectRecord:
 
 # spec §8.2-§8.4 Part groups ------------------------------------------------------------------
 
-def encode_group(g: PartGroup, compress: bool) -> bytes:
+def encode_group(g: PartGroup, compress: bool, major: int = 1) -> bytes:
+    """The GRUP payload; ``major`` 2 writes the varint body of spec 2.0 §8.7."""
+    body = _compact_body(g) if major == 2 else _body(g)
+    method, stored = pack(body, compress)
+    return schema.GroupHead.build(dict(index=g.index, object=g.object, kind=int(g.kind), compression=method,
+                                       reserved=b"\0\0", raw_size=len(body), body=stored))
+
+
+def _roles(g: PartGroup) -> bytes:
+    return np.packbits(np.asarray(g.bounding, dtype=bool), bitorder="little").tobytes()
+
+
+def _compact_body(g: PartGroup) -> bytes:
+    refs = np.asarray(g.refs, dtype=np.int64)
+    gaps = np.diff(refs, prepend=0)
+    if len(refs) and gaps[1:].min(initial=0) < 0:
+        raise PlnError("a version 2 group's references must not decrease", code="BAD_GROUP_STRUCTURE")
+    out = [varint.encode([len(refs)]), varint.encode(gaps), _roles(g)]
+    if g.kind == GroupKind.CELLS:
+        cells = g.cells or ()
+        out += [varint.encode([len(cells)]), varint.encode([len(c) for c in cells])]
+        out += [varint.encode(np.asarray(c, dtype=np.uint64)) for c in cells]
+    elif g.kind == GroupKind.BSP:
+        tokens = np.asarray(g.tree, dtype=np.uint64)
+        coded = np.where(tokens == BSP_IN, schema.COMPACT_IN,
+                         np.where(tokens == BSP_OUT, schema.COMPACT_OUT, tokens + np.uint64(schema.COMPACT_SPLIT)))
+        out += [varint.encode([len(tokens)]), varint.encode(coded)]
+    else:
+        out.append(g.extra)
+    return b"".join(out)
+
+
+def _body(g: PartGroup) -> bytes:
     refs = np.asarray(g.refs, dtype="<u4")
-    roles = np.packbits(np.asarray(g.bounding, dtype=bool), bitorder="little").tobytes()
+    roles = _roles(g)
     extra = g.extra
     if g.kind == GroupKind.CELLS:
         cells = g.cells or ()
@@ -206,15 +249,13 @@ def encode_group(g: PartGroup, compress: bool) -> bytes:
     elif g.kind == GroupKind.BSP:
         tokens = np.asarray(g.tree, dtype="<u4")
         extra = schema.TreeExtra.build(dict(token_count=len(tokens), tokens=tokens.tobytes()))
-    body = schema.GroupBody.build(dict(ref_count=len(refs), refs=refs.tobytes(), roles=roles, extra=extra))
-    method, stored = pack(body, compress)
-    return schema.GroupHead.build(dict(index=g.index, object=g.object, kind=int(g.kind), compression=method,
-                                       reserved=b"\0\0", raw_size=len(body), body=stored))
+    return schema.GroupBody.build(dict(ref_count=len(refs), refs=refs.tobytes(), roles=roles, extra=extra))
 
 
 def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: int,
-                 minor: int, limits: Limits) -> tuple[PartGroup, list[tuple[str, str]]]:
-    """A part group, checked against the objects and planes defined so far."""
+                 minor: int, limits: Limits, major: int = 1) -> tuple[PartGroup, list[tuple[str, str]]]:
+    """A part group of a version ``major``.``minor`` file, checked against the objects and planes
+    defined so far."""
     if len(payload) < schema.GROUP_HEAD:
         raise FormatError("GRUP payload is shorter than its 16-byte head", code="BAD_PAYLOAD")
     head = _parse(schema.GroupHead, payload, "GRUP")
@@ -225,11 +266,14 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
                           code="BAD_OBJECT_REFERENCE")
     findings = []
     if head.kind not in KNOWN_KINDS:
-        if minor <= VERSION[1]:
-            raise FormatError(f"unknown part group kind {head.kind} in a version 1.{minor} file",
+        if minor <= VERSIONS.get(major, 0):
+            raise FormatError(f"unknown part group kind {head.kind} in a version {major}.{minor} file",
                               code="UNKNOWN_GROUP_KIND")
         findings.append(("SKIPPED_GROUP_KIND", f"group {head.index} has kind {head.kind} of a newer minor version"))
     body = unpack(head.compression, bytes(head.body), head.raw_size, limits)
+    if major == 2:
+        group = _decode_compact(head, body, planes, limits)
+        return group, findings
     if len(body) < 4:
         raise FormatError("group body is shorter than its reference count", code="BAD_PAYLOAD")
     count = int.from_bytes(body[:4], "little")
@@ -259,6 +303,83 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
     group = PartGroup(index=head.index, object=head.object, kind=head.kind, refs=refs, bounding=bounding,
                       cells=cells, tree=tree, extra=extra)
     return group, findings
+
+
+def _decode_compact(head, body: bytes, planes: int, limits: Limits) -> PartGroup:
+    """A version 2 group body (spec 2.0 §8.7)."""
+    raw = np.frombuffer(body, dtype=np.uint8)
+    (count,), pos = varint.decode(raw, 1, "group reference count")
+    count = int(count)
+    if count > limits.max_refs_per_group:
+        raise LimitError(f"group declares {count} references, the limit is {limits.max_refs_per_group}")
+    if count == 0:
+        raise FormatError(f"group {head.index} references no planes", code="BAD_GROUP_STRUCTURE")
+    gaps, used = varint.decode(raw[pos:], count, "group references")
+    pos += used
+    if gaps.max() >= planes:
+        raise FormatError(f"group {head.index} references a plane past the {planes} defined",
+                          code="BAD_PLANE_REFERENCE")
+    refs = np.cumsum(gaps.astype(np.int64))
+    if refs[-1] >= planes:
+        raise FormatError(f"group {head.index} references plane {int(refs[-1])}, only {planes} defined",
+                          code="BAD_PLANE_REFERENCE")
+    nroles = (count + 7) // 8
+    if len(raw) < pos + nroles:
+        raise FormatError("group body ends inside its role bits", code="BAD_PAYLOAD")
+    role_bits = np.unpackbits(raw[pos:pos + nroles], bitorder="little")
+    pos += nroles
+    if role_bits[count:].any():
+        raise FormatError("non-zero padding bits after the role bits", code="BAD_PAYLOAD")
+    rest = raw[pos:]
+    cells = tree = None
+    extra = b""
+    if head.kind == GroupKind.CELLS:
+        cells = _decode_compact_cells(rest, count, limits)
+    elif head.kind == GroupKind.BSP:
+        tree = _decode_compact_tree(rest, count)
+    elif head.kind in KNOWN_KINDS:
+        if len(rest):
+            raise FormatError(f"{len(rest)} unexpected bytes after the role bits", code="BAD_PAYLOAD")
+    else:
+        extra = rest.tobytes()
+    return PartGroup(index=head.index, object=head.object, kind=head.kind, refs=refs.astype(np.uint32),
+                     bounding=role_bits[:count].astype(bool), cells=cells, tree=tree, extra=extra)
+
+
+def _decode_counted(raw: np.ndarray, what: str, limit: int) -> tuple[np.ndarray, int]:
+    """A varint count (at most ``limit`` and at most the bytes left) followed by that many varints."""
+    (n,), pos = varint.decode(raw, 1, f"{what} count")
+    if int(n) > min(limit, len(raw) - pos):
+        raise FormatError(f"{what}: {int(n)} declared, more than the body holds or the limit allows",
+                          code="BAD_GROUP_STRUCTURE")
+    values, used = varint.decode(raw[pos:], int(n), what)
+    return values, pos + used
+
+
+def _decode_compact_cells(raw: np.ndarray, count: int, limits: Limits) -> tuple[np.ndarray, ...]:
+    sizes, pos = _decode_counted(raw, "cell sizes", limits.max_refs_per_group)
+    if len(sizes) == 0 or (sizes == 0).any():
+        raise FormatError("a CELLS group needs at least one cell and no empty cell", code="BAD_GROUP_STRUCTURE")
+    if (sizes > np.uint64(len(raw))).any() or int(sizes.sum()) > len(raw) - pos:
+        raise FormatError("cell entries do not match the cell sizes", code="BAD_GROUP_STRUCTURE")
+    entries, used = varint.decode(raw[pos:], int(sizes.sum()), "cell entries")
+    if pos + used != len(raw):
+        raise FormatError("cell entries do not fill the body", code="BAD_GROUP_STRUCTURE")
+    if (entries >> np.uint64(1)).max() >= count:
+        raise FormatError("a cell entry refers past the group's references", code="BAD_GROUP_STRUCTURE")
+    return tuple(np.split(entries.astype(np.uint32), np.cumsum(sizes.astype(np.int64))[:-1]))
+
+
+def _decode_compact_tree(raw: np.ndarray, count: int) -> np.ndarray:
+    coded, pos = _decode_counted(raw, "BSP tokens", len(raw))
+    if pos != len(raw):
+        raise FormatError("bytes follow the BSP token stream", code="BAD_GROUP_STRUCTURE")
+    if len(coded) and coded.max() >= count + schema.COMPACT_SPLIT:
+        raise FormatError(f"BSP token {int(coded.max())} is not a leaf or a reference", code="BAD_GROUP_STRUCTURE")
+    tokens = np.where(coded == schema.COMPACT_IN, BSP_IN, np.where(
+        coded == schema.COMPACT_OUT, BSP_OUT, coded - np.uint64(schema.COMPACT_SPLIT))).astype(np.uint32)
+    check_tree(tokens, count)
+    return tokens
 
 
 def _decode_cells(extra: bytes, count: int) -> tuple[np.ndarray, ...]:

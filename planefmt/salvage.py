@@ -212,7 +212,7 @@ class _Salvager:
         self.groups = index + 1
         group, _ = records.decode_group(chunk.payload, expected_index=index, objects=self.objects,
                                         planes=len(self.lost_planes), minor=self.out.header.version[1],
-                                        limits=self.limits)
+                                        limits=self.limits, major=self.out.header.version[0])
         if not self.object_ok[group.object]:
             raise FormatError(f"part group {index} belongs to lost object {group.object}",
                               code="BAD_OBJECT_REFERENCE")

@@ -1,4 +1,5 @@
-"""Construct declarations of the .pln container, version 1 (read beside spec/pln-1.md).
+"""Construct declarations of the .pln container, versions 1 and 2 (read beside spec/pln-1.md and
+spec/pln-2.md; "2.0 §" marks a section of the latter).
 
 Only structure lives here. Bulk arrays (triplets, plane references, role
 bits, cell entries, tree tokens, colours, index entries) are ``Bytes`` fields
@@ -119,6 +120,20 @@ TreeExtra = cs.Struct(
     "token_count" / cs.Int32ul,
     "tokens" / cs.Bytes(cs.this.token_count * 4),
 )
+
+# spec 2.0 §2.3 Varints: unsigned LEB128, minimal, at most 10 bytes. Bulk varints (plane streams,
+# references, tokens) are decoded with numpy in planefmt.varint, never per element with construct.
+VARINT_MAX_BYTES = 10
+
+# spec 2.0 §7.4 Predicted plane data (coding 3): three streams of `count` varints (nu, phi, h),
+# each below 2^33, taking 3 to 15 bytes a plane
+CODING_PREDICTED = 3
+PREDICTED_LIMIT = 2**33
+PREDICTED_BYTES = (3, 15)
+
+# spec 2.0 §8.7 Group body of version 2: ref_count, reference differences, role bits, kind data,
+# all varints but the role bits; tree tokens 0 IN, 1 OUT, j + 2 split on local reference j
+COMPACT_IN, COMPACT_OUT, COMPACT_SPLIT = 0, 1, 2
 
 # spec §8.5 Face colours (cOLR, ancillary)
 Colours = cs.Struct(

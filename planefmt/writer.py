@@ -47,6 +47,9 @@ class Writer:
 
     def __init__(self, target: str | os.PathLike | BinaryIO, header: Header, *, compress: bool = False,
                  index: bool = True) -> None:
+        if int(header.coding) not in records.CODINGS.get(header.version[0], ()):
+            raise PlnError(f"coding {int(header.coding)} cannot be written in a version {header.version[0]} file",
+                           code="UNSUPPORTED_CODING")
         self._compress = compress
         self._index = index
         self._path: Path | None = None
@@ -152,7 +155,7 @@ class Writer:
         index = len(self._groups)
         group = PartGroup(index=index, object=obj, kind=int(kind), refs=refs.astype(np.uint32),
                           bounding=bounding, cells=cells, tree=tree, extra=extra)
-        self._emit(schema.GRUP, records.encode_group(group, self._compress), index)
+        self._emit(schema.GRUP, records.encode_group(group, self._compress, self._header.version[0]), index)
         self._groups.append(len(refs))
         return index
 

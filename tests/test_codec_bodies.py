@@ -102,12 +102,15 @@ def _colour_by_normal(v: np.ndarray, f: np.ndarray) -> np.ndarray:
                                   lambda: (np.asarray(trimesh.creation.box().vertices),
                                            np.asarray(trimesh.creation.box().faces)[:-2])],
                          ids=["convex", "BSP", "patches"])
-def test_face_colours_survive_as_colour_chunks(make, tmp_path):
+@pytest.mark.parametrize("compact", [False, True], ids=["v1", "v2"])
+def test_face_colours_survive_as_colour_chunks(make, compact, tmp_path):
+    """Also in version 2 files, whose groups list their references sorted, colours with them."""
     from planefmt.model import Mesh, Node, Scene
 
     v, f = make()
     colours = _colour_by_normal(v, f)
-    codec.encode_scene(Scene(nodes=(Node("m", mesh=Mesh(v, f, face_colours=colours)),)), tmp_path / "c.pln")
+    codec.encode_scene(Scene(nodes=(Node("m", mesh=Mesh(v, f, face_colours=colours)),)), tmp_path / "c.pln",
+                       compact=compact)
     with planefmt_open(tmp_path / "c.pln") as r:
         assert any(type(rec).__name__ == "Colours" for rec in r)
     m = codec.decode_scene(tmp_path / "c.pln").nodes[0].mesh

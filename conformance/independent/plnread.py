@@ -1,17 +1,25 @@
 """plnread: an independent, container-level reader of the .pln format.
 
-It was written from `spec/pln-1.md` alone (plus the output contract of
-`conformance/README.md`), without looking at planefmt or at the suite's
-generator, to show that the written spec and the conformance contract are
-enough for a second implementation.  It uses the Python 3.11 standard
-library only.
+It was written from `spec/pln-1.md` and `spec/pln-2.md` alone (plus the
+output contract of `conformance/README.md`), without looking at planefmt or
+at the suite's generator, to show that the written spec and the conformance
+contract are enough for a second implementation.  It uses the Python 3.11
+standard library only.  It reads versions 1.0 and 2.0 (pln-2 §11: files of
+major versions 1 and 2, each as its own document says).
 
 It checks everything a reader must check without decoding geometry
 (signature, chunk framing, CRC-32, header, plane table in every coding,
 objects, part groups of every kind with their cells/tree structure,
 colours, index, end chunk, versioning, zlib compression, limits) and, for a
 valid file, prints the JSON object of conformance/README.md ("geometry" is
-null: this reader does not decode geometry).
+null: this reader does not decode geometry).  Version 2.0 files are
+reported in the same form as 1.0 ones: predicted planes (coding 3) are
+dequantized like coding 2, and varint group bodies (pln-2 §8.7) are given
+as absolute plane indices, cells entries 2j + s and tree tokens in the
+version 1 numbering (0xFFFFFFFE IN, 0xFFFFFFFF OUT, j a split).
+
+Section numbers below are those of spec/pln-1.md; "pln-2 §x" marks a
+section of spec/pln-2.md.
 
 Usage:
     python conformance/independent/plnread.py FILE.pln
@@ -36,7 +44,9 @@ import zlib
 
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
-READER_MAJOR, READER_MINOR = 1, 0  # this reader implements version 1.0
+# the versions this reader implements: major -> highest minor it knows
+# (1.0 and 2.0; pln-2 §11: a reader of 2.m reads major versions 1 and 2)
+READER_VERSIONS = {1: 0, 2: 0}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 
@@ -60,6 +70,11 @@ F32_PI = struct.unpack("<f", struct.pack("<I", 0x40490FDB))[0]  # §7.1
 F32_2PI = struct.unpack("<f", struct.pack("<I", 0x40C90FDB))[0]
 
 TOKEN_IN, TOKEN_OUT, TOKEN_RESERVED_LO = 0xFFFFFFFE, 0xFFFFFFFF, 0xFFFFFFF0  # §8.4
+V2_TOKEN_IN, V2_TOKEN_OUT, V2_TOKEN_SPLIT = 0, 1, 2  # pln-2 §8.7: 0 IN, 1 OUT, j + 2 split
+
+CODING_QUANTIZED, CODING_PREDICTED = 2, 3  # §7.3, pln-2 §7.4
+VARINT_MAX_BYTES = 10  # pln-2 §2.3: below 2^64, at most 10 bytes
+PLANE_VARINT_LIMIT = 2**33  # pln-2 §7.4: every varint of the plane streams
 NO_PARENT = 0xFFFFFFFF
 
 
@@ -144,6 +159,36 @@ class Cursor:
         self.pos += 4 * n
         return v
 
+    def varint(self, what=None):
+        """pln-2 §2.3: unsigned LEB128, minimal, at most 10 bytes (the 10th at
+        most 0x01), below 2^64; any breach, or data ending inside, is BAD_PAYLOAD."""
+        data, pos = self.data, self.pos
+        value = 0
+        for n in range(VARINT_MAX_BYTES):
+            if pos >= len(data):
+                raise PlnError("BAD_PAYLOAD",
+                               "%s: the data ends inside %s, a varint" % (self.what, what or "a field"))
+            b = data[pos]
+            pos += 1
+            value |= (b & 0x7F) << (7 * n)
+            if not b & 0x80:
+                if n > 0 and b == 0:
+                    raise PlnError("BAD_PAYLOAD",
+                                   "%s: %s is a varint that is not minimal" % (self.what, what or "field"))
+                if n == VARINT_MAX_BYTES - 1 and b > 0x01:
+                    raise PlnError("BAD_PAYLOAD",
+                                   "%s: %s is a varint of 2^64 or more" % (self.what, what or "field"))
+                self.pos = pos
+                return value
+        raise PlnError("BAD_PAYLOAD",
+                       "%s: %s is a varint longer than %d bytes" % (self.what, what or "field",
+                                                                    VARINT_MAX_BYTES))
+
+
+def unzigzag(u):
+    """pln-2 §2.3: the inverse of zigzag (0, 1, 2, 3, 4 ... -> 0, -1, 1, -2, 2 ...)."""
+    return -((u + 1) >> 1) if u & 1 else u >> 1
+
 
 def check_bit_padding(data, nbits, what):
     """§2.1: the unused bits of the last byte must be 0."""
@@ -214,6 +259,7 @@ class Reader:
         self.pos = 0
 
         self.header = None
+        self.major = 1
         self.minor = 0
         self.planes = []
         self.objects = []
@@ -344,7 +390,7 @@ class Reader:
     # -- §5 header ---------------------------------------------------------
 
     def read_header(self, p):
-        if len(p) >= 1 and p[0] != 1:
+        if len(p) >= 1 and p[0] not in READER_VERSIONS:
             raise PlnError("UNSUPPORTED_VERSION", "major version %d" % p[0])
         if len(p) < 108:
             raise PlnError("BAD_PAYLOAD", "PHDR payload of %d bytes, under 108" % len(p))
@@ -356,11 +402,13 @@ class Reader:
         tolerance, error_bound = f64(p, 76), f64(p, 84)
         plane_count, object_count, group_count = u64(p, 92), u32(p, 100), u32(p, 104)
 
-        if minor > READER_MINOR:
+        if minor > READER_VERSIONS[major]:
             self.finding("NEWER_MINOR_VERSION")
-        if coding not in (0, 1, 2):
-            raise PlnError("UNSUPPORTED_CODING", "coding %d" % coding)
-        if coding == 2:
+        # coding 3, predicted, exists in major version 2 only (pln-2 §5)
+        codings = (0, 1, 2, 3) if major == 2 else (0, 1, 2)
+        if coding not in codings:
+            raise PlnError("UNSUPPORTED_CODING", "coding %d in a version %d file" % (coding, major))
+        if coding in (CODING_QUANTIZED, CODING_PREDICTED):
             for w in (bn, bp, bh):
                 if not 1 <= w <= 32:
                     raise PlnError("UNSUPPORTED_CODING", "quantized width %d outside 1-32" % w)
@@ -376,6 +424,7 @@ class Reader:
             if not (math.isnan(v) or (math.isfinite(v) and v >= 0)):
                 raise PlnError("BAD_HEADER_VALUE", "%s %r" % (name, v))
 
+        self.major = major
         self.minor = minor
         self.coding = coding
         self.bits = (bn, bp, bh)
@@ -442,15 +491,22 @@ class Reader:
                            "first %d, %d planes before" % (first, len(self.planes)))
         if len(self.planes) + count > LIMIT_PLANES:
             raise PlnError("LIMIT_EXCEEDED", "plane table above %d planes" % LIMIT_PLANES)
-        if self.coding == 0:
-            expected = 12 * count
-        elif self.coding == 1:
-            expected = 24 * count
+        if self.coding == CODING_PREDICTED:
+            # pln-2 §7.4: not implied by count; 1 to 5 bytes a varint, checked before inflating
+            if not 3 * count <= raw_size <= 15 * count:
+                raise PlnError("SIZE_MISMATCH",
+                               "raw_size %d outside [%d, %d] for %d predicted planes"
+                               % (raw_size, 3 * count, 15 * count, count))
         else:
-            expected = (count * sum(self.bits) + 7) // 8
-        if raw_size != expected:
-            raise PlnError("SIZE_MISMATCH",
-                           "raw_size %d, %d planes take %d" % (raw_size, count, expected))
+            if self.coding == 0:
+                expected = 12 * count
+            elif self.coding == 1:
+                expected = 24 * count
+            else:
+                expected = (count * sum(self.bits) + 7) // 8
+            if raw_size != expected:
+                raise PlnError("SIZE_MISMATCH",
+                               "raw_size %d, %d planes take %d" % (raw_size, count, expected))
         data = decompress(method, raw_size, p[20:], "PLNS data")
         base = len(self.planes)
         if self.coding == 0:
@@ -459,8 +515,10 @@ class Reader:
         elif self.coding == 1:
             vals = struct.unpack("<%dd" % (3 * count), data)
             self.add_float_planes(vals, count, math.pi, 2 * math.pi, base)
-        else:
+        elif self.coding == CODING_QUANTIZED:
             self.add_quantized_planes(data, count, base)
+        else:
+            self.add_predicted_planes(data, count, base)
         self.chunk_list.append((offset, b"PLNS", first))
 
     def add_float_planes(self, vals, count, pi, two_pi, base):
@@ -476,18 +534,13 @@ class Reader:
             planes.append([nu, phi, h])
 
     def add_quantized_planes(self, data, count, base):
+        """§7.3: a bit string of (q_nu, q_phi, q_h) records."""
         bn, bp, bh = self.bits
         rec = bn + bp + bh
         check_bit_padding(data, count * rec, "PLNS quantized data")
         m_nu = 2 ** (bn - 1)
-        n_phi = 2 ** bp
-        m_h = 2 ** bh - 1
-        h_min, h_max = self.h_range
-        step_nu = math.pi / m_nu
-        step_phi = (2 * math.pi) / n_phi
-        step_h = (h_max - h_min) / m_h
         mask_nu, mask_phi, mask_h = (1 << bn) - 1, (1 << bp) - 1, (1 << bh) - 1
-        planes = self.planes
+        codes = []
         for i in range(count):
             start = i * rec
             b0 = start >> 3
@@ -499,6 +552,59 @@ class Reader:
             if q_nu > m_nu:
                 raise PlnError("BAD_TRIPLET",
                                "plane %d: nu code %d above %d" % (base + i, q_nu, m_nu))
+            codes.append((q_nu, q_phi, q_h))
+        self.add_dequantized_planes(codes)
+
+    def add_predicted_planes(self, data, count, base):
+        """pln-2 §7.4: three streams of `count` varints (nu, phi, h), each code
+        predicted from the previous plane's, then dequantized as §7.3 says."""
+        c = Cursor(data, "PLNS predicted data")
+        streams = []
+        for name in ("nu", "phi", "h"):
+            stream = []
+            for i in range(count):
+                v = c.varint("the %s varint of plane %d" % (name, base + i))
+                if v >= PLANE_VARINT_LIMIT:
+                    raise PlnError("BAD_PAYLOAD", "plane %d: %s varint %d not below 2^33"
+                                   % (base + i, name, v))
+                stream.append(v)
+            streams.append(stream)
+        if c.remaining():
+            raise PlnError("SIZE_MISMATCH", "%d bytes after the %d varints of the predicted planes"
+                           % (c.remaining(), 3 * count))
+        bn, bp, bh = self.bits
+        max_nu, max_phi, max_h = 2 ** (bn - 1), 2 ** bp - 1, 2 ** bh - 1
+        s_nu, s_phi, s_h = streams
+        codes = []
+        a = b = cc = 0  # a_{-1} = 0; b and c are only used for i > 0
+        for i in range(count):
+            prev_a, prev_b, prev_c = a, b, cc
+            # 1. nu: zigzag(a_i - a_{i-1}), a_{-1} = 0
+            a = prev_a + unzigzag(s_nu[i])
+            # 2. phi: a difference if i > 0 and a_i = a_{i-1}; otherwise the code
+            same_nu = i > 0 and a == prev_a
+            b = prev_b + unzigzag(s_phi[i]) if same_nu else s_phi[i]
+            # 3. h: a difference if also b_i = b_{i-1}; otherwise the code
+            cc = prev_c + unzigzag(s_h[i]) if same_nu and b == prev_b else s_h[i]
+            for what, q, top in (("nu", a, max_nu), ("phi", b, max_phi), ("h", cc, max_h)):
+                if not 0 <= q <= top:
+                    raise PlnError("BAD_TRIPLET", "plane %d: %s code %d outside [0, %d]"
+                                   % (base + i, what, q, top))
+            codes.append((a, b, cc))
+        self.add_dequantized_planes(codes)
+
+    def add_dequantized_planes(self, codes):
+        """§7.3 dequantization, for codings 2 and 3."""
+        bn, bp, bh = self.bits
+        m_nu = 2 ** (bn - 1)
+        n_phi = 2 ** bp
+        m_h = 2 ** bh - 1
+        h_min, h_max = self.h_range
+        step_nu = math.pi / m_nu
+        step_phi = (2 * math.pi) / n_phi
+        step_h = (h_max - h_min) / m_h
+        planes = self.planes
+        for q_nu, q_phi, q_h in codes:
             planes.append([q_nu * step_nu, q_phi * step_phi, h_min + q_h * step_h])
 
     # -- §8.2 part groups --------------------------------------------------
@@ -514,23 +620,15 @@ class Reader:
             raise PlnError("BAD_OBJECT_REFERENCE",
                            "object %d, %d defined" % (obj, len(self.objects)))
         known = kind in KNOWN_KINDS
-        if not known and self.minor <= READER_MINOR:
+        if not known and self.minor <= READER_VERSIONS[self.major]:
             raise PlnError("UNKNOWN_GROUP_KIND",
-                           "kind %d in a version 1.%d file" % (kind, self.minor))
+                           "kind %d in a version %d.%d file" % (kind, self.major, self.minor))
         body = decompress(method, raw_size, p[16:], "GRUP body")
 
         c = Cursor(body, "GRUP body")
-        m = c.u32("ref_count")
-        if m == 0:
-            raise PlnError("BAD_GROUP_STRUCTURE", "ref_count 0")
-        if m > LIMIT_REFS:
-            raise PlnError("LIMIT_EXCEEDED", "ref_count %d above %d" % (m, LIMIT_REFS))
-        refs = c.u32_array(m, "refs")
-        n_planes = len(self.planes)
-        for r in refs:
-            if r >= n_planes:
-                raise PlnError("BAD_PLANE_REFERENCE",
-                               "reference to plane %d, %d defined" % (r, n_planes))
+        v2 = self.major == 2  # pln-2 §8.7: varint bodies
+        refs = self.read_refs_v2(c) if v2 else self.read_refs(c)
+        m = len(refs)
         roles = c.take((m + 7) // 8, "roles")
         check_bit_padding(roles, m, "GRUP roles")
         bounding = [i for i in range(m) if (roles[i >> 3] >> (i & 7)) & 1]
@@ -543,12 +641,48 @@ class Reader:
                 raise PlnError("BAD_PAYLOAD",
                                "%d bytes of kind data for kind %d" % (c.remaining(), kind))
         elif kind == 1:
-            g["cells"] = self.read_cells(c, m)
+            g["cells"] = self.read_cells_v2(c, m) if v2 else self.read_cells(c, m)
         elif kind == 2:
-            g["tree"] = self.read_tree(c, m)
+            g["tree"] = self.read_tree_v2(c, m) if v2 else self.read_tree(c, m)
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.chunk_list.append((offset, b"GRUP", index))
+
+    def check_ref_count(self, m):
+        if m == 0:
+            raise PlnError("BAD_GROUP_STRUCTURE", "ref_count 0")
+        if m > LIMIT_REFS:
+            raise PlnError("LIMIT_EXCEEDED", "ref_count %d above %d" % (m, LIMIT_REFS))
+
+    def read_refs(self, c):
+        """§8.2: ref_count (u32) and refs (u32 plane indices)."""
+        m = c.u32("ref_count")
+        self.check_ref_count(m)
+        refs = c.u32_array(m, "refs")
+        n_planes = len(self.planes)
+        for r in refs:
+            if r >= n_planes:
+                raise PlnError("BAD_PLANE_REFERENCE",
+                               "reference to plane %d, %d defined" % (r, n_planes))
+        return refs
+
+    def read_refs_v2(self, c):
+        """pln-2 §8.7: ref_count (varint) and refs as varint differences
+        (non-decreasing), each difference checked before it is summed."""
+        m = c.varint("ref_count")
+        self.check_ref_count(m)
+        n_planes = len(self.planes)
+        refs = []
+        r = 0
+        for i in range(m):
+            d = c.varint("reference difference %d" % i)
+            if d >= n_planes or r + d >= n_planes:
+                raise PlnError("BAD_PLANE_REFERENCE",
+                               "reference %d: %d + difference %d, %d planes defined"
+                               % (i, r, d, n_planes))
+            r += d
+            refs.append(r)
+        return refs
 
     def read_cells(self, c, m):
         """§8.3."""
@@ -576,12 +710,78 @@ class Reader:
             k += s
         return cells
 
+    def read_cells_v2(self, c, m):
+        """pln-2 §8.7, kind 1: the fields of §8.3 as varints."""
+        n = c.varint("cell_count")
+        if n == 0:
+            raise PlnError("BAD_GROUP_STRUCTURE", "cell_count 0")
+        if n > c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "cell_count %d, %d bytes left" % (n, c.remaining()))
+        sizes = []
+        total = 0
+        for k in range(n):
+            s = c.varint("size of cell %d" % k)
+            if s == 0:
+                raise PlnError("BAD_GROUP_STRUCTURE", "a cell of size 0")
+            if s > c.remaining():
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "cell %d of size %d, %d bytes left" % (k, s, c.remaining()))
+            sizes.append(s)
+            total += s
+        if total > c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "%d cell entries, %d bytes left" % (total, c.remaining()))
+        cells = []
+        for k, s in enumerate(sizes):
+            cell = []
+            for _ in range(s):
+                e = c.varint("an entry of cell %d" % k)
+                if (e >> 1) >= m:
+                    raise PlnError("BAD_GROUP_STRUCTURE",
+                                   "cell entry %d: local reference %d of %d" % (e, e >> 1, m))
+                cell.append(e)
+            cells.append(cell)
+        if c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "%d bytes after the cell entries" % c.remaining())
+        return cells
+
     def read_tree(self, c, m):
         """§8.4."""
         t = c.u32("token_count")
         tokens = c.u32_array(t, "tokens")
         if c.remaining():
             raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the tokens" % c.remaining())
+        return self.check_tree(tokens, m)
+
+    def read_tree_v2(self, c, m):
+        """pln-2 §8.7, kind 2: varint tokens 0 IN, 1 OUT, j + 2 split on j,
+        returned in the numbering of §8.4 and checked as §8.4 says."""
+        t = c.varint("token_count")
+        if t > c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "token_count %d, %d bytes left" % (t, c.remaining()))
+        tokens = []
+        for i in range(t):
+            tok = c.varint("token %d" % i)
+            if tok == V2_TOKEN_IN:
+                tokens.append(TOKEN_IN)
+            elif tok == V2_TOKEN_OUT:
+                tokens.append(TOKEN_OUT)
+            else:
+                j = tok - V2_TOKEN_SPLIT
+                if j >= m:
+                    raise PlnError("BAD_GROUP_STRUCTURE",
+                                   "token %d: %d, a split on local reference %d of %d"
+                                   % (i, tok, j, m))
+                tokens.append(j)  # j < m <= LIMIT_REFS, below the reserved tokens
+        if c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the tokens" % c.remaining())
+        return self.check_tree(tokens, m)
+
+    def check_tree(self, tokens, m):
+        """§8.4: exactly one complete tree in preorder (tokens numbered as in §8.4)."""
         slots = 1
         for i, tok in enumerate(tokens):
             if slots <= 0:

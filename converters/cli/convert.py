@@ -42,6 +42,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--coding", choices=["float32", "float64", "quantized"], help="force a triplet coding")
     g.add_argument("--compress", action=argparse.BooleanOptionalAction, default=True,
                    help="deflate plane and group payloads where that saves bytes (spec §6; the default)")
+    g.add_argument("--compact", action=argparse.BooleanOptionalAction, default=True,
+                   help="write version 2.0 (spec/pln-2.md): predicted plane codes, varint group bodies; "
+                        "the default (--no-compact: version 1.0, for readers of 1.x only)")
     g.add_argument("--lossy", action="store_true", help="allow the paper's lossy options below")
     g.add_argument("--delta", type=float, help="lossy: drop planes of faces under delta x total area")
     g.add_argument("--tau", type=float, help="lossy: merge neighbour planes whose normals differ < tau radians")
@@ -57,7 +60,7 @@ def _pln_options(args: argparse.Namespace) -> dict:
         raise _Usage("--delta and --tau change the geometry: add --lossy to allow it", code="CONVERSION_FAILED")
     from planefmt.model import Coding
 
-    opts = {"tolerance": args.tolerance, "compress": args.compress}
+    opts = {"tolerance": args.tolerance, "compress": args.compress, "compact": args.compact}
     if args.bits is not None:
         opts["bits"] = args.bits
     if args.coding:
