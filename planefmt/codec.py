@@ -794,29 +794,32 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
     candidates = _candidates(coding, bits, table, radius)
     if forced:
         return attempt(*candidates[0])
-    quantized = []
-    indexes: list[TriangleIndex | None] = [None] * len(objects)
-    for cod, q in candidates:
-        if cod != Coding.QUANTIZED:
-            continue
-        rt = quantize.roundtrip(table, cod, q)
-        # Half the room for the prediction: the certified bound the verification needs
-        # comes quickly only with a margin between the true error and the target.
-        room = 0.5 * (allowance - extra)
-        moved = [_moved_vertices(d, rt[a:b], o) for d, (a, b), o in zip(base, spans, objects)]
-        own = [0.0 if simplified else e for e in base_err]
-        predicted = max(e + s * _largest(np.linalg.norm(m - d.vertices, axis=1) for m, d in zip(mv, dec))
-                        for e, s, mv, dec in zip(own, scale, moved, base))
-        if predicted > room:
-            # Where nearly parallel planes meet, a vertex slides far along the surface for a small
-            # turn of the planes; its distance from the surface is what the error sees
-            # (plate_holes.STL at 2e-5: 6.7e-4 of the diagonal moved, 2.5e-5 off the surface, 17 bits).
-            if indexes[0] is None:
-                indexes[:] = [TriangleIndex(o.vertices, o.faces) for o in objects]
-            predicted = max(e + s * _largest(ix.query(m)[0] for m in mv)
-                            for e, s, mv, ix in zip(own, scale, moved, indexes))
-        if predicted <= room:
-            quantized.append(q)
+    # Half the room for the prediction: the certified bound the verification needs comes quickly
+    # only with a margin between the true error and the target.
+    room = 0.5 * (allowance - extra)
+    own = [0.0 if simplified else e for e in base_err]
+    widths = [q for cod, q in candidates if cod == Coding.QUANTIZED]
+
+    incidences = [_Incidences.of(d, o) for d, o in zip(base, objects)]
+
+    def moved(q: Quantization) -> list[np.ndarray]:
+        rt = quantize.roundtrip(table, Coding.QUANTIZED, q)
+        return [inc.moved(rt[a:b]) for inc, (a, b) in zip(incidences, spans)]
+
+    admitted = [i for i, q in enumerate(widths)
+                if max(e + s * _peak(np.linalg.norm(m - inc.vertices, axis=1))
+                       for e, s, m, inc in zip(own, scale, moved(q), incidences)) <= room]
+    # Where nearly parallel planes meet, a vertex slides far along the surface for a small turn of
+    # the planes; its distance from the surface is what the error sees (plate_holes.STL at 2e-5:
+    # 6.7e-4 of the diagonal moved, 2.5e-5 off the surface, 17 bits). Narrower widths than the
+    # displacement admits are admitted by that distance, down to the first that fails it.
+    indexes = None
+    for i in range(min(admitted, default=len(widths)) - 1, -1, -1):
+        indexes = indexes or [TriangleIndex(o.vertices, o.faces) for o in objects]
+        if max(e + s * _peak(ix.query(m)[0]) for e, s, m, ix in zip(own, scale, moved(widths[i]), indexes)) > room:
+            break
+        admitted.append(i)
+    quantized = [widths[i] for i in sorted(set(admitted))]
     # The narrowest widths that pass, by bisection: finer planes decode closer to the source (the
     # search assumes so; whatever it picks is verified like any other).
     lo, hi, best = 0, len(quantized) - 1, None
@@ -861,15 +864,33 @@ def _decode_object(triplets: np.ndarray, obj: _Object, error: PlaneError) -> lis
     return [decode_group(triplets[g.refs], g, i, error) for i, g in enumerate(obj.groups)]
 
 
-def _largest(values: Iterable[np.ndarray]) -> float:
-    return max((float(v.max(initial=0.0)) for v in values), default=0.0)
+def _peak(values: np.ndarray) -> float:
+    return float(values.max(initial=0.0))
 
 
-def _moved_vertices(decoded: list[DecodedGroup], triplets: np.ndarray, obj: _Object) -> list[np.ndarray]:
-    """Each decoded group's vertices as the planes ``triplets`` would put them (model units)."""
-    omega, h = from_triplets(triplets)
-    return [resolve_vertices(d.vertices, d.inc_vertex, d.inc_ref, omega[g.refs], h[g.refs])
-            for d, g in zip(decoded, obj.groups)]
+@dataclass(frozen=True)
+class _Incidences:
+    """An object's decoded vertices, all groups together, and the object-table planes they lie on."""
+
+    vertices: np.ndarray
+    inc_vertex: np.ndarray
+    inc_plane: np.ndarray
+
+    @staticmethod
+    def of(decoded: list[DecodedGroup], obj: _Object) -> _Incidences:
+        # One array for all groups: patch meshes have tens of thousands (bun_zipper.ply).
+        offsets = np.cumsum([0] + [len(d.vertices) for d in decoded])
+        empty = np.zeros(0, dtype=np.int64)
+        return _Incidences(
+            vertices=np.concatenate([d.vertices for d in decoded]) if decoded else np.zeros((0, 3)),
+            inc_vertex=np.concatenate([d.inc_vertex + k for d, k in zip(decoded, offsets)] or [empty]),
+            inc_plane=np.concatenate([np.asarray(g.refs)[d.inc_ref] for d, g in zip(decoded, obj.groups)]
+                                     or [empty]))
+
+    def moved(self, triplets: np.ndarray) -> np.ndarray:
+        """The vertices as the planes ``triplets`` would put them (model units)."""
+        omega, h = from_triplets(triplets)
+        return resolve_vertices(self.vertices, self.inc_vertex, self.inc_plane, omega, h)
 
 
 def _verify(mesh: Mesh, obj: _Object, target: float, pieces: int) -> tuple[float, float]:
