@@ -95,6 +95,9 @@ _RETRY_PIECES = DEFAULT_MAX_PIECES
 _MERGE = 1e-3
 _SPLIT = 0.1
 
+#: Part groups a reader holds before decoding them together (:func:`decode_groups`).
+_DECODE_BATCH = 4096
+
 #: Rounds of mutual-best-pair merging for ``tau`` (each merges at least the closest pair).
 _TAU_ROUNDS = 64
 
@@ -391,6 +394,35 @@ def decode_group(planes: np.ndarray, group: GroupLike, label: object = None,
                             code="DEGENERATE_GEOMETRY") from exc
 
 
+def decode_groups(items: Sequence[tuple[np.ndarray, GroupLike, object]],
+                  error: PlaneError = EXACT) -> list[DecodedGroup]:
+    """:func:`decode_group` of each ``(planes, group, label)``, the patch groups in one batch.
+
+    A mesh stored as patches has tens of thousands of small groups (bun_zipper.ply: 28k); one
+    :func:`planefmt.patches.decode_patch_groups` call intersects them together, and gives each the
+    result it gets alone. If the batch finds a bad group, every patch is decoded on its own, which
+    names the group and tries Qhull where the batch gives up.
+    """
+    out: list[DecodedGroup | None] = [None] * len(items)
+    patches = [i for i, (_, g, _) in enumerate(items)
+               if int(g.kind) in (GroupKind.PSEUDO_CONVEX, GroupKind.PSEUDO_CONCAVE)]
+    if len(patches) > 1:
+        try:
+            planes = np.concatenate([np.asarray(items[i][0], dtype=np.float64).reshape(-1, 3) for i in patches])
+            omega, h = from_triplets(planes)
+            face = np.concatenate([~np.asarray(items[i][1].bounding, dtype=bool) for i in patches])
+            concave = np.array([int(items[i][1].kind) == GroupKind.PSEUDO_CONCAVE for i in patches])
+            decoded = decode_patch_groups(omega, h, [len(np.asarray(items[i][1].refs)) for i in patches],
+                                          face, concave)
+            for i, (v, t, inc_v, inc_r, t_ref) in zip(patches, decoded):
+                if len(t):
+                    out[i] = DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64), t_ref)
+        except (GeometryError, ArithmeticError, IndexError, ValueError, np.linalg.LinAlgError, QhullError):
+            out = [None] * len(items)
+    return [d if d is not None else decode_group(planes, g, label, error)
+            for d, (planes, g, label) in zip(out, items)]
+
+
 def decode_mesh(source: Encoded | np.ndarray, groups: Iterable[GroupLike] | None = None, *,
                 header: Header | None = None) -> Mesh:
     """Triangles of part groups: ``decode_mesh(triplets, groups, header=...)`` or ``decode_mesh(encoded)``.
@@ -410,8 +442,8 @@ def decode_mesh(source: Encoded | np.ndarray, groups: Iterable[GroupLike] | None
     else:
         table = np.asarray(source, dtype=np.float64).reshape(-1, 3)
         error = EXACT if header is None else header_plane_error(header)
-    return _concatenate([decode_group(table[np.asarray(g.refs, dtype=np.int64)], g, i, error)
-                         for i, g in enumerate(groups or ())])
+    return _concatenate(decode_groups([(table[np.asarray(g.refs, dtype=np.int64)], g, i)
+                                       for i, g in enumerate(groups or ())], error))
 
 
 def _concatenate(parts: Sequence[DecodedGroup]) -> Mesh:
@@ -861,7 +893,7 @@ def _diagonal(points: np.ndarray) -> float:
 
 
 def _decode_object(triplets: np.ndarray, obj: _Object, error: PlaneError) -> list[DecodedGroup]:
-    return [decode_group(triplets[g.refs], g, i, error) for i, g in enumerate(obj.groups)]
+    return decode_groups([(triplets[g.refs], g, i) for i, g in enumerate(obj.groups)], error)
 
 
 def _peak(values: np.ndarray) -> float:
@@ -1048,17 +1080,28 @@ def _world_transforms(nodes: Sequence[Node]) -> list[np.ndarray]:
 def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
     """Read a .pln file into a :class:`Scene`: one node per object, its groups decoded and joined.
 
-    Streams: part groups are decoded one at a time as they are read.
+    Streams: part groups are decoded in batches of up to 4096 as they are read.
     """
     parts: dict[int, list[tuple[int, DecodedGroup]]] = {}
     colours: dict[int, np.ndarray] = {}
+    pending: list[PartGroup] = []
+
+    def flush() -> None:
+        for rec, d in zip(pending, decode_groups([(g.planes, g, g.index) for g in pending], error)):
+            parts.setdefault(rec.object, []).append((rec.index, d))
+        pending.clear()
+
     with Reader(source) as r:
         error = header_plane_error(r.header)
         for rec in r:
             if isinstance(rec, PartGroup):
-                parts.setdefault(rec.object, []).append((rec.index, decode_group(rec.planes, rec, rec.index, error)))
+                # Decoded in batches of groups read (patches together), bounding what is held.
+                pending.append(rec)
+                if len(pending) >= _DECODE_BATCH:
+                    flush()
             elif isinstance(rec, Colours):
                 colours[rec.group] = rec.rgba
+        flush()
         return _assemble(r.objects, parts, r.header.units, colours)
 
 

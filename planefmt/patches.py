@@ -696,7 +696,9 @@ def decode_patch_groups(omega: np.ndarray, h: np.ndarray, sizes: list[int], face
     count = len(sizes)
     start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     owner = np.repeat(np.arange(count), sizes)
-    scale = float(np.abs(h).max(initial=1.0))
+    # Each group's own scale: a group decodes the same in any batch, and alone.
+    scale = np.ones(count)
+    np.maximum.at(scale, owner, np.abs(h))
     poly = intersect_many(omega, h, owner, count, 1e-11 * scale)
     bad = np.flatnonzero(poly.status != OK)
     if len(bad):

@@ -92,23 +92,28 @@ class Polytopes:
 
 
 def intersect_many(omega: np.ndarray, h: np.ndarray, owner: np.ndarray, count: int,
-                   tol: float) -> Polytopes:
+                   tol: float | np.ndarray) -> Polytopes:
     """The polytopes ``{x : omega_i . x <= h_i for owner_i == p}``, ``p < count``.
 
     ``omega`` (n, 3) unit normals, ``h`` (n,), ``owner`` (n,) sorted.
-    ``tol`` (model units) is the distance within which a point counts as on
-    a plane; it must exceed rounding (about ``1e-15`` of the coordinates) and
-    stay below any feature size. A polytope with less than about ``tol``
-    of thickness is reported :data:`EMPTY`.
+    ``tol`` (model units, one for all or one per polytope) is the distance
+    within which a point counts as on a plane; it must exceed rounding (about
+    ``1e-15`` of the coordinates) and stay below any feature size. A polytope
+    with less than about ``tol`` of thickness is reported :data:`EMPTY`. Each
+    polytope's result depends on its own planes and tolerance only, not on
+    the others computed with it.
     """
     omega = np.asarray(omega, dtype=np.float64).reshape(-1, 3)
     h = np.asarray(h, dtype=np.float64).reshape(-1)
     owner = np.asarray(owner, dtype=np.int64)
+    tol = np.broadcast_to(np.asarray(tol, dtype=np.float64), (count,))
     start = np.searchsorted(owner, np.arange(count + 1))
     size = np.diff(start)
     status = np.full(count, OK, dtype=np.int8)
     parts: list[_Faces] = []
-    scale = _FAR * (float(np.abs(h).max(initial=0.0)) + tol)
+    reach = np.zeros(count)
+    np.maximum.at(reach, owner, np.abs(h))
+    scale = _FAR * (reach + tol)  # per polytope: the far planes of one do not depend on the others
     for k in np.unique(size):
         ids = np.flatnonzero(size == k)
         if k < 4:
@@ -117,7 +122,7 @@ def intersect_many(omega: np.ndarray, h: np.ndarray, owner: np.ndarray, count: i
             for chunk in np.array_split(ids, max(1, len(ids) * _triples(int(k)) // _BATCH)):
                 parts.append(_enumerate(omega, h, start[chunk], int(k), chunk, tol, scale, status))
         else:
-            parts.extend(_qhull(omega, h, int(start[p]), int(k), int(p), tol, status) for p in ids)
+            parts.extend(_qhull(omega, h, int(start[p]), int(k), int(p), status) for p in ids)
     return _assemble(parts, status)
 
 
@@ -142,13 +147,15 @@ class _Faces:
 
 
 def _enumerate(omega: np.ndarray, h: np.ndarray, first: np.ndarray, k: int, ids: np.ndarray,
-               tol: float, scale: float, status: np.ndarray) -> _Faces:
-    """Faces of ``len(ids)`` polytopes of ``k`` planes each, by triple enumeration."""
+               tol: np.ndarray, scale: np.ndarray, status: np.ndarray) -> _Faces:
+    """Faces of ``len(ids)`` polytopes of ``k`` planes each, by triple enumeration (``tol`` and
+    ``scale`` per polytope of the whole batch, indexed by ``ids``)."""
     n = len(ids)
     rows = first[:, None] + np.arange(k)
     nb = len(_BOX)
     w = np.concatenate([omega[rows], np.broadcast_to(_BOX, (n, nb, 3))], axis=1)
-    hh = np.concatenate([h[rows], np.full((n, nb), scale)], axis=1)
+    hh = np.concatenate([h[rows], np.repeat(scale[ids][:, None], nb, axis=1)], axis=1)
+    tol_p = tol[ids]
     trip, pair_of = _tables(k, nb)
     # Cramer's rule, elementwise: x = (b1 n2 x n3 + b2 n3 x n1 + b3 n1 x n2) / n1 . (n2 x n3), with
     # the cross products computed once per pair of planes.
@@ -165,31 +172,34 @@ def _enumerate(omega: np.ndarray, h: np.ndarray, first: np.ndarray, k: int, ids:
     # A feasible vertex on a far plane means the polytope does not end in that direction; such
     # vertices are far out, so their feasibility allows for rounding at their distance.
     far = t2 >= k
-    slack = np.where(far, tol + 1e-12 * np.abs(x).max(axis=2), tol)
+    slack = np.where(far, tol_p[:, None] + 1e-12 * np.abs(x).max(axis=2), tol_p[:, None])
     feasible = ok & (res <= slack[:, :, None]).all(axis=2)
     status[ids[np.unique(np.nonzero(feasible & far)[0])]] = UNBOUNDED
     pi, ti = np.nonzero(feasible & ~far)
     x, res = x[pi, ti], res[pi, ti]
-    tight = np.abs(res) <= tol
+    tight = np.abs(res) <= tol_p[pi][:, None]
     keep = status[ids[pi]] == OK
     pi, x, tight = pi[keep], x[keep], tight[keep, :k]
     mask = (tight.astype(np.int64) << np.arange(k, dtype=np.int64)).sum(axis=1)
-    pi, x, mask = _merge(pi, x, mask, tol)
+    pi, x, mask = _merge(pi, x, mask, tol_p)
     # Incidences (vertex, local plane) from the masks, grouped into faces.
     vi, j = np.nonzero((mask[:, None] >> np.arange(k)) & 1)
     return _faces(omega, x, vi, pi[vi] * k + j, ids[pi[vi]], rows[pi[vi], j], tol, status, ids)
 
 
 def _merge(owner: np.ndarray, x: np.ndarray, mask: np.ndarray,
-           tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """One vertex per tight-plane set per polytope; vertices of one polytope within ``tol`` join too."""
+           tol: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One vertex per tight-plane set per polytope; vertices of one polytope within its ``tol[owner]``
+    join too."""
     if len(x) == 0:
         return owner, x, mask
     _, label = np.unique(np.column_stack([owner, mask]), axis=0, return_inverse=True)
     label = label.reshape(-1)
-    pairs = cKDTree(x).query_pairs(tol, output_type="ndarray")
+    pairs = cKDTree(x).query_pairs(float(tol[owner].max()), output_type="ndarray")
     if len(pairs):
-        pairs = pairs[owner[pairs[:, 0]] == owner[pairs[:, 1]]]
+        a, b = pairs[:, 0], pairs[:, 1]
+        # query_pairs counts pairs within r inclusively: the same test per pair, with its own tol.
+        pairs = pairs[(owner[a] == owner[b]) & (np.linalg.norm(x[a] - x[b], axis=1) <= tol[owner[a]])]
     if len(pairs):
         n = int(label.max()) + 1
         g = coo_matrix((np.ones(len(pairs)), (label[pairs[:, 0]], label[pairs[:, 1]])), shape=(n, n))
@@ -205,7 +215,7 @@ def _merge(owner: np.ndarray, x: np.ndarray, mask: np.ndarray,
 
 
 def _faces(omega: np.ndarray, x: np.ndarray, vi: np.ndarray, key: np.ndarray, owner: np.ndarray,
-           row: np.ndarray, tol: float, status: np.ndarray, ids: np.ndarray) -> _Faces:
+           row: np.ndarray, tol: np.ndarray, status: np.ndarray, ids: np.ndarray) -> _Faces:
     """Polygons from incidences: vertex ``vi`` lies on face ``key`` (plane ``row`` of polytope ``owner``).
 
     Vertices are ordered by angle in the basis ``(e1, e2, omega)``; faces with
@@ -223,13 +233,14 @@ def _faces(omega: np.ndarray, x: np.ndarray, vi: np.ndarray, key: np.ndarray, ow
     angle = np.arctan2(np.einsum("ij,ij->i", d, e2[face]), np.einsum("ij,ij->i", d, e1[face]))
     order = np.lexsort((angle, face))
     vi, d = vi[order], d[order]
-    vi, d, face, cnt = _strictly_convex(vi, d, face, cnt, omega[row[first]], tol)
+    face_tol = tol[owner_first]
+    vi, d, face, cnt = _strictly_convex(vi, d, face, cnt, omega[row[first]], face_tol)
     first = np.concatenate([[0], np.cumsum(cnt)[:-1]])
     nxt = np.arange(len(vi)) + 1
     nxt[first + cnt - 1] = first
     area2 = np.bincount(face, weights=np.einsum("ij,ij->i", np.cross(d, d[nxt]), omega[row_first][face]),
                         minlength=len(cnt))
-    good = (cnt >= 3) & (area2 > tol * np.sqrt(np.maximum(area2, 0.0)))
+    good = (cnt >= 3) & (area2 > face_tol * np.sqrt(np.maximum(area2, 0.0)))
     face_owner = owner_first
     faces_per = np.bincount(face_owner[good], minlength=len(status))
     flat = ids[faces_per[ids] < 4]
@@ -241,7 +252,7 @@ def _faces(omega: np.ndarray, x: np.ndarray, vi: np.ndarray, key: np.ndarray, ow
 
 
 def _strictly_convex(vi: np.ndarray, d: np.ndarray, face: np.ndarray, cnt: np.ndarray, normal: np.ndarray,
-                     tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                     tol: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Drop ring corners that do not turn left by more than ``tol`` (rounding reflexes, collinear points).
 
     Rings are grouped by ``face`` (sorted), ``d`` their corners relative to the
@@ -259,7 +270,7 @@ def _strictly_convex(vi: np.ndarray, d: np.ndarray, face: np.ndarray, cnt: np.nd
         e_out = d[nxt] - d
         turn = np.einsum("ij,ij->i", np.cross(e_in, e_out), normal[face])
         length = np.linalg.norm(e_in, axis=1)
-        drop = (turn <= tol * length) & (cnt[face] > 3)
+        drop = (turn <= tol[face] * length) & (cnt[face] > 3)
         if not drop.any():
             return vi, d, face, cnt
         # Never drop two neighbours in one round: their removal conditions interact.
@@ -270,8 +281,7 @@ def _strictly_convex(vi: np.ndarray, d: np.ndarray, face: np.ndarray, cnt: np.nd
     return vi, d, face, cnt
 
 
-def _qhull(omega: np.ndarray, h: np.ndarray, first: int, k: int, p: int, tol: float,
-           status: np.ndarray) -> _Faces:
+def _qhull(omega: np.ndarray, h: np.ndarray, first: int, k: int, p: int, status: np.ndarray) -> _Faces:
     """One large polytope through Qhull."""
     try:
         poly = intersect(omega[first:first + k], h[first:first + k])
