@@ -138,18 +138,21 @@ def weld(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarra
 
 
 def polygonize(vertices: np.ndarray, faces: np.ndarray, *,
-               tolerance: float = COPLANAR_TOLERANCE) -> Polygons:
+               tolerance: float = COPLANAR_TOLERANCE, max_drift: float | None = None) -> Polygons:
     """Merge adjacent coplanar triangles into polygons and fit one plane per distinct plane.
 
     ``tolerance`` is a fraction of the bounding-box diagonal (see the module
-    docstring). Raises ``GeometryError`` for malformed or empty input and
-    for a mesh of zero area.
+    docstring); ``max_drift`` (same unit) caps how far a fitted plane may be
+    from a vertex of its faces (default ``_DRIFT`` tolerances): a polygon or
+    merged plane that strays further is split up. Raises ``GeometryError``
+    for malformed or empty input and for a mesh of zero area.
     """
     v, f = weld(vertices, faces)
     diagonal = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
     if diagonal == 0.0:
         raise GeometryError("all vertices coincide: the mesh has no area")
     eps = tolerance * diagonal
+    drift = _DRIFT * eps if max_drift is None else min(_DRIFT * eps, max_drift * diagonal)
     m = len(f)
     p = v[f]  # (m, 3 corners, 3)
     cross = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 1])
@@ -180,7 +183,7 @@ def polygonize(vertices: np.ndarray, faces: np.ndarray, *,
     dist = _corner_distances(v, f, omega, h, polygon)
     # A polygon whose vertices stray from its fitted plane is a gently curved surface that the
     # pairwise test chained together: keep its triangles as separate polygons instead.
-    curved = _max_per_label(dist, polygon, len(omega)) > _DRIFT * eps
+    curved = _max_per_label(dist, polygon, len(omega)) > drift
     if curved.any():
         split = (polygon >= 0) & curved[np.maximum(polygon, 0)]
         polygon[split] = polygon.max() + 1 + np.arange(int(split.sum()))
@@ -193,7 +196,7 @@ def polygonize(vertices: np.ndarray, faces: np.ndarray, *,
     unit[lone] = cross[lone] / norm[lone, None]
     omega, h = _fit(v, f, cross, polygon, polygon.max() + 1)
 
-    plane, polygon_plane = _dedupe(v, f, cross, polygon, omega, h, eps, tolerance)
+    plane, polygon_plane = _dedupe(v, f, cross, polygon, omega, h, eps, tolerance, drift)
     k = polygon_plane.max() + 1
     omega, h = _fit(v, f, cross, plane, k)
     dist = _corner_distances(v, f, omega, h, plane)
@@ -289,7 +292,7 @@ def _attach_slivers(v: np.ndarray, f: np.ndarray, sliver: np.ndarray, polygon: n
 
 def _dedupe(v: np.ndarray, f: np.ndarray, cross: np.ndarray, polygon: np.ndarray,
             omega: np.ndarray, h: np.ndarray, eps: float,
-            tolerance: float) -> tuple[np.ndarray, np.ndarray]:
+            tolerance: float, drift: float) -> tuple[np.ndarray, np.ndarray]:
     """Planes shared by several polygons: ``(face_plane, polygon_plane)``.
 
     Polygons whose rows ``(omega, h)`` round to the same values on a grid of
@@ -304,7 +307,7 @@ def _dedupe(v: np.ndarray, f: np.ndarray, cross: np.ndarray, polygon: np.ndarray
     plane = np.where(polygon >= 0, polygon_plane[np.maximum(polygon, 0)], -1)
     k = polygon_plane.max() + 1
     om, hh = _fit(v, f, cross, plane, k)
-    bad = _max_per_label(_corner_distances(v, f, om, hh, plane), plane, k) > _DRIFT * eps
+    bad = _max_per_label(_corner_distances(v, f, om, hh, plane), plane, k) > drift
     if bad.any():
         revert = bad[polygon_plane]
         polygon_plane[revert] = k + np.arange(int(revert.sum()))

@@ -118,21 +118,47 @@ def test_face_colours_survive_as_colour_chunks(make, compact, tmp_path):
     assert m.face_colours is not None and np.array_equal(m.face_colours, _colour_by_normal(m.vertices, m.faces))
 
 
-@pytest.mark.skipif(not Path("/work/shared/corpus/usd/King_geom.usd").is_file(), reason="shared corpus not available")
-def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkeypatch):
-    """King_geom.usd's polygon planes fit 1.42e-6 of the diagonal: refused after polygonizing, not after encoding."""
+def _king() -> tuple[np.ndarray, np.ndarray]:
     from planefmt_converters import registry
     from planefmt_converters.assemble import flatten
 
     scene, _ = registry.read("/work/shared/corpus/usd/King_geom.usd")
     mesh = flatten(scene)
+    return mesh.vertices, mesh.faces
+
+
+@pytest.mark.skipif(not Path("/work/shared/corpus/usd/King_geom.usd").is_file(), reason="shared corpus not available")
+def test_the_drift_bound_keeps_the_polygon_fit_within_the_tolerance():
+    """King_geom.usd's gently curved quads: with the default drift bound (4 coplanarity
+    tolerances) its fitted planes are 1.42e-6 of the diagonal from their vertices; capped at the
+    tolerance, the curved polygons are split and the fit is within it."""
+    from planefmt.polygonize import polygonize
+
+    v, f = _king()
+    loose = polygonize(v, f, tolerance=5e-7)
+    capped = polygonize(v, f, tolerance=5e-7, max_drift=1e-6)
+    assert loose.max_distance > 1.4e-6 * loose.diagonal
+    assert capped.max_distance <= 1e-6 * capped.diagonal and len(capped.h) > len(loose.h)
+
+
+@pytest.mark.skipif(not Path("/work/shared/corpus/usd/King_geom.usd").is_file(), reason="shared corpus not available")
+def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkeypatch):
+    """A fit over the tolerance (King_geom.usd polygonized without the drift cap) is refused after
+    polygonizing, not after encoding."""
+    from planefmt import polygonize as polygonize_module
+
+    v, f = _king()
 
     def no_body(*args, **kwargs):
         raise AssertionError("a body was encoded")
 
+    def uncapped(vertices, faces, *, tolerance, max_drift=None):
+        return polygonize_module.polygonize(vertices, faces, tolerance=tolerance)
+
     monkeypatch.setattr(codec, "_encode_body", no_body)
+    monkeypatch.setattr(codec, "polygonize", uncapped)
     with pytest.raises(GeometryError, match="fitted polygon planes are 1.42e-06") as err:
-        codec.encode_mesh(mesh.vertices, mesh.faces, tolerance=1e-6)
+        codec.encode_mesh(v, f, tolerance=1e-6)
     assert err.value.code == "TOLERANCE_NOT_MET"
 
 
