@@ -177,3 +177,27 @@ def test_a_lossy_tolerance_lets_the_volume_move_with_the_surface():
     assert 1e-6 * abs(obj.volume) < change <= 2 * obj.area * 1e-4 * diag
     assert not codec.structure_kept(enc.mesh, obj)
     assert codec.structure_kept(enc.mesh, obj, 1e-4 * diag)
+
+
+@pytest.mark.skipif(not Path("/work/shared/corpus/open/suzanne.ply").is_file(), reason="shared corpus not available")
+def test_patch_groups_decode_the_same_batched_as_alone():
+    """codec.decode_groups intersects an object's patch groups in one batch; each group's result is
+    bit for bit the one it gets decoded on its own (own tolerance, own far planes)."""
+    import io
+
+    from planefmt import Reader
+    from planefmt.model import Mesh, Node, Scene
+
+    mesh = trimesh.load("/work/shared/corpus/open/suzanne.ply", process=False)
+    buf = io.BytesIO()
+    codec.encode_scene(Scene(nodes=(Node("s", mesh=Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces))),)),
+                       buf, compact=True)
+    with Reader(io.BytesIO(buf.getvalue())) as r:
+        error = codec.header_plane_error(r.header)
+        groups = [rec for rec in r if hasattr(rec, "refs")]
+    assert len(groups) > 100 and {int(g.kind) for g in groups} == {GroupKind.PSEUDO_CONVEX, GroupKind.PSEUDO_CONCAVE}
+    alone = [codec.decode_group(g.planes, g, g.index, error) for g in groups]
+    batched = codec.decode_groups([(g.planes, g, g.index) for g in groups], error)
+    for a, b in zip(alone, batched):
+        for field in ("vertices", "triangles", "inc_vertex", "inc_ref", "triangle_ref"):
+            assert np.array_equal(getattr(a, field), getattr(b, field))
