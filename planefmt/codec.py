@@ -95,6 +95,14 @@ _RETRY_PIECES = DEFAULT_MAX_PIECES
 _MERGE = 1e-3
 _SPLIT = 0.1
 
+#: A predicted vertex step larger than this many times its planes' offset from it is not trusted
+#: (:meth:`_Incidences.moved`).
+_STEP_LIMIT = 1e3
+
+#: An incidence whose vertex is farther than this fraction of the largest |h| from its plane (in
+#: the exact decoding) is not used to predict where the vertex goes.
+_ON_PLANE = 1e-7
+
 #: Part groups a reader holds before decoding them together (:func:`decode_groups`).
 _DECODE_BATCH = 4096
 
@@ -568,9 +576,19 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
         plane_colours[mapped[mapped >= 0]] = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[on][mapped >= 0]
     return _Object(vertices=poly.vertices, faces=poly.faces, triplets=to_triplets(omega[order], h[order]),
                    groups=tuple(groups), world=world, simplified=simplified, fit=poly.max_distance,
-                   mended=mended, closed=closed,
+                   mended=mended, closed=closed or _mended_solid(poly, groups),
                    volume=signed_volume(poly.vertices, poly.faces), euler=euler_characteristic(poly.faces),
                    area=_area(poly.vertices, poly.faces), plane_colours=plane_colours)
+
+
+def _mended_solid(poly: Polygons, groups: Sequence[GroupSpec]) -> bool:
+    """Whether a mended mesh came out closed and every body of it a solid: its decoding is then held
+    to a closed source's structure (closed, Euler characteristic, volume), whose volume test lets
+    a lossy tolerance move the surface, rather than to an open one's area (octagonal_pocket.stl
+    fell back to float64 planes at every tolerance: quantized cells changed its area by more than
+    1e-6)."""
+    return all(int(g.kind) in (GroupKind.CONVEX, GroupKind.CELLS, GroupKind.BSP) for g in groups) and \
+        is_closed_manifold(poly.faces, len(poly.vertices))
 
 
 def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
@@ -836,13 +854,13 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
 
     incidences = [_Incidences.of(d, o) for d, o in zip(base, objects)]
 
-    def moved(q: Quantization) -> list[np.ndarray]:
+    def moved(q: Quantization) -> list[tuple[np.ndarray, float]]:
         rt = quantize.roundtrip(table, Coding.QUANTIZED, q)
         return [inc.moved(rt[a:b]) for inc, (a, b) in zip(incidences, spans)]
 
     admitted = [i for i, q in enumerate(widths)
-                if max(e + s * _peak(np.linalg.norm(m - inc.vertices, axis=1))
-                       for e, s, m, inc in zip(own, scale, moved(q), incidences)) <= room]
+                if max(e + s * max(_peak(np.linalg.norm(m - inc.vertices, axis=1)), floor)
+                       for e, s, (m, floor), inc in zip(own, scale, moved(q), incidences)) <= room]
     # Where nearly parallel planes meet, a vertex slides far along the surface for a small turn of
     # the planes; its distance from the surface is what the error sees (plate_holes.STL at 2e-5:
     # 6.7e-4 of the diagonal moved, 2.5e-5 off the surface, 17 bits). Narrower widths than the
@@ -850,7 +868,8 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
     indexes = None
     for i in range(min(admitted, default=len(widths)) - 1, -1, -1):
         indexes = indexes or [TriangleIndex(o.vertices, o.faces) for o in objects]
-        if max(e + s * _peak(ix.query(m)[0]) for e, s, m, ix in zip(own, scale, moved(widths[i]), indexes)) > room:
+        if max(e + s * max(_peak(ix.query(m)[0]), floor)
+               for e, s, (m, floor), ix in zip(own, scale, moved(widths[i]), indexes)) > room:
             break
         admitted.append(i)
     quantized = [widths[i] for i in sorted(set(admitted))]
@@ -912,19 +931,37 @@ class _Incidences:
 
     @staticmethod
     def of(decoded: list[DecodedGroup], obj: _Object) -> _Incidences:
+        """From ``decoded``, the object's groups decoded from its exact planes. Incidences whose
+        vertex is off its plane there (welded across a crack: octagonal_pocket.stl has 6 of 6,236,
+        up to 0.27 of the diagonal off) would pull the vertex away; they are left out."""
         # One array for all groups: patch meshes have tens of thousands (bun_zipper.ply).
         offsets = np.cumsum([0] + [len(d.vertices) for d in decoded])
         empty = np.zeros(0, dtype=np.int64)
-        return _Incidences(
-            vertices=np.concatenate([d.vertices for d in decoded]) if decoded else np.zeros((0, 3)),
-            inc_vertex=np.concatenate([d.inc_vertex + k for d, k in zip(decoded, offsets)] or [empty]),
-            inc_plane=np.concatenate([np.asarray(g.refs)[d.inc_ref] for d, g in zip(decoded, obj.groups)]
-                                     or [empty]))
+        vertices = np.concatenate([d.vertices for d in decoded]) if decoded else np.zeros((0, 3))
+        inc_vertex = np.concatenate([d.inc_vertex + k for d, k in zip(decoded, offsets)] or [empty])
+        inc_plane = np.concatenate([np.asarray(g.refs)[d.inc_ref] for d, g in zip(decoded, obj.groups)] or [empty])
+        omega, h = from_triplets(obj.triplets)
+        gap = np.abs(np.einsum("ij,ij->i", omega[inc_plane], vertices[inc_vertex]) - h[inc_plane])
+        on = gap <= _ON_PLANE * float(np.abs(h).max(initial=1.0))
+        return _Incidences(vertices=vertices, inc_vertex=inc_vertex[on], inc_plane=inc_plane[on])
 
-    def moved(self, triplets: np.ndarray) -> np.ndarray:
-        """The vertices as the planes ``triplets`` would put them (model units)."""
+    def moved(self, triplets: np.ndarray) -> tuple[np.ndarray, float]:
+        """The vertices as the planes ``triplets`` would put them (model units), and the largest
+        offset of those planes from a vertex whose step is not to be trusted.
+
+        A vertex of nearly dependent planes can get a step thousands of times what its planes moved
+        (octagonal_pocket.stl: 0.38 of the diagonal for planes moved 1e-6 at it, at every width):
+        such a vertex keeps its place and counts with its planes' offset instead.
+        """
         omega, h = from_triplets(triplets)
-        return resolve_vertices(self.vertices, self.inc_vertex, self.inc_plane, omega, h)
+        out = resolve_vertices(self.vertices, self.inc_vertex, self.inc_plane, omega, h)
+        gap = np.abs(np.einsum("ij,ij->i", omega[self.inc_plane], self.vertices[self.inc_vertex])
+                     - h[self.inc_plane])
+        offset = np.zeros(len(out))
+        np.maximum.at(offset, self.inc_vertex, gap)
+        wild = np.linalg.norm(out - self.vertices, axis=1) > _STEP_LIMIT * offset
+        out[wild] = self.vertices[wild]
+        return out, _peak(offset[wild])
 
 
 def _verify(mesh: Mesh, obj: _Object, target: float, pieces: int) -> tuple[float, float]:
