@@ -93,10 +93,6 @@ def roundtrip(triplets: np.ndarray, coding: Coding, q: Quantization | None = Non
     return decode_payload(encode_payload(triplets, coding, q), len(triplets), coding, q)
 
 
-#: Largest varint of a predicted stream: codes are below 2^32, their zigzag differences below 2^33.
-MAX_PREDICTED = PREDICTED_LIMIT
-
-
 def payload_size(count: int, coding: Coding, q: Quantization | None) -> int | None:
     """Exact byte size of the uncompressed triplet data of ``count`` planes; None for the predicted
     coding, whose size depends on the planes (3 to 15 bytes a plane)."""
@@ -200,7 +196,8 @@ def _unpredict(data: bytes, count: int) -> np.ndarray:
     if used != len(raw):
         raise FormatError(f"predicted triplet data is {len(raw)} bytes, its {3 * count} varints take {used}",
                           code="SIZE_MISMATCH")
-    if count and values.max() >= MAX_PREDICTED:
+    # Codes are below 2^32, their zigzag differences below 2^33 (PREDICTED_LIMIT).
+    if count and values.max() >= PREDICTED_LIMIT:
         raise FormatError("a predicted triplet varint is 2^33 or more", code="BAD_PAYLOAD")
     v = values.astype(np.int64).reshape(3, count)
     codes = np.empty((count, 3), dtype=np.int64)

@@ -19,7 +19,6 @@ from .errors import FormatError, LimitError, PlnError, VersionError
 from .model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, Coding, Colours, GroupKind, Header,
                     ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
 
-VERSION = (1, 0)
 #: Major versions read, each with the newest minor version this reader knows.
 VERSIONS = {1: 0, 2: 0}
 #: Triplet codings each major version allows (spec §5; 2.0 §7.4).

@@ -127,7 +127,6 @@ VARINT_MAX_BYTES = 10
 
 # spec 2.0 §7.4 Predicted plane data (coding 3): three streams of `count` varints (nu, phi, h),
 # each below 2^33, taking 3 to 15 bytes a plane
-CODING_PREDICTED = 3
 PREDICTED_LIMIT = 2**33
 PREDICTED_BYTES = (3, 15)
 
