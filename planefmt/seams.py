@@ -77,7 +77,7 @@ class Planes:
 
 def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes: Planes,
            plane: np.ndarray, edge_plane: np.ndarray, tol: float,
-           scale: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+           scale: float, carried: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One triangle mesh from polygons ``corners[offsets[i]:offsets[i+1]]`` over ``points``.
 
     Polygon ``i`` lies on plane ``plane[i]`` of ``planes``; ``edge_plane``
@@ -88,7 +88,9 @@ def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes:
     fixed welding distance either misses copies of one vertex or merges
     distinct ones. Two corners are one vertex when closer than ``tol`` or
     than the larger of their errors; a vertex splits an edge (a T-junction)
-    when it lies as close to the segment, strictly between its ends. Returns
+    when it lies as close to the segment, strictly between its ends; with
+    ``carried``, or within the errors of the segment's ends (a welded end
+    moves the whole edge). Returns
     ``(vertices (V, 3), triangles (T, 3), polygon (T,))``, ``polygon`` the
     input polygon of each triangle. Polygons that collapse below three
     distinct vertices are dropped.
@@ -137,7 +139,7 @@ def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes:
     nxt = np.arange(len(ring)) + 1
     ends = start[1:][size > 0] - 1
     nxt[ends] = start[:-1][size > 0]
-    edge, ins, t = _on_edges(vertices, verr, ring, ring[nxt], tol)
+    edge, ins, t = _on_edges(vertices, verr, ring, ring[nxt], tol, carried)
     # Rebuild each ring with the inserted vertices, in order along their edge.
     key = np.concatenate([np.arange(len(ring), dtype=np.float64), edge + t])
     seq = np.concatenate([ring, ins])
@@ -149,11 +151,12 @@ def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes:
 
 
 def _on_edges(vertices: np.ndarray, verr: np.ndarray, a: np.ndarray, b: np.ndarray,
-              tol: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              tol: float, carried: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Vertices strictly inside edges ``a -> b``: ``(edge, vertex, t)`` with ``t`` in (0, 1).
 
     A vertex is on an edge when within ``tol``, or its rounding error
-    ``verr``, of the segment.
+    ``verr``, of the segment; with ``carried``, also within its own error
+    plus the ends' (interpolated along the edge).
     """
     if len(a) == 0:
         empty = np.empty(0, dtype=np.int64)
@@ -173,7 +176,11 @@ def _on_edges(vertices: np.ndarray, verr: np.ndarray, a: np.ndarray, b: np.ndarr
     t = np.einsum("ij,ij->i", r, d) / np.where(length2 > 0, length2, 1.0)
     dist = np.linalg.norm(r - t[:, None] * d, axis=1)
     length = np.sqrt(length2)
-    near = dist <= np.maximum(tol, verr[cand])
+    reach = verr[cand]
+    if carried:
+        u = np.clip(t, 0.0, 1.0)
+        reach = reach + (1.0 - u) * verr[a[edge]] + u * verr[b[edge]]
+    near = dist <= np.maximum(tol, reach)
     inside = near & (t * length > tol) & ((1.0 - t) * length > tol)
     return edge[inside], cand[inside], t[inside]
 
