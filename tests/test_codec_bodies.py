@@ -3,6 +3,7 @@ each held to the tolerance and to the source's structure (closed, volume, Euler 
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -201,3 +202,26 @@ def test_patch_groups_decode_the_same_batched_as_alone():
     for a, b in zip(alone, batched):
         for field in ("vertices", "triangles", "inc_vertex", "inc_ref", "triangle_ref"):
             assert np.array_equal(getattr(a, field), getattr(b, field))
+
+
+def test_float_planes_uncertified_within_the_budget_are_verified_again_with_a_larger_one(monkeypatch):
+    """A surface whose bound needs 3 million pieces to certify (ADIS16480.STL at 1e-6 needs 2.9
+    million: its source's sliver triangles run along decoded outlines 1e-9 inside their own): every
+    verification with less reports the bound uncertified, the lower bound far under the tolerance.
+    The float64 planes get ``_FINAL_PIECES`` and pass; without that second budget the encode fails."""
+    v, f = shapes.ring()
+    real = codec._verify
+    asked = []
+
+    def needs_3m(mesh, obj, target, pieces):
+        asked.append(pieces)
+        return real(mesh, obj, target, pieces) if pieces >= 3_000_000 else (math.inf, 0.0)
+
+    monkeypatch.setattr(codec, "_verify", needs_3m)
+    enc = codec.encode_mesh(v, f, tolerance=TOL)
+    assert enc.coding == codec.Coding.FLOAT64 and 0 <= enc.error_bound <= TOL
+    assert asked[-2:] == [codec.DEFAULT_MAX_PIECES, codec._FINAL_PIECES]
+    monkeypatch.setattr(codec, "_FINAL_PIECES", 2_000_000)
+    with pytest.raises(GeometryError) as err:
+        codec.encode_mesh(v, f, tolerance=TOL)
+    assert err.value.code == "TOLERANCE_NOT_MET"
