@@ -717,18 +717,25 @@ def decode_patch_groups(omega: np.ndarray, h: np.ndarray, sizes: list[int], face
     tri_owner = owner[row]
     inc_owner = owner[inc_row]
     t_order = np.argsort(tri_owner, kind="stable")
-    i_order = np.argsort(inc_owner, kind="stable")
-    t_split = np.searchsorted(tri_owner[t_order], np.arange(count + 1))
-    i_split = np.searchsorted(inc_owner[i_order], np.arange(count + 1))
+    tris, row, tri_owner = tris[t_order], row[t_order], tri_owner[t_order]
+    # Each group's vertices, numbered in its own order: one sort over (group, vertex) keys for all.
+    nv = np.int64(len(poly.vertices))
+    used, local = np.unique(tri_owner[:, None] * nv + tris, return_inverse=True)
+    v_split = np.searchsorted(used // nv, np.arange(count + 1))
+    local = local.reshape(-1, 3) - v_split[tri_owner][:, None]
+    # Incidences of vertices of a group's triangles, as sorted (vertex, reference) pairs per group.
+    key = inc_owner * nv + inc_v
+    pos = np.minimum(np.searchsorted(used, key), max(len(used) - 1, 0))
+    on = used[pos] == key if len(used) else np.zeros(len(key), dtype=bool)
+    refs = np.int64(int(np.max(sizes, initial=0)) + 1)
+    pairs = np.unique(pos[on] * refs + (inc_row[on] - start[inc_owner[on]]))
+    p_split = np.searchsorted(pairs // refs, v_split)
+    vertex_of = used % nv
+    t_split = np.searchsorted(tri_owner, np.arange(count + 1))
     out = []
     for g in range(count):
-        t = tris[t_order[t_split[g]:t_split[g + 1]]]
-        t_ref = row[t_order[t_split[g]:t_split[g + 1]]] - start[g]
-        used, local = np.unique(t, return_inverse=True)
-        iv = inc_v[i_order[i_split[g]:i_split[g + 1]]]
-        ir = inc_row[i_order[i_split[g]:i_split[g + 1]]] - start[g]
-        pos = np.searchsorted(used, iv)
-        on = (pos < len(used)) & (used[np.minimum(pos, len(used) - 1)] == iv)
-        pairs = np.unique(np.column_stack([pos[on], ir[on]]), axis=0)
-        out.append((poly.vertices[used], local.reshape(-1, 3), pairs[:, 0], pairs[:, 1], t_ref))
+        a, b = v_split[g], v_split[g + 1]
+        pg = pairs[p_split[g]:p_split[g + 1]]
+        out.append((poly.vertices[vertex_of[a:b]], local[t_split[g]:t_split[g + 1]], pg // refs - a, pg % refs,
+                    row[t_split[g]:t_split[g + 1]] - start[g]))
     return out
