@@ -43,7 +43,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Iterable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import BinaryIO, Protocol
 
 import numpy as np
@@ -487,6 +487,7 @@ class _Object:
     euler: int
     area: float  # model units squared, local coordinates
     plane_colours: np.ndarray | None  # (planes, 4) uint8 RGBA: a source face's colour on each plane
+    name: str = ""  # the scene node's, for messages
 
 
 def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1e-6,
@@ -618,11 +619,23 @@ def structure_kept(mesh: Mesh, obj: _Object, distance: float = 0.0) -> bool:
     band of that half-width around the source, about ``2 * area * distance``; the volume test
     allows that much where it is more than the relative one.
     """
+    return structure_problem(mesh, obj, distance) is None
+
+
+def structure_problem(mesh: Mesh, obj: _Object, distance: float = 0.0) -> str | None:
+    """How a decoding fails :func:`structure_kept`, in words; None if it keeps the structure."""
     if obj.closed:
+        if not is_closed_manifold(mesh.faces, len(mesh.vertices)):
+            sides = np.sort(np.column_stack([mesh.faces.reshape(-1), mesh.faces[:, [1, 2, 0]].reshape(-1)]), axis=1)
+            _, count = np.unique(sides, axis=0, return_counts=True)
+            return f"a closed source decodes open ({int((count != 2).sum())} edges not on exactly two triangles)"
+        if euler_characteristic(mesh.faces) != obj.euler:
+            return f"Euler characteristic {euler_characteristic(mesh.faces)}, the source's {obj.euler}"
         allowed = max(STRUCTURE_TOLERANCE * abs(obj.volume), 2.0 * obj.area * distance)
-        return (is_closed_manifold(mesh.faces, len(mesh.vertices)) and euler_characteristic(mesh.faces) == obj.euler
-                and abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume) <= allowed)
-    return abs(_area(mesh.vertices, mesh.faces) - obj.area) <= STRUCTURE_TOLERANCE * obj.area
+        off = abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume)
+        return None if off <= allowed else f"volume off by {off / abs(obj.volume):.2g} (relative)"
+    off = abs(_area(mesh.vertices, mesh.faces) - obj.area)
+    return None if off <= STRUCTURE_TOLERANCE * obj.area else f"area off by {off / obj.area:.2g} (relative)"
 
 
 def _bodies(poly: Polygons) -> np.ndarray:
@@ -813,6 +826,11 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
 
     # Lower bounds (fractions of the bound) of quantized candidates whose verification ran out of pieces.
     undecided: dict[int, float] = {}
+    # Why the float64 planes, the finest coding, failed: the reason given when nothing passes.
+    why: list[str] = []
+
+    def named(k: int) -> str:
+        return f"object {k}" + (f" ({objects[k].name!r})" if objects[k].name else "")
 
     def attempt(cod: Coding, q: Quantization | None, pieces: int | None = None, key: int = -1) -> _Choice | None:
         """The choice of this coding if its decoding keeps the structure and verifies; None if not."""
@@ -828,9 +846,14 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                 if forced:
                     raise
                 return None
-        if not forced and not simplified and not all(structure_kept(m, o, band * diag_src / sc)
-                                                     for m, o, sc in zip(meshes, objects, scale)):
-            return None
+        if not forced and not simplified:
+            problems = [(k, structure_problem(m, o, band * diag_src / sc))
+                        for k, (m, o, sc) in enumerate(zip(meshes, objects, scale))]
+            problems = [(k, p) for k, p in problems if p is not None]
+            if problems:
+                if cod == Coding.FLOAT64:
+                    why[:] = [f"{named(k)}: {p}" for k, p in problems[:1]]
+                return None
         bound, world = limit(meshes)
         if forced:
             errors = [_measure(m, o, bound) for m, o in zip(meshes, objects)]
@@ -843,6 +866,12 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
             if max(errors) > bound:
                 if all(c[1] <= bound for c in checks):
                     undecided[key] = max(c[1] for c in checks) / bound
+                if cod == Coding.FLOAT64:
+                    k = max(range(len(checks)), key=lambda i: checks[i][1])
+                    far = checks[k][1] > bound
+                    why[:] = [f"{named(k)}: " + (f"decodes {checks[k][1] / diag_src:.2g} of the diagonal from its "
+                                                 f"source" if far else
+                                                 f"its distance is not certified within {pieces:,} pieces")]
                 return None
         diagonal = _diagonal(world)
         error_bound = max(errors) / diagonal
@@ -910,7 +939,8 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                 return found
     raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g} (two-sided Hausdorff distance; "
                         f"closed sources must also decode closed, with their volume and Euler characteristic, "
-                        f"open ones with their area, within {STRUCTURE_TOLERANCE:g})", code="TOLERANCE_NOT_MET")
+                        f"open ones with their area, within {STRUCTURE_TOLERANCE:g})"
+                        + (f"; with float64 planes {why[0]}" if why else ""), code="TOLERANCE_NOT_MET")
 
 
 def _fit_error(relative: float, tolerance: float) -> GeometryError:
@@ -1038,7 +1068,7 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
                              tau, scene.nodes[i].mesh.face_colours, diagonal)) for i in meshes]
     if not prepared:
         raise GeometryError("the scene has no mesh to encode")
-    objects = [o for _, o in prepared]
+    objects = [replace(o, name=scene.nodes[i].name) for i, o in prepared]
     choice = _choose(objects, tolerance, coding, bits)
     stored = Coding.PREDICTED if compact and choice.coding.quantized else choice.coding
     header = Header(version=(2, 0) if compact else (1, 0), lossy=choice.lossy, coding=stored,

@@ -177,7 +177,19 @@ def test_a_lossy_tolerance_lets_the_volume_move_with_the_surface():
     diag = float(np.linalg.norm(np.ptp(v, axis=0)))
     assert 1e-6 * abs(obj.volume) < change <= 2 * obj.area * 1e-4 * diag
     assert not codec.structure_kept(enc.mesh, obj)
+    assert codec.structure_problem(enc.mesh, obj) == f"volume off by {change / abs(obj.volume):.2g} (relative)"
     assert codec.structure_kept(enc.mesh, obj, 1e-4 * diag)
+
+
+def test_a_closed_source_that_decodes_open_is_refused_with_the_reason():
+    """The message of TOLERANCE_NOT_MET says what the float64 planes, the finest coding, failed: here
+    a closed cube whose decoding lost one triangle (three edges left on one triangle)."""
+    v, f = shapes.cube()
+    obj = codec._prepare(v, f, np.eye(4), TOL, None, None)
+    enc = codec.encode_mesh(v, f, tolerance=TOL)
+    holed = codec.Mesh(enc.mesh.vertices, enc.mesh.faces[1:])
+    assert codec.structure_problem(holed, obj) == "a closed source decodes open (3 edges not on exactly two triangles)"
+    assert codec.structure_problem(enc.mesh, obj) is None
 
 
 @pytest.mark.skipif(not Path("/work/shared/corpus/open/suzanne.ply").is_file(), reason="shared corpus not available")
@@ -225,3 +237,5 @@ def test_float_planes_uncertified_within_the_budget_are_verified_again_with_a_la
     with pytest.raises(GeometryError) as err:
         codec.encode_mesh(v, f, tolerance=TOL)
     assert err.value.code == "TOLERANCE_NOT_MET"
+    assert str(err.value).endswith("with float64 planes object 0: its distance is not certified within "
+                                   "2,000,000 pieces")
