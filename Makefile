@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    := out
 
-.PHONY: setup demo test bench benchmarks clean
+.PHONY: setup demo test bench benchmarks roundtrip clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -34,6 +34,10 @@ bench: $(STAMP)
 benchmarks: $(STAMP)
 	$(BIN)/python -m pip install -q -e '.[bench]'
 	$(BIN)/python bench/compare.py
+
+# every corpus file to .pln and back to OBJ, PLY, GLB, glTF, USDA, USDC, USDZ, checked (about an hour)
+roundtrip: $(STAMP)
+	$(BIN)/python bench/corpus_roundtrip.py
 
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache .hypothesis

@@ -1,0 +1,138 @@
+"""Every corpus file to .pln and back to each output format, checked against its source (issue 5).
+
+For each file of ``../shared/corpus`` (or the paths given):
+
+1. ``pln convert SOURCE x.pln`` (default tolerance 1e-6, the CLI as users run
+   it, in a subprocess with ``--timeout`` seconds);
+2. ``pln convert x.pln x.EXT`` for OBJ, PLY, GLB, glTF, USDA, USDC and USDZ;
+3. each output reloaded through the project's readers (trimesh for OBJ, PLY
+   and glTF, pxr for USD) and compared with the source. The .pln file's own
+   decoding (flattened) is measured against the source once: the certified
+   two-sided Hausdorff distance must be at most the error bound recorded in
+   its header. An output with the decoding's triangles and vertex order is
+   then within that bound plus its largest vertex displacement from the
+   decoding (corresponding vertices at most d apart put every point of the
+   surface within d), which must be at most float32 rounding (1e-7 of the
+   largest coordinate); any other output is measured against the source
+   directly. For glTF and USD the names of the nodes that carry meshes must
+   be the .pln file's, in order.
+
+A row per file: the .pln bytes and encode seconds, then ``ok`` or what
+failed per format. Exit 1 if anything failed.
+
+Usage::
+
+    python bench/corpus_roundtrip.py [--timeout 1200] [FILE ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import glob
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import warnings
+
+import numpy as np
+
+CORPUS = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "corpus")
+FORMATS = ("obj", "ply", "glb", "gltf", "usda", "usdc", "usdz")
+SCENES = ("glb", "gltf", "usda", "usdc", "usdz")
+#: Rounding of float32 outputs, relative to the largest coordinate.
+FLOAT32_ROUNDING = 1e-7
+PLN = [sys.executable, "-m", "planefmt_converters.cli"]
+
+
+def corpus_files() -> list[str]:
+    return sorted(f for f in glob.glob(os.path.join(CORPUS, "*", "*")) if not f.endswith((".md", ".bin")))
+
+
+def _convert(src: str, dst: str, timeout: float) -> str | None:
+    """Run ``pln convert``; the last stderr line if it failed."""
+    try:
+        run = subprocess.run(PLN + ["convert", src, dst], capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return f"timeout after {timeout:g} s"
+    if run.returncode != 0:
+        return (run.stderr.strip().splitlines() or [f"exit {run.returncode}"])[-1][:160]
+    return None
+
+
+def check(path: str, timeout: float, work: str) -> tuple[str, list[str]]:
+    """The row of one corpus file and its failures."""
+    import planefmt
+    from planefmt.hausdorff import hausdorff
+    from planefmt_converters import registry
+    from planefmt_converters.assemble import flatten
+
+    name = os.path.relpath(path, CORPUS)
+    pln = os.path.join(work, os.path.basename(path) + ".pln")
+    t = time.perf_counter()
+    failed = _convert(path, pln, timeout)
+    seconds = time.perf_counter() - t
+    if failed:
+        return f"| {name} | – | {seconds:.0f} | " + " | ".join("–" for _ in FORMATS) + f" | {failed} |", [failed]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        source = flatten(registry.read(path)[0])
+        decoded, _ = registry.read(pln)
+    with planefmt.open(pln) as f:
+        bound = f.header.error_bound
+    names = [n.name for n in decoded.nodes if n.mesh is not None]
+    dec = flatten(decoded)
+    v, faces = source.vertices, source.faces
+    diag = float(np.linalg.norm(np.ptp(v[np.unique(faces)], axis=0)))
+    rounding = FLOAT32_ROUNDING * float(np.abs(v).max())
+    r = hausdorff(dec.vertices, dec.faces, v, faces, target=bound * diag)
+    if not (r.certified and r.upper <= bound * diag):
+        why = f"decoding {r.lower / diag:.2g}..{r.upper / diag:.2g} from the source, header bound {bound:.2g}"
+        return f"| {name} | {os.path.getsize(pln):,} | {seconds:.0f} | " + " | ".join("–" for _ in FORMATS) + \
+            f" | {why} |", [why]
+    cells, problems = [], []
+    for ext in FORMATS:
+        out = os.path.join(work, os.path.basename(path) + "." + ext)
+        why = _convert(pln, out, timeout)
+        if why is None:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                again, _ = registry.read(out)
+            back = flatten(again)
+            if back.vertices.shape == dec.vertices.shape and np.array_equal(back.faces, dec.faces):
+                moved = float(np.linalg.norm(back.vertices - dec.vertices, axis=1).max(initial=0.0))
+                if moved > rounding:
+                    why = f"vertices moved {moved / diag:.2g} of the diagonal from the decoding"
+            else:
+                allowed = bound * diag + rounding
+                r = hausdorff(back.vertices, back.faces, v, faces, target=allowed)
+                if not (r.certified and r.upper <= allowed):
+                    why = f"distance {r.lower / diag:.2g}..{r.upper / diag:.2g} over {allowed / diag:.2g}"
+            if why is None and ext in SCENES and [n.name for n in again.nodes if n.mesh is not None] != names:
+                why = "node names differ"
+        cells.append("ok" if why is None else f"FAIL: {why}")
+        if why is not None:
+            problems.append(f"{ext}: {why}")
+    return (f"| {name} | {os.path.getsize(pln):,} | {seconds:.0f} | " + " | ".join(cells) + " | |"), problems
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("files", nargs="*")
+    ap.add_argument("--timeout", type=float, default=1200.0, help="seconds per conversion (default 1200)")
+    args = ap.parse_args(argv)
+    print("| file | .pln B | encode s | " + " | ".join(FORMATS) + " | .pln failure |")
+    print("|---|---:|---:|" + "---|" * len(FORMATS) + "---|")
+    failures = 0
+    with tempfile.TemporaryDirectory() as work:
+        for path in args.files or corpus_files():
+            row, problems = check(path, args.timeout, work)
+            failures += bool(problems)
+            print(row, flush=True)
+    print(f"\n{failures} of {len(args.files or corpus_files())} files failed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
