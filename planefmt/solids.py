@@ -228,10 +228,10 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
     pts, count, labels, plane = pts[keep], count[keep], labels[keep], plane[keep]
     slot = np.arange(pts.shape[1])[None, :] < count[:, None]
     offsets = np.concatenate([[0], np.cumsum(count)])
-    # Edges carried by their welded ends only after the plain welds failed: on smooth surfaces
-    # (ballA.off) the ends' large error estimates insert vertices of neighbouring edges; where
-    # nearly coincident planes cut a face (pins.glb "sides": two planes 6e-4 degrees apart) they
-    # move edges 5e-5 off the vertices lying on them.
+    # Edges carried by their welded ends only after the plain welds failed, so that every surface
+    # that closes without it decodes as it did: where nearly coincident planes cut a face (pins.glb
+    # "sides": two planes 6e-4 degrees apart) welded ends move edges 5e-5 off the vertices lying
+    # on them.
     plain = None
     for carried in (False, True):
         first = None
