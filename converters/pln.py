@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import os
+import warnings
 
+from planefmt.errors import PlnWarning
 from planefmt.model import Scene
 
 SIGNATURE_TAIL = b"PLN"
@@ -23,10 +25,19 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
           delta: float | None = None, tau: float | None = None, compress: bool = False,
-          compact: bool = False) -> list[str]:
-    """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane."""
+          compact: bool = False, watertight: bool = True) -> list[str]:
+    """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane.
+
+    Returns what the encoder gave up (its :class:`PlnWarning` lines): with
+    ``watertight=False``, the closedness of solids that planes cannot close.
+    """
     from planefmt import codec
 
-    codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta, tau=tau,
-                       compress=compress, compact=compact)
-    return []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PlnWarning)
+        codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta, tau=tau,
+                           compress=compress, compact=compact, watertight=watertight)
+    for w in caught:
+        if not issubclass(w.category, PlnWarning):
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+    return [str(w.message) for w in caught if issubclass(w.category, PlnWarning)]

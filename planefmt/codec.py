@@ -42,6 +42,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, replace
 from typing import BinaryIO, Protocol
@@ -52,7 +53,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError
 
 from . import quantize
-from .errors import CODES, FormatError, GeometryError, PlnError
+from .errors import CODES, FormatError, GeometryError, PlnError, PlnWarning
 from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
 from .model import (BSP_MAX_SPLIT, Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup,
@@ -492,7 +493,7 @@ class _Object:
 
 def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1e-6,
                 coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
-                delta: float | None = None, tau: float | None = None) -> Encoded:
+                delta: float | None = None, tau: float | None = None, watertight: bool = True) -> Encoded:
     """Encode a triangle mesh (model units, counter-clockwise from outside) as planes.
 
     ``tolerance``: the two-sided Hausdorff distance allowed between decoded
@@ -504,13 +505,18 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     then ``tolerance`` bounds the error the *coding* adds to the simplified
     planes' own, and the total is measured and recorded.
 
+    ``watertight=False`` lets a closed source that no coding decodes closed
+    (a smooth dense solid: busted.STL) be stored as an open surface, held to
+    an open one's checks (distance and area); the result is then lossy and a
+    :class:`PlnWarning` says so. By default such a source fails.
+
     Raises ``GeometryError``: ``DEGENERATE_GEOMETRY`` for malformed input,
     ``TOLERANCE_NOT_MET`` when no coding meets the tolerance and keeps the
     source's structure.
     """
     forced = coding is not None or bits is not None
     obj = _prepare(vertices, faces, np.eye(4), tolerance, delta, tau, diagonal=None if forced else 0.0)
-    choice = _choose([obj], tolerance, coding, bits)
+    choice = _choose([obj], tolerance, coding, bits, watertight)
     return Encoded(triplets=obj.triplets, groups=obj.groups, coding=choice.coding,
                    quantization=choice.quantization, bbox=choice.bbox, tolerance=float(tolerance),
                    error_bound=choice.error_bound, lossy=choice.lossy, mesh=choice.meshes[0],
@@ -791,8 +797,12 @@ def _candidates(coding: Coding | None, bits: int | tuple[int, int, int] | None, 
 
 
 def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
-            bits: int | tuple[int, int, int] | None) -> _Choice:
-    """Pick the cheapest coding whose decoded surfaces meet the tolerance; verify it."""
+            bits: int | tuple[int, int, int] | None, watertight: bool = True) -> _Choice:
+    """Pick the cheapest coding whose decoded surfaces meet the tolerance; verify it.
+
+    Without ``watertight``, closed objects whose float64 planes decode open
+    are held to an open surface's checks when nothing else passes.
+    """
     forced = coding is not None or bits is not None
     simplified = any(o.simplified for o in objects)
     offsets = np.cumsum([0] + [len(o.triplets) for o in objects])
@@ -937,6 +947,18 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                 found = attempt(cod, q, pieces=_FINAL_PIECES)
             if found is not None:
                 return found
+    if not watertight:
+        # Only when the solid cannot be had: coarser widths that open a solid that finer ones keep
+        # closed would otherwise win.
+        opened = [k for k, (m, o) in enumerate(zip(base_meshes, objects))
+                  if o.closed and structure_problem(m, o) is not None]
+        if opened:
+            found = _choose([replace(o, closed=False) if k in opened else o for k, o in enumerate(objects)],
+                            tolerance, coding, bits)
+            for k in opened:
+                warnings.warn(f"{named(k)} is closed but no coding decodes it closed: stored as an open surface "
+                              f"(distance and area kept, not watertight), marked lossy", PlnWarning, stacklevel=3)
+            return replace(found, lossy=True)
     raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g} (two-sided Hausdorff distance; "
                         f"closed sources must also decode closed, with their volume and Euler characteristic, "
                         f"open ones with their area, within {STRUCTURE_TOLERANCE:g})"
@@ -1046,7 +1068,7 @@ def _measure(mesh: Mesh, obj: _Object, target: float) -> float:
 def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, tolerance: float = 1e-6,
                  coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
                  delta: float | None = None, tau: float | None = None, compress: bool = False,
-                 compact: bool = False) -> Header:
+                 compact: bool = False, watertight: bool = True) -> Header:
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
     One object per node, keeping name, parent and transform; each node's
@@ -1069,7 +1091,7 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     if not prepared:
         raise GeometryError("the scene has no mesh to encode")
     objects = [replace(o, name=scene.nodes[i].name) for i, o in prepared]
-    choice = _choose(objects, tolerance, coding, bits)
+    choice = _choose(objects, tolerance, coding, bits, watertight)
     stored = Coding.PREDICTED if compact and choice.coding.quantized else choice.coding
     header = Header(version=(2, 0) if compact else (1, 0), lossy=choice.lossy, coding=stored,
                     quantization=choice.quantization, units=scene.units, bbox=choice.bbox,

@@ -159,3 +159,7 @@ class ConversionError(PlnError):
     """A converter failed to read or write another mesh format."""
 
     default_code = "CONVERSION_FAILED"
+
+
+class PlnWarning(UserWarning):
+    """Something the encoder did that the caller allowed but may not expect (the call succeeded)."""

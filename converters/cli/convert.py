@@ -1,6 +1,6 @@
 """``pln convert``: between any two supported formats, .pln on either side.
 
-    pln convert IN OUT [--tolerance T] [--bits N] [--lossy --delta D --tau A]
+    pln convert IN OUT [--tolerance T] [--bits N] [--allow-open] [--lossy --delta D --tau A]
     pln convert A B C -d OUTDIR --to glb [--jobs N]
 
 ``-`` reads standard input (format detected from the content) or writes
@@ -45,6 +45,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--compact", action=argparse.BooleanOptionalAction, default=True,
                    help="write version 2.0 (spec/pln-2.md): predicted plane codes, varint group bodies; "
                         "the default (--no-compact: version 1.0, for readers of 1.x only)")
+    g.add_argument("--allow-open", action="store_true",
+                   help="store a closed mesh that planes cannot close as an open surface (distance and area "
+                        "kept, not watertight; marked lossy) instead of failing")
     g.add_argument("--lossy", action="store_true", help="allow the paper's lossy options below")
     g.add_argument("--delta", type=float, help="lossy: drop planes of faces under delta x total area")
     g.add_argument("--tau", type=float, help="lossy: merge neighbour planes whose normals differ < tau radians")
@@ -60,7 +63,8 @@ def _pln_options(args: argparse.Namespace) -> dict:
         raise _Usage("--delta and --tau change the geometry: add --lossy to allow it", code="CONVERSION_FAILED")
     from planefmt.model import Coding
 
-    opts = {"tolerance": args.tolerance, "compress": args.compress, "compact": args.compact}
+    opts = {"tolerance": args.tolerance, "compress": args.compress, "compact": args.compact,
+            "watertight": not args.allow_open}
     if args.bits is not None:
         opts["bits"] = args.bits
     if args.coding:
