@@ -3,7 +3,8 @@
 For each file of ``../shared/corpus`` (or the paths given):
 
 1. ``pln convert SOURCE x.pln`` (default tolerance 1e-6, the CLI as users run
-   it, in a subprocess with ``--timeout`` seconds);
+   it, in a subprocess with ``--timeout`` seconds; with ``--allow-open``, so
+   that closed meshes planes cannot close are stored as open surfaces);
 2. ``pln convert x.pln x.EXT`` for OBJ, PLY, GLB, glTF, USDA, USDC and USDZ;
 3. each output reloaded through the project's readers (trimesh for OBJ, PLY
    and glTF, pxr for USD) and compared with the source. The .pln file's own
@@ -23,7 +24,7 @@ failed per format. Exit 1 if anything failed.
 
 Usage::
 
-    python bench/corpus_roundtrip.py [--timeout 1200] [FILE ...]
+    python bench/corpus_roundtrip.py [--timeout 1200] [--allow-open] [FILE ...]
 """
 
 from __future__ import annotations
@@ -53,10 +54,11 @@ def corpus_files() -> list[str]:
     return sorted(f for f in glob.glob(os.path.join(CORPUS, "*", "*")) if not f.endswith((".md", ".bin")))
 
 
-def _convert(src: str, dst: str, timeout: float) -> str | None:
+def _convert(src: str, dst: str, timeout: float, options: tuple[str, ...] = ()) -> str | None:
     """Run ``pln convert``; the last stderr line if it failed."""
     try:
-        run = subprocess.run(PLN + ["convert", src, dst], capture_output=True, text=True, timeout=timeout)
+        run = subprocess.run(PLN + ["convert", *options, src, dst], capture_output=True, text=True,
+                             timeout=timeout)
     except subprocess.TimeoutExpired:
         return f"timeout after {timeout:g} s"
     if run.returncode != 0:
@@ -64,7 +66,7 @@ def _convert(src: str, dst: str, timeout: float) -> str | None:
     return None
 
 
-def check(path: str, timeout: float, work: str) -> tuple[str, list[str]]:
+def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tuple[str, list[str]]:
     """The row of one corpus file and its failures."""
     import planefmt
     from planefmt.hausdorff import hausdorff
@@ -74,7 +76,7 @@ def check(path: str, timeout: float, work: str) -> tuple[str, list[str]]:
     name = os.path.relpath(path, CORPUS)
     pln = os.path.join(work, os.path.basename(path) + ".pln")
     t = time.perf_counter()
-    failed = _convert(path, pln, timeout)
+    failed = _convert(path, pln, timeout, ("--allow-open",) if allow_open else ())
     seconds = time.perf_counter() - t
     if failed:
         return f"| {name} | – | {seconds:.0f} | " + " | ".join("–" for _ in FORMATS) + f" | {failed} |", [failed]
@@ -131,13 +133,14 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("files", nargs="*")
     ap.add_argument("--timeout", type=float, default=1200.0, help="seconds per conversion (default 1200)")
+    ap.add_argument("--allow-open", action="store_true", help="pass --allow-open to the conversion to .pln")
     args = ap.parse_args(argv)
     print("| file | .pln B | encode s | " + " | ".join(FORMATS) + " | .pln failure |")
     print("|---|---:|---:|" + "---|" * len(FORMATS) + "---|")
     failures = 0
     with tempfile.TemporaryDirectory() as work:
         for path in args.files or corpus_files():
-            row, problems = check(path, args.timeout, work)
+            row, problems = check(path, args.timeout, work, args.allow_open)
             failures += bool(problems)
             print(row, flush=True)
     print(f"\n{failures} of {len(args.files or corpus_files())} files failed")

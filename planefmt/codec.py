@@ -959,10 +959,14 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                 warnings.warn(f"{named(k)} is closed but no coding decodes it closed: stored as an open surface "
                               f"(distance and area kept, not watertight), marked lossy", PlnWarning, stacklevel=3)
             return replace(found, lossy=True)
+    hint = ""
+    if watertight and any(o.closed and not is_closed_manifold(m.faces, len(m.vertices))
+                          for m, o in zip(base_meshes, objects)):
+        hint = "; watertight=False (pln convert --allow-open) would store it as an open surface"
     raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g} (two-sided Hausdorff distance; "
                         f"closed sources must also decode closed, with their volume and Euler characteristic, "
                         f"open ones with their area, within {STRUCTURE_TOLERANCE:g})"
-                        + (f"; with float64 planes {why[0]}" if why else ""), code="TOLERANCE_NOT_MET")
+                        + (f"; with float64 planes {why[0]}" if why else "") + hint, code="TOLERANCE_NOT_MET")
 
 
 def _fit_error(relative: float, tolerance: float) -> GeometryError:

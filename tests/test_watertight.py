@@ -38,6 +38,7 @@ def test_a_closed_source_decoding_open_fails_by_default(no_solid):
         codec.encode_mesh(v, f, tolerance=TOL)
     assert err.value.code == "TOLERANCE_NOT_MET"
     assert "a closed source decodes open" in str(err.value)
+    assert "watertight=False (pln convert --allow-open) would store it as an open surface" in str(err.value)
 
 
 def test_allowed_open_it_is_stored_as_a_lossy_surface_within_the_tolerance(no_solid):
