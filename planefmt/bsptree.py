@@ -170,7 +170,7 @@ def piece_faces(tree: Tree, start: int, leaf: int, omega: np.ndarray, h: np.ndar
     try:
         poly = intersect(omega[plane] * sign[:, None], h[plane] * sign)
     except GeometryError:
-        return _clipped_piece(rows, len(path), omega, h, size, eps)
+        return _clipped_piece(rows, len(path), start, omega, h, size, eps)
     offs = poly.polygon_offsets
     size_f = np.diff(offs)
     ring = poly.polygon_vertices
@@ -208,9 +208,14 @@ def piece_faces(tree: Tree, start: int, leaf: int, omega: np.ndarray, h: np.ndar
     return _Batch(pts, lab, size_f[faces].astype(np.int64), src, z + 3, z + 1, z)
 
 
-def _clipped_piece(rows: list[tuple[int, int]], depth: int, omega: np.ndarray, h: np.ndarray,
+def _clipped_piece(rows: list[tuple[int, int]], depth: int, start: int, omega: np.ndarray, h: np.ndarray,
                    size: float, eps: float) -> _Batch:
-    """The faces of a convex piece by clipping a square on each of its planes by every other half-space."""
+    """The faces of a convex piece by clipping a square on each of its planes by every other half-space.
+
+    ``rows`` are the ``(plane, side)`` of the piece's ancestors (the first
+    ``depth``), then of its own nodes from ``start`` on; each face is tagged
+    with its node, as :func:`piece_faces` tags them.
+    """
     parts = []
     for k in range(depth, len(rows)):
         j = rows[k][0]
@@ -228,7 +233,7 @@ def _clipped_piece(rows: list[tuple[int, int]], depth: int, omega: np.ndarray, h
                 break
         if len(cnt):
             z = np.zeros(1, dtype=np.int64)
-            parts.append(_Batch(pts, lab, cnt, z + k - depth, z + 3, z + 1, z))
+            parts.append(_Batch(pts, lab, cnt, z + start + k - depth, z + 3, z + 1, z))
     return _concat(parts) if parts else _empty()
 
 

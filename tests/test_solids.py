@@ -207,3 +207,32 @@ def test_edges_cut_by_nearly_coincident_planes_are_carried_by_their_ends() -> No
     v, f = _corpus_node("gltf_scene/pins.glb", "sides#1:5:2:4:3")
     out = check_solid(v, f)
     assert out["kinds"] == ["solid"] and out["notes"] == ["exact planes"]
+
+
+def test_pieces_clipped_without_qhull_keep_their_planes(monkeypatch) -> None:
+    """Where Qhull cannot intersect a convex piece, its faces are clipped square by square; they lie
+    on the piece's own planes, and the triangles say so (busted.STL: such faces were tagged with the
+    planes of the tree's first nodes, 1.6 degrees off)."""
+    import planefmt.halfspace
+
+    v, f = shapes.ring()
+    enc = encode_groups(v, f, tolerance=TOL)
+    (group,) = [g for g in enc.groups if g.kind == GroupKind.BSP]
+    omega, h = from_triplets(to_triplets(enc.omega[group.refs], enc.h[group.refs]))
+    face = ~group.bounding
+    dv, dt, plane = decode_tree(omega, h, group.tree, face)
+
+    def no_qhull(*args, **kwargs):
+        raise GeometryError("stub: Qhull declines", code="DEGENERATE_GEOMETRY")
+
+    monkeypatch.setattr(planefmt.halfspace, "intersect", no_qhull)
+    cv, ct, cplane = decode_tree(omega, h, group.tree, face)
+    assert is_closed_manifold(ct, len(cv))
+    off = np.abs(np.einsum("ij,ij->i", omega[cplane], cv[ct].mean(axis=1)) - h[cplane])
+    assert off.max() <= 1e-9 * float(np.abs(h).max())
+    # The same surface as through Qhull, plane by plane.
+    area = np.linalg.norm(np.cross(dv[dt[:, 1]] - dv[dt[:, 0]], dv[dt[:, 2]] - dv[dt[:, 0]]), axis=1) / 2
+    carea = np.linalg.norm(np.cross(cv[ct[:, 1]] - cv[ct[:, 0]], cv[ct[:, 2]] - cv[ct[:, 0]]), axis=1) / 2
+    by_plane = np.bincount(plane, weights=area, minlength=len(h))
+    np.testing.assert_allclose(np.bincount(cplane, weights=carea, minlength=len(h)), by_plane,
+                               atol=1e-9 * by_plane.max())
