@@ -10,8 +10,10 @@ lying on it, and triangulates; both tests use the planes each point lies on
 the angles between its planes). Triangulation:
 a polygon that received no vertex is fanned from its first corner, one that
 did is fanned from its centroid (a convex polygon with points on its edges
-has no other fan free of zero-area triangles). Polygons are convex and
-counter-clockwise seen from outside; so are the triangles.
+has no other fan free of zero-area triangles); a ring that welding makes
+pass one vertex twice (two corners of a thin polygon joined) is fanned as
+its separate loops. Polygons are convex and counter-clockwise seen from
+outside; so are the triangles.
 """
 
 from __future__ import annotations
@@ -32,16 +34,19 @@ def weld(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
     return _merge(points, cKDTree(points).query_pairs(tol, output_type="ndarray"))
 
 
-def _merge(points: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Connected components of ``pairs`` over ``points``: ``(means (k, 3), label (n,))``."""
+def _merge(points: np.ndarray, pairs: np.ndarray, weight: np.ndarray | None = None
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Connected components of ``pairs`` over ``points``: ``(means (k, 3), label (n,))``, each mean
+    weighted by ``weight`` (n,) if given."""
     n = len(points)
     if len(pairs) == 0:
         return points.copy(), np.arange(n)
     g = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     label = connected_components(g, directed=False)[1].astype(np.int64)
     k = int(label.max()) + 1
-    count = np.bincount(label, minlength=k).astype(np.float64)
-    merged = np.column_stack([np.bincount(label, weights=points[:, i], minlength=k) for i in range(3)])
+    wt = np.ones(n) if weight is None else weight
+    count = np.bincount(label, weights=wt, minlength=k)
+    merged = np.column_stack([np.bincount(label, weights=wt * points[:, i], minlength=k) for i in range(3)])
     return merged / count[:, None], label
 
 
@@ -121,7 +126,9 @@ def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes:
         a, b = pairs[:, 0], pairs[:, 1]
         dist = np.linalg.norm(points[a] - points[b], axis=1)
         pairs = pairs[dist <= np.maximum(tol, np.maximum(err[a], err[b]))]
-    vertices, label = _merge(points, pairs)
+    # Weighted by their expected rounding: a copy solved from nearly dependent planes may lie far off
+    # along them, and its well-conditioned copies are where the vertex is.
+    vertices, label = _merge(points, pairs, 1.0 / np.maximum(err, tol) ** 2)
     # A welded vertex is as uncertain as its most uncertain copy.
     verr = np.zeros(len(vertices))
     np.maximum.at(verr, label, err)
@@ -147,7 +154,51 @@ def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes:
     order = np.lexsort((key, owner))
     seq, owner = seq[order], owner[order]
     grown = np.bincount(poly[edge], minlength=len(size)) > 0
-    return _triangulate(vertices, seq, owner, grown, len(size))
+    seq, owner, grown, source = _loops(seq, owner, grown, len(size))
+    vertices, tris, polygon = _triangulate(vertices, seq, owner, grown, len(grown))
+    return vertices, tris, source[polygon]
+
+
+def _loops(seq: np.ndarray, owner: np.ndarray, grown: np.ndarray, count: int
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Rings that pass a vertex twice (welding joined two corners of a thin polygon) split into
+    their simple loops: ``(seq, owner, grown, source)``, ``source`` the input ring of each loop.
+
+    Fanned as one ring, such a ring covers its pinch twice (edges on four triangles of one
+    polygon). Loops of fewer than three vertices have no area and are dropped.
+    """
+    key = owner * np.int64(int(seq.max(initial=0)) + 1) + seq
+    _, inverse, times = np.unique(key, return_inverse=True, return_counts=True)
+    pinched = np.unique(owner[times[inverse.reshape(-1)] > 1])
+    if len(pinched) == 0:
+        return seq, owner, grown, np.arange(count)
+    starts = np.searchsorted(owner, np.arange(count + 1))
+    keep = ~np.isin(owner, pinched)
+    out_seq, out_owner = [seq[keep]], [owner[keep]]
+    source, flags = list(range(count)), list(grown)
+    for ring in pinched.tolist():
+        path: list[int] = []
+        loops = []
+        for x in seq[starts[ring]:starts[ring + 1]].tolist():
+            if x in path:
+                at = path.index(x)
+                loops.append(path[at:])
+                del path[at + 1:]
+            else:
+                path.append(x)
+        loops.append(path)
+        loops = [loop for loop in loops if len(loop) >= 3]
+        for k, loop in enumerate(loops):
+            target = ring if k == 0 else len(source)
+            if k:
+                source.append(ring)
+                flags.append(True)
+            out_seq.append(np.asarray(loop, dtype=np.int64))
+            out_owner.append(np.full(len(loop), target, dtype=np.int64))
+        flags[ring] = True
+    seq, owner = np.concatenate(out_seq), np.concatenate(out_owner)
+    order = np.argsort(owner, kind="stable")
+    return seq[order], owner[order], np.asarray(flags), np.asarray(source, dtype=np.int64)
 
 
 def _on_edges(vertices: np.ndarray, verr: np.ndarray, a: np.ndarray, b: np.ndarray,
