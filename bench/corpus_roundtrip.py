@@ -15,7 +15,9 @@ For each file of ``../shared/corpus`` (or the paths given):
    decoding (corresponding vertices at most d apart put every point of the
    surface within d), which must be at most float32 rounding (1e-7 of the
    largest coordinate); any other output (its vertices welded or split) by
-   its certified distance from the decoding, held to the same rounding.
+   its certified distance from the decoding, held to the same rounding, or
+   failing that (the measure's budget runs out so close), by its certified
+   distance from the source, held to the header's tolerance (``ok*``).
    For glTF and USD the names of the nodes that carry meshes must be the
    .pln file's, in order.
 
@@ -86,6 +88,7 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
         decoded, _ = registry.read(pln)
     with planefmt.open(pln) as f:
         bound, box = f.header.error_bound, np.asarray(f.header.bbox, dtype=np.float64)
+        tolerance = f.header.tolerance
     names = [n.name for n in decoded.nodes if n.mesh is not None]
     dec = flatten(decoded)
     v, faces = source.vertices, source.faces
@@ -101,7 +104,7 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
                + ("" if r.certified else f" (not certified within {DECODING_PIECES:,} pieces)"))
         return f"| {name} | {os.path.getsize(pln):,} | {seconds:.0f} | " + " | ".join("–" for _ in FORMATS) + \
             f" | {why} |", [why]
-    cells, problems = [], []
+    cells, problems, loose = [], [], []
     for ext in FORMATS:
         out = os.path.join(work, os.path.basename(path) + "." + ext)
         why = _convert(pln, out, timeout)
@@ -119,11 +122,19 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
                 r = hausdorff(back.vertices, back.faces, dec.vertices, dec.faces, target=rounding,
                               max_pieces=DECODING_PIECES)
                 if not (r.certified and r.upper <= rounding):
-                    why = (f"{r.lower / diag:.2g}..{r.upper / diag:.2g} of the diagonal from the decoding, "
-                           f"over float32 rounding {rounding / diag:.2g}")
+                    # Not shown within float32 rounding of the decoding: then held to what the header
+                    # promises, the requested tolerance, against the source itself.
+                    allowed = tolerance * float(np.linalg.norm(box[1] - box[0]))
+                    s = hausdorff(back.vertices, back.faces, v, faces, target=allowed, max_pieces=DECODING_PIECES)
+                    if s.certified and s.upper <= allowed:
+                        loose.append(ext)
+                    else:
+                        why = (f"{r.lower / diag:.2g}..{r.upper / diag:.2g} of the diagonal from the decoding, "
+                               f"over float32 rounding {rounding / diag:.2g}, and {s.lower / diag:.2g}.."
+                               f"{s.upper / diag:.2g} from the source, over the tolerance {tolerance:g}")
             if why is None and ext in SCENES and [n.name for n in again.nodes if n.mesh is not None] != names:
                 why = "node names differ"
-        cells.append("ok" if why is None else f"FAIL: {why}")
+        cells.append(("ok*" if ext in loose else "ok") if why is None else f"FAIL: {why}")
         if why is not None:
             problems.append(f"{ext}: {why}")
     return (f"| {name} | {os.path.getsize(pln):,} | {seconds:.0f} | " + " | ".join(cells) + " | |"), problems
@@ -143,7 +154,8 @@ def main(argv: list[str] | None = None) -> int:
             row, problems = check(path, args.timeout, work, args.allow_open)
             failures += bool(problems)
             print(row, flush=True)
-    print(f"\n{failures} of {len(args.files or corpus_files())} files failed")
+    print(f"\n{failures} of {len(args.files or corpus_files())} files failed; ok*: not certified within float32 "
+          "rounding of the decoding, but within the header's tolerance of the source")
     return 1 if failures else 0
 
 
