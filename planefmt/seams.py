@@ -238,7 +238,8 @@ def _on_edges(vertices: np.ndarray, verr: np.ndarray, a: np.ndarray, b: np.ndarr
 
 def _triangulate(vertices: np.ndarray, seq: np.ndarray, owner: np.ndarray, grown: np.ndarray,
                  count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Fan triangles of the rings ``seq`` grouped by ``owner``: from the first corner, or the centroid of grown rings."""
+    """Fan triangles of the rings ``seq`` grouped by ``owner``: from the first corner, or the
+    centroid of grown rings."""
     size = np.bincount(owner, minlength=count)
     start = np.concatenate([[0], np.cumsum(size)])
     plain = ~grown & (size >= 3)
@@ -290,3 +291,61 @@ def close_cracks(vertices: np.ndarray, triangles: np.ndarray, reaches: tuple[flo
         if edge_adjacency(t[kept], len(merged)).closed:
             return merged, t[kept], kept
     return None
+
+
+def fill_slits(vertices: np.ndarray, triangles: np.ndarray, reach: float
+               ) -> tuple[np.ndarray, np.ndarray] | None:
+    """Triangles closing the holes of a surface whose every hole is a flat slit: ``(fill (k, 3),
+    beside (k,))``, ``beside`` a triangle on each one's hole; None if some edge is on more than two
+    triangles, a vertex starts two holes, or a hole's corners stray more than ``reach`` (model
+    units) from its own plane.
+
+    Where two faces nearly coincide (busted.STL: 5e-6 degrees apart), the planes' solid holds a
+    wedge between them thinner than any weld, running past their shared edge; welded, its two
+    sides leave a slit along the faces, flat to within the wedge's thickness. Each hole is fanned
+    from its first corner, facing the way the surface around it does.
+    """
+    sides = np.column_stack([triangles.reshape(-1), triangles[:, [1, 2, 0]].reshape(-1)])
+    _, inverse, count = np.unique(np.sort(sides, axis=1), axis=0, return_inverse=True, return_counts=True)
+    uses = count[inverse.reshape(-1)]
+    empty = np.zeros((0, 3), dtype=np.int64), np.zeros(0, dtype=np.int64)
+    if (uses > 2).any():
+        return None
+    loose = np.flatnonzero(uses == 1)
+    if len(loose) == 0:
+        return empty
+    if len(np.unique(sides[loose, 0])) != len(loose):
+        return None
+    after = dict(zip(sides[loose, 0].tolist(), sides[loose, 1].tolist()))
+    owner = dict(zip(sides[loose, 0].tolist(), (loose // 3).tolist()))
+    fans, beside = [], []
+    todo = set(after)
+    while todo:
+        first = min(todo)
+        todo.remove(first)
+        loop = [first]
+        nxt = after[first]
+        while nxt != first:
+            if nxt not in todo:
+                return None
+            todo.remove(nxt)
+            loop.append(nxt)
+            nxt = after[nxt]
+        ring = vertices[loop]
+        # The smallest singular value is the root of the corners' summed squared distances from
+        # the loop's best plane: at most reach puts every corner within reach of it.
+        if len(loop) < 3 or np.linalg.svd(ring - ring.mean(axis=0), compute_uv=False)[-1] > reach:
+            return None
+        at = np.arange(1, len(loop) - 1)
+        ids = np.asarray(loop, dtype=np.int64)
+        fan = np.column_stack([np.full(len(at), ids[0]), ids[at + 1], ids[at]])
+        # Of the triangles around the hole, the one facing most nearly as the fill does.
+        around = np.array([owner[x] for x in loop], dtype=np.int64)
+        t = vertices[triangles[around]]
+        facing = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+        facing /= np.maximum(np.linalg.norm(facing, axis=1), np.finfo(np.float64).tiny)[:, None]
+        p = vertices[fan]
+        area = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]).sum(axis=0)
+        fans.append(fan)
+        beside.append(np.full(len(at), around[np.argmax(facing @ area)], dtype=np.int64))
+    return np.concatenate(fans), np.concatenate(beside)

@@ -47,7 +47,7 @@ from .errors import GeometryError
 from .bsptree import boundary, parse
 from .model import BSP_IN, BSP_OUT
 from .polygonize import edge_adjacency
-from .seams import Planes, close_cracks, stitch
+from .seams import Planes, close_cracks, fill_slits, stitch
 
 #: Splitter candidates evaluated per node.
 CANDIDATES = 8
@@ -233,6 +233,7 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
     # "sides": two planes 6e-4 degrees apart) welded ends move edges 5e-5 off the vertices lying
     # on them.
     plain = None
+    welded = []
     for carried in (False, True):
         first = None
         for weld in WELD_TOL:
@@ -241,10 +242,19 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
             if edge_adjacency(triangles, len(vertices)).closed:
                 return vertices, triangles, plane[polygon]
             first = first or (vertices, triangles, plane[polygon])
+            if not carried:
+                welded.append((weld, vertices, triangles, plane[polygon]))
         closed = close_cracks(first[0], first[1], tuple(r * reach for r in CRACK_WELD))
         if closed is not None:
             return closed[0], closed[1], first[2][closed[2]]
         plain = plain or first
+    # Last, slits that faces nearly coinciding leave, closed flat (the encoder verifies the result).
+    for weld, vertices, triangles, planes in welded:
+        slits = fill_slits(vertices, triangles, weld * reach)
+        if slits is not None and len(slits[0]):
+            filled = np.concatenate([triangles, slits[0]])
+            if edge_adjacency(filled, len(vertices)).closed:
+                return vertices, filled, np.concatenate([planes, planes[slits[1]]])
     return plain
 
 

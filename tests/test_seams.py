@@ -54,3 +54,44 @@ def test_a_welded_vertex_sits_where_its_best_conditioned_copy_is() -> None:
     assert len(v) == 6
     origin = np.flatnonzero(np.linalg.norm(v, axis=1) < 1e-9)
     assert len(origin) == 1 and np.linalg.norm(v[origin[0]]) < 1e-12
+
+
+def _box() -> tuple[np.ndarray, np.ndarray]:
+    import trimesh
+
+    m = trimesh.creation.box([1.0, 2.0, 3.0])
+    return np.asarray(m.vertices, dtype=float), np.asarray(m.faces, dtype=np.int64)
+
+
+def test_a_flat_slit_is_closed_facing_the_surface_around_it() -> None:
+    from planefmt.bodies import is_closed_manifold, signed_volume
+    from planefmt.seams import fill_slits
+
+    v, f = _box()
+    holed = f[1:]
+    fill, beside = fill_slits(v, holed, 1e-9)
+    closed = np.concatenate([holed, fill])
+    assert len(fill) == 1 and is_closed_manifold(closed, len(v))
+    assert np.isclose(signed_volume(v, closed), 6.0)
+    # The triangle beside the hole lies on the same face of the box.
+    n = np.cross(v[fill[0, 1]] - v[fill[0, 0]], v[fill[0, 2]] - v[fill[0, 0]])
+    m = np.cross(v[holed[beside[0], 1]] - v[holed[beside[0], 0]], v[holed[beside[0], 2]] - v[holed[beside[0], 0]])
+    assert np.allclose(np.cross(n, m), 0.0) and n @ m > 0
+
+
+def test_holes_that_are_not_flat_slits_are_left_open() -> None:
+    from planefmt.seams import fill_slits
+
+    v, f = _box()
+    # Two triangles of two faces meeting at an edge: a bent hole, its corners 0.3+ off any plane.
+    normal = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    first = 0
+    other = next(k for k in range(1, len(f)) if len(set(f[k]) & set(f[first])) == 2
+                 and abs(normal[k] @ normal[first]) < 1e-9)
+    bent = np.delete(f, [first, other], axis=0)
+    assert fill_slits(v, bent, 1e-6) is None
+    assert fill_slits(v, bent, 10.0) is not None
+    # An edge on three triangles: not a surface whose holes can be told apart.
+    assert fill_slits(v, np.concatenate([f, f[:1]]), 10.0) is None
+    empty, _ = fill_slits(v, f, 1e-9)
+    assert len(empty) == 0
