@@ -956,7 +956,7 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
             found = _choose([replace(o, closed=False) if k in opened else o for k, o in enumerate(objects)],
                             tolerance, coding, bits)
             for k in opened:
-                warnings.warn(f"{named(k)} is closed but no coding decodes it closed: stored as an open surface "
+                warnings.warn(f"{named(k)} is closed but no coding keeps it a closed solid: stored as an open surface "
                               f"(distance and area kept, not watertight), marked lossy", PlnWarning, stacklevel=3)
             return replace(found, lossy=True)
     hint = ""

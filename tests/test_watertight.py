@@ -44,7 +44,7 @@ def test_a_closed_source_decoding_open_fails_by_default(no_solid):
 def test_allowed_open_it_is_stored_as_a_lossy_surface_within_the_tolerance(no_solid):
     v, f = l_prism()
     assert is_closed_manifold(f, len(v))
-    with pytest.warns(PlnWarning, match=r"object 0 is closed but no coding decodes it closed"):
+    with pytest.warns(PlnWarning, match=r"object 0 is closed but no coding keeps it a closed solid"):
         enc = codec.encode_mesh(v, f, tolerance=TOL, watertight=False)
     assert enc.lossy
     assert {int(g.kind) for g in enc.groups} <= {3, 4}
@@ -95,5 +95,5 @@ def test_pln_convert_allow_open_writes_the_file_and_says_what_it_gave_up(no_soli
     out = tmp_path / "open.pln"
     assert main(["convert", "--allow-open", str(src), str(out)]) == 0
     err = capsys.readouterr().err
-    assert "is closed but no coding decodes it closed" in err and "not watertight" in err
+    assert "is closed but no coding keeps it a closed solid" in err and "not watertight" in err
     assert codec.decode_scene(out).nodes[0].mesh is not None
