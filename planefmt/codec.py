@@ -505,8 +505,8 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     then ``tolerance`` bounds the error the *coding* adds to the simplified
     planes' own, and the total is measured and recorded.
 
-    ``watertight=False`` lets a closed source that no coding decodes closed
-    (a smooth dense solid: busted.STL) be stored as an open surface, held to
+    ``watertight=False`` lets a closed source that no coding keeps a closed
+    solid (King_geom.usd) be stored as an open surface, held to
     an open one's checks (distance and area); the result is then lossy and a
     :class:`PlnWarning` says so. By default such a source fails.
 
@@ -800,8 +800,9 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
             bits: int | tuple[int, int, int] | None, watertight: bool = True) -> _Choice:
     """Pick the cheapest coding whose decoded surfaces meet the tolerance; verify it.
 
-    Without ``watertight``, closed objects whose float64 planes decode open
-    are held to an open surface's checks when nothing else passes.
+    Without ``watertight``, closed objects whose float64 decoding fails a
+    solid's checks (closed, Euler characteristic, volume) are held to an
+    open surface's checks when nothing else passes.
     """
     forced = coding is not None or bits is not None
     simplified = any(o.simplified for o in objects)
