@@ -10,6 +10,7 @@ rather than echoing it.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 
@@ -55,24 +56,45 @@ def offsets(layout: Layout) -> list[int]:
     return out
 
 
-def index_payload(layout: Layout) -> bytes:
+def index_payload(layout: Layout, major: int = 1) -> bytes:
     """The iNDX payload listing the OBJT, PLNS and GRUP chunks of ``layout`` (spec §8.6).
 
     Ordinals are read from the payloads themselves (object index, first plane,
-    group index), so a layout with a defect in those fields keeps an index that
-    agrees with its chunks.
+    group index: a u32 / u64 in versions 1 and 2, a varint in version 3), so a
+    layout with a defect in those fields keeps an index that agrees with its
+    chunks.
     """
-    entries = [(off, t, int.from_bytes(p[:4], "little")) for off, (t, p) in zip(offsets(layout), layout)
+    entries = [(off, t, records.leading_index(p, major, 4)) for off, (t, p) in zip(offsets(layout), layout)
                if t in (schema.OBJT, schema.PLNS, schema.GRUP)]
     return records.encode_index(np.array(entries, dtype=schema.INDEX_ENTRY_DTYPE))
 
 
-def finish(layout: Layout, index: bool = True) -> Layout:
+def finish(layout: Layout, index: bool = True, major: int = 1) -> Layout:
     """``layout`` followed by its iNDX (optional) and PEND chunks."""
     if not index:
-        return layout + [(schema.PEND, records.encode_end(0))]
+        return layout + [(schema.PEND, records.encode_end(0, major))]
     at = offsets(layout + [(b"", b"")])[-1]
-    return layout + [(schema.INDX, index_payload(layout)), (schema.PEND, records.encode_end(at))]
+    return layout + [(schema.INDX, index_payload(layout, major)), (schema.PEND, records.encode_end(at, major))]
+
+
+def stored_header(h: Header) -> Header:
+    """The header values a reader gets back: version 3 stores the bbox rounded outward to float32 and
+    tolerance and error bound rounded up (spec 3.0 §5), written out here from that rule."""
+    if h.version[0] != 3:
+        return h
+
+    def toward(x: float, direction: float) -> float:
+        f = np.float32(x)
+        if (direction > 0 and float(f) < x) or (direction < 0 and float(f) > x):
+            f = np.nextafter(f, np.float32(direction))
+        return float(f)
+
+    bbox = None if h.bbox is None else np.array(
+        [[toward(float(x), -math.inf) for x in h.bbox[0]], [toward(float(x), math.inf) for x in h.bbox[1]]])
+    def up(v: float) -> float:
+        return v if math.isnan(v) else toward(v, math.inf)
+
+    return dataclasses.replace(h, bbox=bbox, tolerance=up(h.tolerance), error_bound=up(h.error_bound))
 
 
 # -- spec §7: what a reader decodes ----------------------------------------------------------

@@ -287,9 +287,9 @@ def _():
 
 # -- header (spec §5) --------------------------------------------------------------------------
 
-@case("xhdr_major3", "UNSUPPORTED_VERSION", "version 3.0")
+@case("xhdr_major4", "UNSUPPORTED_VERSION", "version 4.0")
 def _():
-    return file(cube(PHDR=header(version=(3, 0))))
+    return file(cube(PHDR=header(version=(4, 0))))
 
 
 @case("xhdr_predicted_v1", "UNSUPPORTED_CODING", "coding 3 (predicted, version 2.0) in a version 1.0 header")
@@ -544,6 +544,105 @@ def _():
       "differences, a role byte, then 21 bytes a convex group cannot have")
 def _():
     return v2(GRUP=grup())
+
+
+# -- version 3.0 (spec/pln-3.md) ----------------------------------------------------------------
+
+def v3(PHDR: bytes | None = None, OBJT: bytes | None = None, PLNS: bytes | None = None, GRUP: bytes | None = None,
+       *, index: bool = True, end: bytes | None = None) -> bytes:
+    """The cube of spec §12 as a version 3.0 file, one payload replaced (``end``: the PEND payload)."""
+    layout = cube(PHDR=PHDR or header(version=(3, 0)),
+                  OBJT=OBJT or records.encode_object(ObjectRecord(0, "cube", None, None), 3),
+                  PLNS=PLNS or records.encode_planes(0, CUBE, V3_HEAD, False),
+                  GRUP=GRUP or records.encode_group(PartGroup(0, 0, 0, np.arange(6, dtype=np.uint32),
+                                                              np.zeros(6, bool)), False, 3))
+    layout = finish(layout, index, 3)
+    if end is not None:
+        layout[-1] = (schema.PEND, end)
+    return frame(layout)
+
+
+V3_HEAD = dataclasses.replace(SPEC_HEADER, version=(3, 0))
+#: The version 3 cube's PHDR: 9 fixed bytes, the bbox as 6 float32, tolerance and error bound as
+#: float32, then the counts 6, 1, 1 as one-byte varints (no h range: float32 coding).
+V3_PHDR = header(version=(3, 0))
+
+
+@case("xv3_hdr_short", "BAD_PAYLOAD", "version 3.0 PHDR of a quantized coding that ends inside h_max")
+def _():
+    q = header(version=(3, 0), coding=Coding.QUANTIZED, quantization=Quantization(16, 16, 16, 0.0, 1.0))
+    return v3(PHDR=q[:20])
+
+
+@case("xv3_hdr_counts_short", "BAD_PAYLOAD",
+      "version 3.0 PHDR with COUNTS_KNOWN set whose payload ends after the plane count")
+def _():
+    return v3(PHDR=V3_PHDR[:-2])
+
+
+@case("xv3_count_mismatch", "COUNT_MISMATCH", "version 3.0 PHDR declaring 2 groups; the file has 1")
+def _():
+    return v3(PHDR=V3_PHDR[:-1] + b"\x02")
+
+
+@case("xv3_varint32", "BAD_PAYLOAD", "version 3.0 OBJT whose index is the varint 2^32 (ff ff ff ff 10), over a "
+      "varint32")
+def _():
+    return v3(OBJT=b"\x80\x80\x80\x80\x10" + records.encode_object(ObjectRecord(0, "cube", None, None), 3)[1:],
+              index=False)
+
+
+@case("xv3_head_not_minimal", "BAD_PAYLOAD", "version 3.0 GRUP head whose index 0 is written 80 00, a varint that "
+      "is not minimal")
+def _():
+    g = records.encode_group(PartGroup(0, 0, 0, np.arange(6, dtype=np.uint32), np.zeros(6, bool)), False, 3)
+    return v3(GRUP=b"\x80\x00" + g[1:], index=False)
+
+
+@case("xv3_plns_short", "BAD_PAYLOAD", "version 3.0 PLNS payload that ends inside its raw_size varint")
+def _():
+    return v3(PLNS=b"\x00\x06\x00\xc8", index=False)
+
+
+@case("xv3_parent", "BAD_OBJECT", "version 3.0 OBJT of object 0 with parent 1 (object 0 itself): parents are "
+      "stored + 1, and must be earlier objects")
+def _():
+    return v3(OBJT=b"\x00\x01" + records.encode_object(ObjectRecord(0, "cube", None, None), 3)[2:])
+
+
+@case("xv3_name_cap", "BAD_OBJECT", "version 3.0 OBJT declaring a name of 70000 bytes (over 65535) in a "
+      "payload of 8: the cap is checked before the name is looked for")
+def _():
+    return v3(OBJT=b"\x00\x00\x00\xf0\xa2\x04cube")
+
+
+@case("xv3_coding_first", "UNSUPPORTED_CODING", "version 3.0 PHDR of 9 bytes with coding 7: the coding is checked "
+      "before the fields it would call for are read")
+def _():
+    return v3(PHDR=bytes([3, 0, 0, 0, 7, 0, 0, 0, 1]))
+
+
+@case("xv3_pend_size", "BAD_PAYLOAD", "version 3.0 PEND of 4 bytes (only 0 or 8 are allowed)")
+def _():
+    return v3(index=False, end=bytes(4))
+
+
+@case("xv3_pend_zero", "BAD_INDEX", "version 3.0 PEND of 8 bytes holding index offset 0 (no index is an empty PEND)")
+def _():
+    return v3(index=False, end=bytes(8))
+
+
+@case("xv3_index_in_header", "BAD_INDEX", "version 3.0 iNDX whose OBJT entry points at byte 16, inside the PHDR "
+      "chunk (version 3 offsets start after the PHDR payload, whatever its length)")
+def _():
+    layout = cube(PHDR=V3_PHDR, OBJT=records.encode_object(ObjectRecord(0, "cube", None, None), 3),
+                  PLNS=records.encode_planes(0, CUBE, V3_HEAD, False),
+                  GRUP=records.encode_group(PartGroup(0, 0, 0, np.arange(6, dtype=np.uint32), np.zeros(6, bool)),
+                                            False, 3))
+    at = offsets(layout + [(b"", b"")])
+    entries = [(16, schema.OBJT, 0), (at[2], schema.PLNS, 0), (at[3], schema.GRUP, 0)]
+    index = records.encode_index(np.array(entries, dtype=schema.INDEX_ENTRY_DTYPE))
+    return frame(layout + [(schema.INDX, index), (schema.PEND, records.encode_end(at[-1], 3))])
 
 
 @case("xgrup_deflate_bomb", "LIMIT_EXCEEDED", "a deflated GRUP body declaring raw_size 2^32-1 (a deflate bomb)",

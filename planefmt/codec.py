@@ -52,7 +52,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError
 
-from . import quantize
+from . import quantize, records
 from .errors import CODES, FormatError, GeometryError, PlnError, PlnWarning
 from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
@@ -68,7 +68,7 @@ from .solids import decode_bsp_group
 from .salvage import salvage
 from .trianglegeom import TriangleIndex
 from .validate import GROUP_CHECKS, Finding
-from .writer import Writer
+from .writer import BLOCK_PLANES, Writer
 
 #: Quantized widths tried for nu and phi.
 MIN_BITS, MAX_BITS = 2, 32
@@ -1084,8 +1084,9 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     group that uses them: in first-use order, or with ``compact`` sorted
     within each object's block. Options as for :func:`encode_mesh`.
 
-    ``compact``: a version 2.0 file (spec/pln-2.md): quantized planes in the
-    predicted coding, group references, cells and trees as varints. The
+    ``compact``: a version 3.0 file (spec/pln-3.md): quantized planes in
+    whichever of the bit-packed and the predicted coding takes fewer bytes,
+    group references, cells and trees as varints, chunk heads as varints. The
     planes and the decoded surface are those of the version 1 file.
     """
     worlds = _world_transforms(scene.nodes)
@@ -1097,10 +1098,6 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
         raise GeometryError("the scene has no mesh to encode")
     objects = [replace(o, name=scene.nodes[i].name) for i, o in prepared]
     choice = _choose(objects, tolerance, coding, bits, watertight)
-    stored = Coding.PREDICTED if compact and choice.coding.quantized else choice.coding
-    header = Header(version=(2, 0) if compact else (1, 0), lossy=choice.lossy, coding=stored,
-                    quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
-                    tolerance=float(tolerance), error_bound=choice.error_bound)
     table = quantize.roundtrip(np.concatenate([o.triplets for o in objects]), choice.coding,
                                choice.quantization)
     # Rows identical after coding are one plane; the plane table is in first-use order, so each
@@ -1118,6 +1115,15 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     rank[order] = np.arange(len(order))
     global_index = rank[inverse.reshape(-1)]
     rows = table[first[order]]
+    stored = choice.coding
+    if compact and stored.quantized:
+        stored = min((Coding.QUANTIZED, Coding.PREDICTED), key=lambda c: _table_bytes(rows, c, choice.quantization,
+                                                                                       compress))
+    header = Header(version=(3, 0) if compact else (1, 0), lossy=choice.lossy, coding=stored,
+                    quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
+                    tolerance=float(tolerance), error_bound=choice.error_bound,
+                    plane_count=len(rows), object_count=len(scene.nodes),
+                    group_count=sum(len(o.groups) for o in objects))
     by_node = {i: (o, a) for (i, o), a in zip(prepared, offsets)}
     # An index of one group gives no random access a streaming read lacks: compact files skip it.
     index = not compact or sum(len(o.groups) for o in objects) > 1
@@ -1137,6 +1143,13 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
                 if o.plane_colours is not None:
                     w.add_colours(k, o.plane_colours[g.refs[perm]])
     return header
+
+
+def _table_bytes(rows: np.ndarray, coding: Coding, q: Quantization, compress: bool) -> int:
+    """Bytes of the plane table ``rows`` in ``coding``, deflated where that is smaller, as the writer
+    stores it (the block heads are the same for either coding)."""
+    return sum(len(records.pack(quantize.encode_payload(rows[s:s + BLOCK_PLANES], coding, q), compress)[1])
+               for s in range(0, len(rows), BLOCK_PLANES))
 
 
 def _permuted(g: GroupSpec, perm: np.ndarray) -> tuple[tuple[np.ndarray, ...] | None, np.ndarray | None]:

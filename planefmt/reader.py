@@ -19,7 +19,7 @@ from typing import BinaryIO
 import numpy as np
 
 from . import records, schema
-from .chunks import ChunkStream, Limits, RawChunk, is_ancillary
+from .chunks import ChunkStream, Limits, RawChunk, chunk_bytes, is_ancillary
 from .errors import FormatError, PlnError
 from .model import ObjectRecord, PartGroup, Record, UnknownChunk
 
@@ -63,6 +63,7 @@ class Reader:
                                   chunk=first.name, offset=first.offset)
             self._count(first)
             self.header, found = self._located(lambda raw: records.decode_header(raw.payload), first)
+            self._after_header = first.offset + 12 + len(first.payload)
             self.findings.extend(found)
         except BaseException:
             self.close()
@@ -144,7 +145,7 @@ class Reader:
             if len(self.objects) >= self.limits.max_objects:
                 raise PlnError(f"more than {self.limits.max_objects} objects", code="LIMIT_EXCEEDED")
             self._listed.append((raw.offset, t, len(self.objects)))
-            obj = records.decode_object(raw.payload, len(self.objects))
+            obj = records.decode_object(raw.payload, len(self.objects), self.header.version[0])
             self.objects.append(obj)
             return obj
         if t == schema.GRUP:
@@ -163,7 +164,7 @@ class Reader:
             return records.decode_colours(raw.payload, self._group_refs)
         if t == schema.INDX:
             self.index_offset = raw.offset
-            self._check_index(records.decode_index(raw.payload, raw.offset))
+            self._check_index(records.decode_index(raw.payload, raw.offset, self._after_header))
             return None
         if t == schema.PEND:
             self._finish(raw)
@@ -190,7 +191,7 @@ class Reader:
                               f"{want['offset']}", code="BAD_INDEX")
 
     def _finish(self, raw: RawChunk) -> None:
-        index_offset = records.decode_end(raw.payload)
+        index_offset = records.decode_end(raw.payload, self.header.version[0])
         if index_offset and index_offset != self.index_offset:
             raise FormatError(f"PEND points at byte {index_offset}, the iNDX chunk is at {self.index_offset}",
                               code="BAD_INDEX")
@@ -223,16 +224,22 @@ class Reader:
         if self._base is None:
             raise PlnError("random access needs a seekable file", code="BAD_INDEX", file=self.name)
         end = self._fp.seek(0, os.SEEK_END) - self._base
+        major = self.header.version[0]
+        stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
+        if major == 3 and end >= 12:
+            # A version 3 file without an index ends in an empty PEND (spec 3.0 §4.4).
+            self._fp.seek(self._base + end - 12)
+            if self._fp.read(12) == chunk_bytes(schema.PEND, b""):
+                raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - 12)
         if end < 20:
             raise FormatError("file too short to end with PEND", code="TRUNCATED", file=self.name)
-        stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
         stream.seek(self._base + end - 20)
         stream.offset = end - 20
         raw = stream.next_chunk()
         if raw.type != schema.PEND:
             raise FormatError("the file does not end with a PEND chunk", code="MISSING_END", file=self.name,
                               offset=end - 20)
-        index_offset = self._located(lambda r: records.decode_end(r.payload), raw)
+        index_offset = self._located(lambda r: records.decode_end(r.payload, major), raw)
         if not index_offset or index_offset >= end - 20:
             raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - 20)
         stream.seek(self._base + index_offset)
@@ -242,7 +249,7 @@ class Reader:
             raise FormatError("PEND does not point at an iNDX chunk", code="BAD_INDEX", file=self.name,
                               offset=index_offset)
         try:
-            return records.decode_index(raw.payload, index_offset)
+            return records.decode_index(raw.payload, index_offset, self._after_header)
         except PlnError as exc:
             raise exc.located(file=self.name, chunk="iNDX", offset=index_offset)
 

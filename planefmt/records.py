@@ -20,9 +20,9 @@ from .model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, Coding, Colours, 
                     ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0}
-#: Triplet codings each major version allows (spec §5; 2.0 §7.4).
-CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3)}
+VERSIONS = {1: 0, 2: 0, 3: 0}
+#: Triplet codings each major version allows (spec §5; 2.0 §7.4; 3.0 §5).
+CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 
 
@@ -44,16 +44,49 @@ def encode_header(h: Header) -> bytes:
     if h.bbox is not None:
         flags |= schema.FLAG_BBOX_KNOWN
     bbox = np.zeros((2, 3)) if h.bbox is None else np.asarray(h.bbox, dtype=np.float64)
-    return schema.Header.build(dict(
+    fields = dict(
         version_major=h.version[0], version_minor=h.version[1], flags=flags, coding=int(h.coding),
         bits_nu=q.bits_nu if q else 0, bits_phi=q.bits_phi if q else 0, bits_h=q.bits_h if q else 0,
-        units=int(h.units), reserved=b"\0\0\0",
-        h_min=q.h_min if q else 0.0, h_max=q.h_max if q else 0.0,
+        units=int(h.units), extra=h.extra)
+    if h.version[0] == 3:
+        return schema.Header3.build(dict(
+            fields, h_range=[q.h_min, q.h_max] if h.coding.quantized else None,
+            bbox=None if h.bbox is None else [*_f32_toward(bbox[0], -math.inf), *_f32_toward(bbox[1], math.inf)],
+            tolerance=_f32_up(h.tolerance, "tolerance"), error_bound=_f32_up(h.error_bound, "error_bound"),
+            counts=dict(plane_count=counts[0], object_count=counts[1], group_count=counts[2])
+            if flags & schema.FLAG_COUNTS_KNOWN else None))
+    return schema.Header.build(dict(
+        fields, reserved=b"\0\0\0", h_min=q.h_min if q else 0.0, h_max=q.h_max if q else 0.0,
         bbox_min=list(bbox[0]), bbox_max=list(bbox[1]),
         tolerance=h.tolerance, error_bound=h.error_bound,
         plane_count=h.plane_count or 0, object_count=h.object_count or 0, group_count=h.group_count or 0,
-        extra=h.extra,
     ))
+
+
+def _f32_toward(values: np.ndarray, direction: float) -> list[float]:
+    """Each value rounded to the nearest float32 on the side of ``direction`` (spec 3.0 §5)."""
+    v = np.asarray(values, dtype=np.float64)
+    with np.errstate(over="ignore"):
+        f = v.astype(np.float32)
+    wrong = (f < v) if direction > 0 else (f > v)
+    f = np.where(wrong, np.nextafter(f, np.float32(direction)), f)
+    if not np.isfinite(f).all():
+        raise PlnError("a bounding box coordinate is beyond the float32 range", code="BAD_HEADER_VALUE")
+    return [float(x) for x in f]
+
+
+def _f32_up(value: float, name: str) -> float:
+    if math.isnan(value):
+        return value
+    (up,) = _f32_toward(np.array([value]), math.inf) if math.isfinite(value) else [math.inf]
+    if not math.isfinite(up):
+        raise PlnError(f"{name} {value} is beyond the float32 range", code="BAD_HEADER_VALUE")
+    return up
+
+
+def header_size(major: int) -> int:
+    """The smallest PHDR payload of a version ``major`` file."""
+    return schema.HEADER3_FIXED if major == 3 else schema.HEADER_SIZE
 
 
 def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
@@ -62,28 +95,39 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
         raise FormatError("PHDR is too short to hold a version", code="BAD_PAYLOAD")
     major, minor = payload[0], payload[1]
     if major not in VERSIONS:
-        raise VersionError(f"major version {major} is not supported (this reader reads 1.x and 2.x)")
-    if len(payload) < schema.HEADER_SIZE:
-        raise FormatError(f"PHDR is {len(payload)} bytes, version {major} needs {schema.HEADER_SIZE}",
+        raise VersionError(f"major version {major} is not supported (this reader reads 1.x, 2.x and 3.x)")
+    if len(payload) < header_size(major):
+        raise FormatError(f"PHDR is {len(payload)} bytes, version {major} needs {header_size(major)}",
                           code="BAD_PAYLOAD")
     findings = []
     if minor > VERSIONS[major]:
         findings.append(("NEWER_MINOR_VERSION", f"file is version {major}.{minor}; read as {major}.{VERSIONS[major]}"))
-    r = _parse(schema.Header, payload, "PHDR")
+    if major == 3:
+        # The coding decides which fields follow the fixed part, so it is checked before they are read.
+        if payload[4] not in CODINGS[major]:
+            raise VersionError(f"triplet coding {payload[4]} is not supported in a version {major} file",
+                               code="UNSUPPORTED_CODING")
+        r = _parse(schema.Header3, payload, "PHDR")
+        h_min, h_max = r.h_range if r.h_range is not None else (0.0, 0.0)
+        bbox_min, bbox_max = (r.bbox[:3], r.bbox[3:]) if r.bbox is not None else (None, None)
+        counts = r.counts or cs.Container(plane_count=0, object_count=0, group_count=0)
+    else:
+        r = _parse(schema.Header, payload, "PHDR")
+        h_min, h_max, bbox_min, bbox_max, counts = r.h_min, r.h_max, r.bbox_min, r.bbox_max, r
     if r.coding not in CODINGS[major]:
         raise VersionError(f"triplet coding {r.coding} is not supported in a version {major} file",
                            code="UNSUPPORTED_CODING")
     coding = Coding(r.coding)
     q = None
     if coding.quantized:
-        q = Quantization(r.bits_nu, r.bits_phi, r.bits_h, r.h_min, r.h_max)
+        q = Quantization(r.bits_nu, r.bits_phi, r.bits_h, h_min, h_max)
         quantize.check_quantization(q)
     units = Units(r.units) if r.units in Units._value2member_map_ else None
     if units is None:
         raise FormatError(f"unknown units code {r.units}", code="BAD_HEADER_VALUE")
     bbox = None
     if r.flags & schema.FLAG_BBOX_KNOWN:
-        bbox = np.array([r.bbox_min, r.bbox_max], dtype=np.float64)
+        bbox = np.array([bbox_min, bbox_max], dtype=np.float64)
         if not np.isfinite(bbox).all() or (bbox[0] > bbox[1]).any():
             raise FormatError("bounding box is not finite or min > max", code="BAD_HEADER_VALUE")
     for name in ("tolerance", "error_bound"):
@@ -94,10 +138,18 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
     header = Header(
         version=(major, minor), lossy=bool(r.flags & schema.FLAG_LOSSY), coding=coding, quantization=q,
         units=units, bbox=bbox, tolerance=r.tolerance, error_bound=r.error_bound,
-        plane_count=r.plane_count if known else None, object_count=r.object_count if known else None,
-        group_count=r.group_count if known else None, extra=bytes(r.extra),
+        plane_count=counts.plane_count if known else None, object_count=counts.object_count if known else None,
+        group_count=counts.group_count if known else None, extra=bytes(r.extra),
     )
     return header, findings
+
+
+def leading_index(payload: bytes, major: int, width: int) -> int:
+    """The number an OBJT, PLNS or GRUP payload starts with (index or first plane): a u32 / u64 of
+    ``width`` bytes in versions 1 and 2, a varint in version 3."""
+    if major == 3:
+        return _parse(schema.Varint, bytes(payload[:schema.VARINT_MAX_BYTES]), "chunk head")
+    return int.from_bytes(payload[:width], "little")
 
 
 # spec §6 Compression -------------------------------------------------------------------------
@@ -140,15 +192,23 @@ def unpack(method: int, stored: bytes, raw_size: int, limits: Limits) -> bytes:
 def encode_planes(first: int, triplets: np.ndarray, header: Header, compress: bool) -> bytes:
     raw = quantize.encode_payload(triplets, header.coding, header.quantization)
     method, stored = pack(raw, compress)
+    if header.version[0] == 3:
+        return schema.PlaneBlock3.build(dict(first=first, count=len(triplets), compression=method,
+                                             raw_size=len(raw), data=stored))
     return schema.PlaneBlock.build(dict(first=first, count=len(triplets), compression=method,
                                         reserved=b"\0\0\0", raw_size=len(raw), data=stored))
 
 
 def decode_planes(payload: bytes, header: Header, expected_first: int, limits: Limits) -> PlaneBlock:
-    if len(payload) < schema.PLANE_BLOCK_HEAD:
-        raise FormatError("PLNS payload is shorter than its 20-byte head", code="BAD_PAYLOAD")
-    # Only the 20-byte head goes through construct: the data stays a zero-copy view.
-    r = _parse(schema.PlaneBlock, bytes(payload[:schema.PLANE_BLOCK_HEAD]), "PLNS")
+    # Only the head goes through construct: the data stays a zero-copy view.
+    if header.version[0] == 3:
+        r = _parse(schema.PlaneBlock3, bytes(payload[:schema.PLANE_BLOCK3_MAX_HEAD]), "PLNS")
+        start = r.data_offset
+    else:
+        if len(payload) < schema.PLANE_BLOCK_HEAD:
+            raise FormatError("PLNS payload is shorter than its 20-byte head", code="BAD_PAYLOAD")
+        r = _parse(schema.PlaneBlock, bytes(payload[:schema.PLANE_BLOCK_HEAD]), "PLNS")
+        start = schema.PLANE_BLOCK_HEAD
     if r.first != expected_first:
         raise FormatError(f"block starts at plane {r.first}, the table has {expected_first}",
                           code="PLANE_INDEX_MISMATCH")
@@ -164,31 +224,42 @@ def decode_planes(payload: bytes, header: Header, expected_first: int, limits: L
     elif r.raw_size != expected:
         raise FormatError(f"raw size {r.raw_size} != {expected} bytes for {r.count} planes",
                           code="SIZE_MISMATCH")
-    raw = unpack(r.compression, memoryview(payload)[schema.PLANE_BLOCK_HEAD:], r.raw_size, limits)
+    raw = unpack(r.compression, memoryview(payload)[start:], r.raw_size, limits)
     triplets = quantize.decode_payload(raw, r.count, header.coding, header.quantization)
     return PlaneBlock(first=r.first, triplets=triplets)
 
 
 # spec §8.1 Objects ---------------------------------------------------------------------------
 
-def encode_object(o: ObjectRecord) -> bytes:
+def encode_object(o: ObjectRecord, major: int = 1) -> bytes:
     name = o.name.encode("utf-8")
     if len(name) > 0xFFFF:
         raise PlnError(f"object name is {len(name)} bytes, at most 65535", code="BAD_OBJECT")
     t = None if o.transform is None else np.asarray(o.transform, dtype="<f8").reshape(4, 4).tobytes()
+    flags = schema.OBJECT_HAS_TRANSFORM if t is not None else 0
+    if major == 3:
+        head = dict(index=o.index, parent=0 if o.parent is None else o.parent + 1, flags=flags, name_length=len(name))
+        return schema.Object3.build(dict(head=head, name=name, transform=t, extra=b""))
     return schema.Object.build(dict(
         index=o.index, parent=NO_PARENT if o.parent is None else o.parent,
-        flags=schema.OBJECT_HAS_TRANSFORM if t is not None else 0, reserved=b"\0",
-        name_length=len(name), name=name, transform=t, extra=b""))
+        flags=flags, reserved=b"\0", name_length=len(name), name=name, transform=t, extra=b""))
 
 
-def decode_object(payload: bytes, expected_index: int) -> ObjectRecord:
-    r = _parse(schema.Object, payload, "OBJT")
-    if r.index != expected_index:
-        raise FormatError(f"object index {r.index}, expected {expected_index}", code="BAD_OBJECT")
-    parent = None if r.parent == NO_PARENT else r.parent
-    if parent is not None and parent >= r.index:
-        raise FormatError(f"parent {parent} of object {r.index} is not an earlier object", code="BAD_OBJECT")
+def decode_object(payload: bytes, expected_index: int, major: int = 1) -> ObjectRecord:
+    if major == 3:
+        # The head first: a name length over the cap is BAD_OBJECT before the name is looked for.
+        head = _parse(schema.Object3Head, bytes(payload[:3 * schema.VARINT_MAX_BYTES + 1]), "OBJT")
+        if head.name_length > schema.OBJECT3_MAX_NAME:
+            raise FormatError(f"object name of {head.name_length} bytes, at most 65535", code="BAD_OBJECT")
+        r = _parse(schema.Object3, payload, "OBJT")
+        index, parent = head.index, None if head.parent == 0 else head.parent - 1
+    else:
+        r = _parse(schema.Object, payload, "OBJT")
+        index, parent = r.index, None if r.parent == NO_PARENT else r.parent
+    if index != expected_index:
+        raise FormatError(f"object index {index}, expected {expected_index}", code="BAD_OBJECT")
+    if parent is not None and parent >= index:
+        raise FormatError(f"parent {parent} of object {index} is not an earlier object", code="BAD_OBJECT")
     try:
         name = bytes(r.name).decode("utf-8")
     except UnicodeDecodeError:
@@ -198,15 +269,19 @@ def decode_object(payload: bytes, expected_index: int) -> ObjectRecord:
         transform = np.frombuffer(r.transform, dtype="<f8").reshape(4, 4).astype(np.float64)
         if not np.isfinite(transform).all() or not np.array_equal(transform[3], [0, 0, 0, 1]):
             raise FormatError("transform is not a finite affine matrix (last row 0 0 0 1)", code="BAD_OBJECT")
-    return ObjectRecord(index=r.index, name=name, parent=parent, transform=transform)
+    return ObjectRecord(index=index, name=name, parent=parent, transform=transform)
 
 
 # spec §8.2-§8.4 Part groups ------------------------------------------------------------------
 
 def encode_group(g: PartGroup, compress: bool, major: int = 1) -> bytes:
-    """The GRUP payload; ``major`` 2 writes the varint body of spec 2.0 §8.7."""
-    body = _compact_body(g) if major == 2 else _body(g)
+    """The GRUP payload; ``major`` 2 and 3 write the varint body of spec 2.0 §8.7, 3 with the varint
+    head of 3.0 §8.2."""
+    body = _compact_body(g) if major >= 2 else _body(g)
     method, stored = pack(body, compress)
+    if major == 3:
+        return schema.GroupHead3.build(dict(index=g.index, object=g.object, kind=int(g.kind), compression=method,
+                                            raw_size=len(body), body=stored))
     return schema.GroupHead.build(dict(index=g.index, object=g.object, kind=int(g.kind), compression=method,
                                        reserved=b"\0\0", raw_size=len(body), body=stored))
 
@@ -255,9 +330,12 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
                  minor: int, limits: Limits, major: int = 1) -> tuple[PartGroup, list[tuple[str, str]]]:
     """A part group of a version ``major``.``minor`` file, checked against the objects and planes
     defined so far."""
-    if len(payload) < schema.GROUP_HEAD:
+    if major == 3:
+        head = _parse(schema.GroupHead3, payload, "GRUP")
+    elif len(payload) < schema.GROUP_HEAD:
         raise FormatError("GRUP payload is shorter than its 16-byte head", code="BAD_PAYLOAD")
-    head = _parse(schema.GroupHead, payload, "GRUP")
+    else:
+        head = _parse(schema.GroupHead, payload, "GRUP")
     if head.index != expected_index:
         raise FormatError(f"group index {head.index}, expected {expected_index}", code="GROUP_INDEX_MISMATCH")
     if head.object >= objects:
@@ -270,7 +348,7 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
                               code="UNKNOWN_GROUP_KIND")
         findings.append(("SKIPPED_GROUP_KIND", f"group {head.index} has kind {head.kind} of a newer minor version"))
     body = unpack(head.compression, bytes(head.body), head.raw_size, limits)
-    if major == 2:
+    if major >= 2:
         group = _decode_compact(head, body, planes, limits)
         return group, findings
     if len(body) < 4:
@@ -305,7 +383,7 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
 
 
 def _decode_compact(head, body: bytes, planes: int, limits: Limits) -> PartGroup:
-    """A version 2 group body (spec 2.0 §8.7)."""
+    """A version 2 or 3 group body (spec 2.0 §8.7)."""
     raw = np.frombuffer(body, dtype=np.uint8)
     (count,), pos = varint.decode(raw, 1, "group reference count")
     count = int(count)
@@ -441,13 +519,14 @@ def encode_index(entries: np.ndarray) -> bytes:
     return schema.Index.build(dict(count=len(entries), entries=entries.astype(schema.INDEX_ENTRY_DTYPE).tobytes()))
 
 
-def decode_index(payload: bytes, index_offset: int) -> np.ndarray:
+def decode_index(payload: bytes, index_offset: int, first_chunk: int = 8 + 12 + schema.HEADER_SIZE) -> np.ndarray:
+    """The iNDX entries; ``first_chunk`` is the offset of the chunk after PHDR (spec §8.6, 3.0 §8.6)."""
     r = _parse(schema.Index, payload, "iNDX")
     if len(payload) != 4 + 16 * r.count:
         raise FormatError("iNDX size does not match its count", code="BAD_INDEX")
     entries = np.frombuffer(r.entries, dtype=schema.INDEX_ENTRY_DTYPE)
     offsets = entries["offset"]
-    if len(entries) and ((offsets < 8 + 8 + schema.HEADER_SIZE + 4).any() or (offsets >= index_offset).any()
+    if len(entries) and ((offsets < first_chunk).any() or (offsets >= index_offset).any()
                          or (np.diff(offsets.astype(np.int64)) <= 0).any()):
         raise FormatError("index offsets are outside the chunk area or not increasing", code="BAD_INDEX")
     if not np.isin(entries["type"], [schema.OBJT, schema.PLNS, schema.GRUP]).all():
@@ -455,11 +534,21 @@ def decode_index(payload: bytes, index_offset: int) -> np.ndarray:
     return entries
 
 
-def encode_end(index_offset: int) -> bytes:
+def encode_end(index_offset: int, major: int = 1) -> bytes:
+    """The PEND payload; version 3 leaves it empty when there is no index (spec 3.0 §4.4)."""
+    if major == 3 and not index_offset:
+        return b""
     return schema.End.build(dict(index_offset=index_offset))
 
 
-def decode_end(payload: bytes) -> int:
-    if len(payload) != schema.END_SIZE:
-        raise FormatError(f"PEND payload is {len(payload)} bytes, not {schema.END_SIZE}", code="BAD_PAYLOAD")
-    return schema.End.parse(payload).index_offset
+def decode_end(payload: bytes, major: int = 1) -> int:
+    sizes = schema.END3_SIZES if major == 3 else (schema.END_SIZE,)
+    if len(payload) not in sizes:
+        raise FormatError(f"PEND payload is {len(payload)} bytes, not {' or '.join(map(str, sizes))}",
+                          code="BAD_PAYLOAD")
+    if not payload:
+        return 0
+    index_offset = schema.End.parse(payload).index_offset
+    if major == 3 and not index_offset:
+        raise FormatError("a version 3 PEND of 8 bytes must point at the index, not 0", code="BAD_INDEX")
+    return index_offset

@@ -172,21 +172,21 @@ class _Salvager:
             raise FormatError(f"unknown critical chunk {type_name(t)}", code="UNKNOWN_CRITICAL_CHUNK")
 
     def _take_object(self, chunk: RawChunk) -> None:
-        index = int.from_bytes(chunk.payload[:4], "little")
+        index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
         if index < self.objects or index > self.limits.max_objects:
             raise FormatError(f"object index {index} out of sequence", code="BAD_OBJECT")
         for missing in range(self.objects, index):
             self.lose("BAD_OBJECT", f"object {missing} lost", chunk.offset)
         self.object_ok += [False] * (index - self.objects) + [True]
         self.objects = index + 1
-        obj = records.decode_object(chunk.payload, index)
+        obj = records.decode_object(chunk.payload, index, self.out.header.version[0])
         if obj.parent is not None and not self.object_ok[obj.parent]:
             obj = ObjectRecord(obj.index, obj.name, None, obj.transform)
             self.lose("BAD_OBJECT", f"object {index} ({obj.name!r}) lost its parent; kept as a root", chunk.offset)
         self.out.records.append(obj)
 
     def _take_planes(self, chunk: RawChunk) -> None:
-        first = int.from_bytes(chunk.payload[:8], "little")
+        first = records.leading_index(chunk.payload, self.out.header.version[0], 8)
         have = len(self.lost_planes)
         if first < have or first > self.limits.max_planes:
             raise FormatError(f"plane block at {first} overlaps or is out of range", code="PLANE_INDEX_MISMATCH")
@@ -204,7 +204,7 @@ class _Salvager:
         self.lost_planes = np.concatenate([self.lost_planes, np.full(extra, lost)])
 
     def _take_group(self, chunk: RawChunk) -> None:
-        index = int.from_bytes(chunk.payload[:4], "little")
+        index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
         if index < self.groups:
             raise FormatError(f"group index {index} out of sequence", code="GROUP_INDEX_MISMATCH")
         for missing in range(self.groups, index):

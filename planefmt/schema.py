@@ -1,5 +1,5 @@
-"""Construct declarations of the .pln container, versions 1 and 2 (read beside spec/pln-1.md and
-spec/pln-2.md; "2.0 §" marks a section of the latter).
+"""Construct declarations of the .pln container, versions 1, 2 and 3 (read beside spec/pln-1.md,
+spec/pln-2.md and spec/pln-3.md; "2.0 §" and "3.0 §" mark sections of the latter two).
 
 Only structure lives here. Bulk arrays (triplets, plane references, role
 bits, cell entries, tree tokens, colours, index entries) are ``Bytes`` fields
@@ -8,6 +8,50 @@ floats are little-endian.
 """
 
 import construct as cs
+
+VARINT_MAX_BYTES = 10
+
+
+class Leb128(cs.Construct):
+    """A minimal unsigned LEB128 varint below ``2**bits`` (spec 2.0 §2.3; varint32 of 3.0): the
+    heads of version 3 chunks. Parsing fails on a varint that is not minimal, is longer than 10
+    bytes, or is out of range, so that every byte string has at most one reading."""
+
+    def __init__(self, bits: int = 64):
+        super().__init__()
+        self.bits = bits
+
+    def _parse(self, stream, context, path):
+        value = shift = 0
+        for n in range(1, VARINT_MAX_BYTES + 1):
+            b = cs.stream_read(stream, 1, path)[0]
+            value |= (b & 0x7F) << shift
+            shift += 7
+            if b < 0x80:
+                if n > 1 and b == 0:
+                    raise cs.ValidationError("varint is not minimal", path=path)
+                if value >> self.bits:
+                    raise cs.ValidationError(f"varint is 2^{self.bits} or more", path=path)
+                return value
+        raise cs.ValidationError(f"varint is longer than {VARINT_MAX_BYTES} bytes", path=path)
+
+    def _build(self, obj, stream, context, path):
+        if not isinstance(obj, int) or obj < 0 or obj >> self.bits:
+            raise cs.IntegerError(f"{obj!r} is not an integer in 0..2^{self.bits} - 1", path=path)
+        out, rest = bytearray(), obj
+        while rest >= 0x80:
+            out.append(rest & 0x7F | 0x80)
+            rest >>= 7
+        out.append(rest)
+        cs.stream_write(stream, bytes(out), len(out), path)
+        return obj
+
+    def _sizeof(self, context, path):
+        raise cs.SizeofError("a varint has no fixed size", path=path)
+
+
+Varint = Leb128(64)
+Varint32 = Leb128(32)
 
 # spec §3 Signature
 SIGNATURE = b"\x89PLN\r\n\x1a\n"
@@ -121,9 +165,9 @@ TreeExtra = cs.Struct(
     "tokens" / cs.Bytes(cs.this.token_count * 4),
 )
 
-# spec 2.0 §2.3 Varints: unsigned LEB128, minimal, at most 10 bytes. Bulk varints (plane streams,
-# references, tokens) are decoded with numpy in planefmt.varint, never per element with construct.
-VARINT_MAX_BYTES = 10
+# spec 2.0 §2.3 Varints: unsigned LEB128, minimal, at most 10 bytes (VARINT_MAX_BYTES above). Bulk
+# varints (plane streams, references, tokens) are decoded with numpy in planefmt.varint, never per
+# element with construct; Leb128 serves the few in version 3 chunk heads.
 
 # spec 2.0 §7.4 Predicted plane data (coding 3): three streams of `count` varints (nu, phi, h),
 # each below 2^33, taking 3 to 15 bytes a plane
@@ -153,3 +197,67 @@ End = cs.Struct(
     "index_offset" / cs.Int64ul,
 )
 END_SIZE = 8
+
+# spec 3.0 §5 Header of version 3: a fixed part, then only the fields the coding and flags call for
+HEADER3_FIXED = 9
+CODINGS_WITH_RANGE = (2, 3)
+Header3 = cs.Struct(
+    "version_major" / cs.Int8ul,
+    "version_minor" / cs.Int8ul,
+    "flags" / cs.Int16ul,
+    "coding" / cs.Int8ul,
+    "bits_nu" / cs.Int8ul,
+    "bits_phi" / cs.Int8ul,
+    "bits_h" / cs.Int8ul,
+    "units" / cs.Int8ul,
+    "h_range" / cs.If(lambda this: this.coding in CODINGS_WITH_RANGE, cs.Array(2, cs.Float64l)),
+    "bbox" / cs.If(cs.this.flags & FLAG_BBOX_KNOWN, cs.Array(6, cs.Float32l)),
+    "tolerance" / cs.Float32l,
+    "error_bound" / cs.Float32l,
+    "counts" / cs.If(cs.this.flags & FLAG_COUNTS_KNOWN, cs.Struct(
+        "plane_count" / Varint,
+        "object_count" / Varint32,
+        "group_count" / Varint32,
+    )),
+    "extra" / cs.GreedyBytes,
+)
+
+# spec 3.0 §7 Plane table head of version 3
+PlaneBlock3 = cs.Struct(
+    "first" / Varint,
+    "count" / Varint32,
+    "compression" / cs.Int8ul,
+    "raw_size" / Varint32,
+    "data_offset" / cs.Tell,
+    "data" / cs.GreedyBytes,
+)
+#: Longest head of PlaneBlock3 (varints of 10, 5 and 5 bytes and the compression byte).
+PLANE_BLOCK3_MAX_HEAD = 21
+
+# spec 3.0 §8.1 Objects of version 3: parent 0 for a root, else the parent's index + 1
+OBJECT3_MAX_NAME = 0xFFFF
+Object3Head = cs.Struct(
+    "index" / Varint32,
+    "parent" / Varint32,
+    "flags" / cs.Int8ul,
+    "name_length" / Varint,
+)
+Object3 = cs.Struct(
+    "head" / Object3Head,
+    "name" / cs.Bytes(cs.this.head.name_length),
+    "transform" / cs.If(cs.this.head.flags & OBJECT_HAS_TRANSFORM, cs.Bytes(128)),
+    "extra" / cs.GreedyBytes,
+)
+
+# spec 3.0 §8.2 Part group head of version 3; the body is that of 2.0 §8.7
+GroupHead3 = cs.Struct(
+    "index" / Varint32,
+    "object" / Varint32,
+    "kind" / cs.Int8ul,
+    "compression" / cs.Int8ul,
+    "raw_size" / Varint32,
+    "body" / cs.GreedyBytes,
+)
+
+# spec 3.0 §4.4 End of version 3: empty (no index) or the index offset
+END3_SIZES = (0, END_SIZE)

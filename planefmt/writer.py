@@ -39,9 +39,12 @@ BLOCK_PLANES = 1 << 16
 class Writer:
     """Write a .pln file to a path (atomically) or to a binary stream.
 
-    ``header`` gives coding, quantization, units, bbox and error bound; its
-    counts are ignored and replaced by the actual ones where the output is
-    seekable. Use as a context manager: leaving the block by an exception
+    ``header`` gives version, coding, quantization, units, bbox and error
+    bound. Versions 1 and 2: its counts are ignored and replaced by the actual
+    ones where the output is seekable. Version 3 (spec/pln-3.md): counts given
+    in it are written and must match what is written by :meth:`close`
+    (``COUNT_MISMATCH`` otherwise, and the output is discarded); without them
+    the file declares none. Use as a context manager: leaving the block by an exception
     discards a path target's temporary file.
     """
 
@@ -67,7 +70,13 @@ class Writer:
             self._fp: BinaryIO = os.fdopen(fd, "wb")
         else:
             self._fp = target
-        self._header = dataclasses.replace(header, plane_count=None, object_count=None, group_count=None)
+        self._major = header.version[0]
+        declared = (header.plane_count, header.object_count, header.group_count)
+        # Version 3 counts are varints: written up front if the caller declares them, never patched.
+        self._declared = declared if self._major == 3 and None not in declared else None
+        if self._declared is None:
+            header = dataclasses.replace(header, plane_count=None, object_count=None, group_count=None)
+        self._header = header
         self._start = _tell(self._fp)
         self._pos = 0
         self._planes = 0
@@ -113,7 +122,7 @@ class Writer:
             transform = np.asarray(transform, dtype=np.float64).reshape(4, 4)
             if not np.isfinite(transform).all() or not np.array_equal(transform[3], [0, 0, 0, 1]):
                 raise PlnError("transform must be a finite affine 4x4 matrix", code="BAD_OBJECT")
-        self._emit(schema.OBJT, records.encode_object(ObjectRecord(index, name, parent, transform)), index)
+        self._emit(schema.OBJT, records.encode_object(ObjectRecord(index, name, parent, transform), self._major), index)
         self._objects += 1
         return index
 
@@ -155,7 +164,7 @@ class Writer:
         index = len(self._groups)
         group = PartGroup(index=index, object=obj, kind=int(kind), refs=refs.astype(np.uint32),
                           bounding=bounding, cells=cells, tree=tree, extra=extra)
-        self._emit(schema.GRUP, records.encode_group(group, self._compress, self._header.version[0]), index)
+        self._emit(schema.GRUP, records.encode_group(group, self._compress, self._major), index)
         self._groups.append(len(refs))
         return index
 
@@ -199,8 +208,14 @@ class Writer:
                 index_offset = self._pos
                 entries = np.array(self._entries, dtype=schema.INDEX_ENTRY_DTYPE)
                 self._emit(schema.INDX, records.encode_index(entries))
-            self._emit(schema.PEND, records.encode_end(index_offset))
-            self._patch_counts()
+            actual = (self._planes, self._objects, len(self._groups))
+            if self._declared is not None and self._declared != actual:
+                raise PlnError(f"the header declares {self._declared[0]} planes, {self._declared[1]} objects, "
+                               f"{self._declared[2]} groups; {actual[0]}, {actual[1]}, {actual[2]} were written",
+                               code="COUNT_MISMATCH")
+            self._emit(schema.PEND, records.encode_end(index_offset, self._major))
+            if self._major != 3:
+                self._patch_counts()
             self._fp.flush()
             if self._path is not None:
                 os.fsync(self._fp.fileno())

@@ -70,13 +70,14 @@ def groups_for(n: int, draw) -> list[dict]:
 @st.composite
 def files(draw):
     """Planes, coding, quantization, groups, compression and version: the predicted coding only in
-    version 2, whose groups list their references in increasing order."""
+    versions 2 and 3, whose groups list their references in increasing order."""
     planes = draw(plane_sets)
     coding = draw(st.sampled_from(list(Coding)))
     q = draw(quantizations) if coding.quantized else None
-    version = (2, 0) if coding == Coding.PREDICTED else draw(st.sampled_from([(1, 0), (2, 0)]))
+    versions = [(2, 0), (3, 0)] if coding == Coding.PREDICTED else [(1, 0), (2, 0), (3, 0)]
+    version = draw(st.sampled_from(versions))
     groups = groups_for(len(planes), draw)
-    if version[0] == 2:
+    if version[0] >= 2:
         for g in groups:
             g["refs"] = np.sort(g["refs"])
     return planes, coding, q, groups, draw(st.booleans()), version
@@ -348,7 +349,7 @@ def test_newer_minor_version_is_read_and_unknown_kind_skipped():
 
 def test_major_version_mismatch():
     data = write_bytes(Header(version=(2, 0)), lambda w: None)
-    data = data[:16] + b"\x03" + data[17:]  # PHDR's version_major: 3, which no reader of this version knows
+    data = data[:16] + b"\x04" + data[17:]  # PHDR's version_major: 4, which no reader of this version knows
     data = data[:124] + zlib.crc32(data[8:12] + data[16:124]).to_bytes(4, "little") + data[128:]
     with pytest.raises(planefmt.VersionError):
         read_all(data)

@@ -1,11 +1,12 @@
 """plnread: an independent, container-level reader of the .pln format.
 
-It was written from `spec/pln-1.md` and `spec/pln-2.md` alone (plus the
-output contract of `conformance/README.md`), without looking at planefmt or
-at the suite's generator, to show that the written spec and the conformance
-contract are enough for a second implementation.  It uses the Python 3.11
-standard library only.  It reads versions 1.0 and 2.0 (pln-2 §11: files of
-major versions 1 and 2, each as its own document says).
+It was written from `spec/pln-1.md`, `spec/pln-2.md` and `spec/pln-3.md`
+alone (plus the output contract of `conformance/README.md`), without looking
+at planefmt or at the suite's generator, to show that the written spec and
+the conformance contract are enough for a second implementation.  It uses
+the Python 3.11 standard library only.  It reads versions 1.0, 2.0 and 3.0
+(pln-3 §11: files of major versions 1, 2 and 3, each as its own document
+says).
 
 It checks everything a reader must check without decoding geometry
 (signature, chunk framing, CRC-32, header, plane table in every coding,
@@ -16,10 +17,21 @@ null: this reader does not decode geometry).  Version 2.0 files are
 reported in the same form as 1.0 ones: predicted planes (coding 3) are
 dequantized like coding 2, and varint group bodies (pln-2 §8.7) are given
 as absolute plane indices, cells entries 2j + s and tree tokens in the
-version 1 numbering (0xFFFFFFFE IN, 0xFFFFFFFF OUT, j a split).
+version 1 numbering (0xFFFFFFFE IN, 0xFFFFFFFF OUT, j a split).  Version
+3.0 files are reported in the same form too: the compact header's f32
+bounding box, tolerance and error bound are widened to binary64 exactly, an
+h range absent for codings 0 and 1 is [0.0, 0.0], counts absent without
+COUNTS_KNOWN are null, and an OBJT parent stored as index + 1 (0 for a root)
+is given as the parent's index or null.
 
-Section numbers below are those of spec/pln-1.md; "pln-2 §x" marks a
-section of spec/pln-2.md.
+This reader reads its input front to back (it works on pipes) and never
+seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
+a code it never raises; a file whose last chunk is not PEND is TRUNCATED or
+TRAILING_DATA here.
+
+Section numbers below are those of spec/pln-1.md; "pln-2 §x" and "pln-3 §x"
+mark a section of spec/pln-2.md or spec/pln-3.md (which use the section
+numbers of pln-1).
 
 Usage:
     python conformance/independent/plnread.py FILE.pln
@@ -45,8 +57,8 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0 and 2.0; pln-2 §11: a reader of 2.m reads major versions 1 and 2)
-READER_VERSIONS = {1: 0, 2: 0}
+# (1.0, 2.0 and 3.0; pln-3 §11: a reader of 3.m reads major versions 1, 2 and 3)
+READER_VERSIONS = {1: 0, 2: 0, 3: 0}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 
@@ -75,7 +87,15 @@ V2_TOKEN_IN, V2_TOKEN_OUT, V2_TOKEN_SPLIT = 0, 1, 2  # pln-2 §8.7: 0 IN, 1 OUT,
 CODING_QUANTIZED, CODING_PREDICTED = 2, 3  # §7.3, pln-2 §7.4
 VARINT_MAX_BYTES = 10  # pln-2 §2.3: below 2^64, at most 10 bytes
 PLANE_VARINT_LIMIT = 2**33  # pln-2 §7.4: every varint of the plane streams
+VARINT32_LIMIT = 2**32  # pln-3: a varint32 MUST be below 2^32
 NO_PARENT = 0xFFFFFFFF
+V3_NO_PARENT = 0  # pln-3 §8.1: parent 0 for a root, otherwise the parent's index + 1
+MAX_NAME_LENGTH = 65535  # pln-3 §8.1: name_length at most 65535 (the u16 of §8.1)
+
+V3_HEADER_FIXED = 9  # pln-3 §5: version_major .. units, no reserved bytes
+PEND_PAYLOAD_V1 = 8  # §4.4
+PEND_PAYLOADS_V3 = (0, 8)  # pln-3 §4.4: empty without an index, else the u64 offset
+CHUNK_FRAME = 12  # §4.1: type, length, crc around a payload
 
 
 class PlnError(Exception):
@@ -146,11 +166,41 @@ class Cursor:
         self.pos += n
         return b
 
+    def u8(self, what=None):
+        self.need(1, what)
+        v = self.data[self.pos]
+        self.pos += 1
+        return v
+
+    def u16(self, what=None):
+        self.need(2, what)
+        v = u16(self.data, self.pos)
+        self.pos += 2
+        return v
+
     def u32(self, what=None):
         self.need(4, what)
         v = u32(self.data, self.pos)
         self.pos += 4
         return v
+
+    def f32s(self, n, what=None):
+        # widened to binary64 exactly (§7.2)
+        self.need(4 * n, what)
+        v = list(struct.unpack_from("<%df" % n, self.data, self.pos))
+        self.pos += 4 * n
+        return v
+
+    def f64s(self, n, what=None):
+        self.need(8 * n, what)
+        v = list(struct.unpack_from("<%dd" % n, self.data, self.pos))
+        self.pos += 8 * n
+        return v
+
+    def rest(self):
+        b = self.data[self.pos:]
+        self.pos = len(self.data)
+        return b
 
     def u32_array(self, n, what=None):
         # the length is checked against the bytes present before allocating
@@ -183,6 +233,14 @@ class Cursor:
         raise PlnError("BAD_PAYLOAD",
                        "%s: %s is a varint longer than %d bytes" % (self.what, what or "field",
                                                                     VARINT_MAX_BYTES))
+
+    def varint32(self, what=None):
+        """pln-3: a varint (pln-2 §2.3) whose value MUST be below 2^32 (BAD_PAYLOAD)."""
+        v = self.varint(what)
+        if v >= VARINT32_LIMIT:
+            raise PlnError("BAD_PAYLOAD",
+                           "%s: %s is a varint32 of %d, not below 2^32" % (self.what, what or "field", v))
+        return v
 
 
 def unzigzag(u):
@@ -269,6 +327,7 @@ class Reader:
         self.findings = []
         self.chunk_list = []  # (offset, type, ordinal) of OBJT, PLNS, GRUP
         self.index_offset = None  # offset of the iNDX chunk, if seen
+        self.after_header = None  # offset of the chunk after PHDR (pln-3 §8.6)
         self.last_was_index = False
 
     # -- input -------------------------------------------------------------
@@ -390,22 +449,25 @@ class Reader:
     # -- §5 header ---------------------------------------------------------
 
     def read_header(self, p):
+        # pln-3 §10.1: a major version other than 1, 2 or 3
         if len(p) >= 1 and p[0] not in READER_VERSIONS:
             raise PlnError("UNSUPPORTED_VERSION", "major version %d" % p[0])
-        if len(p) < 108:
-            raise PlnError("BAD_PAYLOAD", "PHDR payload of %d bytes, under 108" % len(p))
-        major, minor, flags = p[0], p[1], u16(p, 2)
-        coding, bn, bp, bh, units = p[4], p[5], p[6], p[7], p[8]
-        h_min, h_max = f64(p, 12), f64(p, 20)
-        bbox_min = [f64(p, 28 + 8 * i) for i in range(3)]
-        bbox_max = [f64(p, 52 + 8 * i) for i in range(3)]
-        tolerance, error_bound = f64(p, 76), f64(p, 84)
-        plane_count, object_count, group_count = u64(p, 92), u32(p, 100), u32(p, 104)
+        # the layout is chosen by the major version: that of §5 for 1 and 2
+        # (pln-2 §5), the compact one of pln-3 §5 for 3; every field is read
+        # (BAD_PAYLOAD) before any value is checked
+        if len(p) >= 1 and p[0] == 3:
+            fields = self.parse_header_v3(p)
+        else:
+            fields = self.parse_header_v1(p)
+        (major, minor, flags, coding, bn, bp, bh, units, h_min, h_max,
+         bbox_min, bbox_max, tolerance, error_bound, plane_count, object_count, group_count) = fields
+        # pln-3 §8.6: the first chunk after the header, the lowest offset an index entry may give
+        self.after_header = len(SIGNATURE) + CHUNK_FRAME + len(p)
 
         if minor > READER_VERSIONS[major]:
             self.finding("NEWER_MINOR_VERSION")
-        # coding 3, predicted, exists in major version 2 only (pln-2 §5)
-        codings = (0, 1, 2, 3) if major == 2 else (0, 1, 2)
+        # coding 3, predicted, exists in major versions 2 (pln-2 §5) and 3 (pln-3 §5)
+        codings = (0, 1, 2) if major == 1 else (0, 1, 2, 3)
         if coding not in codings:
             raise PlnError("UNSUPPORTED_CODING", "coding %d in a version %d file" % (coding, major))
         if coding in (CODING_QUANTIZED, CODING_PREDICTED):
@@ -447,18 +509,69 @@ class Reader:
             ),
         }
 
+    def parse_header_v1(self, p):
+        """§5: the fixed 108-byte layout of versions 1 and 2 (later bytes ignored)."""
+        if len(p) < 108:
+            raise PlnError("BAD_PAYLOAD", "PHDR payload of %d bytes, under 108" % len(p))
+        major, minor, flags = p[0], p[1], u16(p, 2)
+        coding, bn, bp, bh, units = p[4], p[5], p[6], p[7], p[8]
+        h_min, h_max = f64(p, 12), f64(p, 20)
+        bbox_min = [f64(p, 28 + 8 * i) for i in range(3)]
+        bbox_max = [f64(p, 52 + 8 * i) for i in range(3)]
+        tolerance, error_bound = f64(p, 76), f64(p, 84)
+        plane_count, object_count, group_count = u64(p, 92), u32(p, 100), u32(p, 104)
+        return (major, minor, flags, coding, bn, bp, bh, units, h_min, h_max,
+                bbox_min, bbox_max, tolerance, error_bound, plane_count, object_count, group_count)
+
+    def parse_header_v3(self, p):
+        """pln-3 §5: a 9-byte fixed part, then the fields the flags and the
+        coding call for, in table order; a payload that ends inside them is
+        BAD_PAYLOAD, bytes after them are later fields and ignored."""
+        c = Cursor(p, "PHDR")
+        c.need(V3_HEADER_FIXED, "the fixed part")
+        major, minor = c.u8("version_major"), c.u8("version_minor")
+        flags = c.u16("flags")
+        coding, bn, bp, bh = c.u8("coding"), c.u8("bits_nu"), c.u8("bits_phi"), c.u8("bits_h")
+        units = c.u8("units")
+        # pln-3 §5: the coding is checked as soon as the fixed part is read,
+        # because it decides which fields follow
+        if coding not in (0, 1, 2, 3):
+            raise PlnError("UNSUPPORTED_CODING", "coding %d in a version 3 file" % coding)
+        # h range only for codings 2 and 3 ("coding 2 or 3")
+        h_min = h_max = 0.0
+        if coding in (CODING_QUANTIZED, CODING_PREDICTED):
+            h_min, h_max = c.f64s(2, "h_min, h_max")
+        bbox_min = bbox_max = None
+        if flags & FLAG_BBOX_KNOWN:
+            bbox = c.f32s(6, "bbox_min, bbox_max")
+            bbox_min, bbox_max = bbox[:3], bbox[3:]
+        tolerance, error_bound = c.f32s(2, "tolerance, error_bound")
+        plane_count = object_count = group_count = 0
+        if flags & FLAG_COUNTS_KNOWN:
+            plane_count = c.varint("plane_count")
+            object_count = c.varint32("object_count")
+            group_count = c.varint32("group_count")
+        # later fields (c.rest()): ignored (pln-3 §5, §11)
+        return (major, minor, flags, coding, bn, bp, bh, units, h_min, h_max,
+                bbox_min, bbox_max, tolerance, error_bound, plane_count, object_count, group_count)
+
     # -- §8.1 objects ------------------------------------------------------
 
     def read_object(self, p, offset):
         c = Cursor(p, "OBJT")
-        head = c.take(12, "OBJT head")
-        index, parent, flags, name_len = u32(head, 0), u32(head, 4), head[8], u16(head, 10)
+        if self.major == 3:
+            index, parent, flags, name_len = self.read_object_head_v3(c)
+        else:
+            head = c.take(12, "OBJT head")
+            index, parent, flags, name_len = u32(head, 0), u32(head, 4), head[8], u16(head, 10)
         if index != len(self.objects):
             raise PlnError("BAD_OBJECT", "object index %d, expected %d" % (index, len(self.objects)))
         if len(self.objects) + 1 > LIMIT_OBJECTS:
             raise PlnError("LIMIT_EXCEEDED", "more than %d objects" % LIMIT_OBJECTS)
         if parent != NO_PARENT and parent >= index:
             raise PlnError("BAD_OBJECT", "parent %d is not an earlier object" % parent)
+        if name_len > MAX_NAME_LENGTH:  # only a pln-3 varint can exceed it; checked before the name
+            raise PlnError("BAD_OBJECT", "name_length %d above %d" % (name_len, MAX_NAME_LENGTH))
         raw_name = c.take(name_len, "name")
         try:
             name = raw_name.decode("utf-8")
@@ -480,12 +593,25 @@ class Reader:
         })
         self.chunk_list.append((offset, b"OBJT", index))
 
+    def read_object_head_v3(self, c):
+        """pln-3 §8.1: index, parent (varint32, 0 for a root, else the parent's
+        index + 1), flags (u8), name_length (varint); returned with the parent
+        in the numbering of §8.1 (NO_PARENT for a root)."""
+        index = c.varint32("object index")
+        parent = c.varint32("parent")
+        flags = c.u8("flags")
+        name_len = c.varint("name_length")
+        return index, (NO_PARENT if parent == V3_NO_PARENT else parent - 1), flags, name_len
+
     # -- §7 plane table ----------------------------------------------------
 
     def read_planes(self, p, offset):
-        if len(p) < 20:
-            raise PlnError("BAD_PAYLOAD", "PLNS payload of %d bytes, under 20" % len(p))
-        first, count, method, raw_size = u64(p, 0), u32(p, 8), p[12], u32(p, 16)
+        if self.major == 3:
+            first, count, method, raw_size, stored = self.read_planes_head_v3(p)
+        else:
+            if len(p) < 20:
+                raise PlnError("BAD_PAYLOAD", "PLNS payload of %d bytes, under 20" % len(p))
+            first, count, method, raw_size, stored = u64(p, 0), u32(p, 8), p[12], u32(p, 16), p[20:]
         if first != len(self.planes):
             raise PlnError("PLANE_INDEX_MISMATCH",
                            "first %d, %d planes before" % (first, len(self.planes)))
@@ -507,7 +633,7 @@ class Reader:
             if raw_size != expected:
                 raise PlnError("SIZE_MISMATCH",
                                "raw_size %d, %d planes take %d" % (raw_size, count, expected))
-        data = decompress(method, raw_size, p[20:], "PLNS data")
+        data = decompress(method, raw_size, stored, "PLNS data")
         base = len(self.planes)
         if self.coding == 0:
             vals = struct.unpack("<%df" % (3 * count), data)
@@ -520,6 +646,17 @@ class Reader:
         else:
             self.add_predicted_planes(data, count, base)
         self.chunk_list.append((offset, b"PLNS", first))
+
+    def read_planes_head_v3(self, p):
+        """pln-3 §7: first (varint), count (varint32), compression (u8),
+        raw_size (varint32), then the stored data; a payload that ends inside
+        the head is BAD_PAYLOAD."""
+        c = Cursor(p, "PLNS")
+        first = c.varint("first")
+        count = c.varint32("count")
+        method = c.u8("compression")
+        raw_size = c.varint32("raw_size")
+        return first, count, method, raw_size, c.rest()
 
     def add_float_planes(self, vals, count, pi, two_pi, base):
         planes = self.planes
@@ -610,9 +747,13 @@ class Reader:
     # -- §8.2 part groups --------------------------------------------------
 
     def read_group(self, p, offset):
-        if len(p) < 16:
-            raise PlnError("BAD_PAYLOAD", "GRUP payload of %d bytes, under 16" % len(p))
-        index, obj, kind, method, raw_size = u32(p, 0), u32(p, 4), p[8], p[9], u32(p, 12)
+        if self.major == 3:
+            index, obj, kind, method, raw_size, stored = self.read_group_head_v3(p)
+        else:
+            if len(p) < 16:
+                raise PlnError("BAD_PAYLOAD", "GRUP payload of %d bytes, under 16" % len(p))
+            index, obj, kind, method, raw_size = u32(p, 0), u32(p, 4), p[8], p[9], u32(p, 12)
+            stored = p[16:]
         if index != len(self.groups):
             raise PlnError("GROUP_INDEX_MISMATCH",
                            "group index %d, expected %d" % (index, len(self.groups)))
@@ -623,10 +764,10 @@ class Reader:
         if not known and self.minor <= READER_VERSIONS[self.major]:
             raise PlnError("UNKNOWN_GROUP_KIND",
                            "kind %d in a version %d.%d file" % (kind, self.major, self.minor))
-        body = decompress(method, raw_size, p[16:], "GRUP body")
+        body = decompress(method, raw_size, stored, "GRUP body")
 
         c = Cursor(body, "GRUP body")
-        v2 = self.major == 2  # pln-2 §8.7: varint bodies
+        v2 = self.major >= 2  # pln-2 §8.7: varint bodies, in major 3 too (pln-3 §8.2)
         refs = self.read_refs_v2(c) if v2 else self.read_refs(c)
         m = len(refs)
         roles = c.take((m + 7) // 8, "roles")
@@ -647,6 +788,18 @@ class Reader:
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.chunk_list.append((offset, b"GRUP", index))
+
+    def read_group_head_v3(self, p):
+        """pln-3 §8.2: index, object (varint32), kind, compression (u8),
+        raw_size (varint32), then the stored body; a payload that ends inside
+        the head is BAD_PAYLOAD."""
+        c = Cursor(p, "GRUP")
+        index = c.varint32("group index")
+        obj = c.varint32("object")
+        kind = c.u8("kind")
+        method = c.u8("compression")
+        raw_size = c.varint32("raw_size")
+        return index, obj, kind, method, raw_size, c.rest()
 
     def check_ref_count(self, m):
         if m == 0:
@@ -834,6 +987,10 @@ class Reader:
             if off <= prev:
                 raise PlnError("BAD_INDEX", "entry %d: offsets do not increase" % i)
             prev = off
+            # pln-3 §8.6: "after the header" is at or after the chunk that follows PHDR
+            if self.major == 3 and off < self.after_header:
+                raise PlnError("BAD_INDEX", "entry %d: offset %d before %d, the end of the header"
+                               % (i, off, self.after_header))
             if off >= offset:
                 raise PlnError("BAD_INDEX", "entry %d: offset %d not before the index" % (i, off))
         if len(entries) != len(self.chunk_list):
@@ -848,16 +1005,35 @@ class Reader:
     # -- §4.4 end ----------------------------------------------------------
 
     def read_end(self, p):
-        if len(p) != 8:
-            raise PlnError("BAD_PAYLOAD", "PEND payload of %d bytes, not 8" % len(p))
-        index_offset = u64(p, 0)
-        if index_offset != 0 and index_offset != self.index_offset:
-            raise PlnError("BAD_INDEX", "PEND index_offset %d, iNDX at %r"
-                           % (index_offset, self.index_offset))
+        if self.major == 3:
+            self.read_end_v3(p)
+        else:
+            if len(p) != PEND_PAYLOAD_V1:
+                raise PlnError("BAD_PAYLOAD", "PEND payload of %d bytes, not 8" % len(p))
+            index_offset = u64(p, 0)
+            if index_offset != 0 and index_offset != self.index_offset:
+                raise PlnError("BAD_INDEX", "PEND index_offset %d, iNDX at %r"
+                               % (index_offset, self.index_offset))
         if self.flags & FLAG_COUNTS_KNOWN:
             actual = (len(self.planes), len(self.objects), len(self.groups))
             if actual != self.counts:
                 raise PlnError("COUNT_MISMATCH", "header counts %r, file %r" % (self.counts, actual))
+
+    def read_end_v3(self, p):
+        """pln-3 §4.4: an empty payload (no index) or the u64 offset of the
+        iNDX chunk, never 0; any other length is BAD_PAYLOAD."""
+        if len(p) not in PEND_PAYLOADS_V3:
+            raise PlnError("BAD_PAYLOAD", "PEND payload of %d bytes, not 0 or 8" % len(p))
+        if not p:
+            # like index_offset 0 in versions 1 and 2, an empty PEND is not
+            # checked against an iNDX the file may hold (pln-3 §4.4 names no code)
+            return
+        index_offset = u64(p, 0)
+        if index_offset == 0:
+            raise PlnError("BAD_INDEX", "PEND index_offset 0 (pln-3 §4.4: an empty PEND says no index)")
+        if index_offset != self.index_offset:
+            raise PlnError("BAD_INDEX", "PEND index_offset %d, iNDX at %r"
+                           % (index_offset, self.index_offset))
 
     # -- output ------------------------------------------------------------
 
