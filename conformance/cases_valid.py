@@ -333,6 +333,15 @@ V3_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 0))
 V3_Q221 = Header(version=(3, 0), coding=Coding.QUANTIZED, quantization=Quantization(2, 2, 1, 0.0, 1.0),
                  units=Units.MILLIMETRE, tolerance=1e-6, error_bound=2.2e-14)
 
+#: A newer minor version's additions: OBJT bytes after the transform, a group of unknown kind 9
+#: between two known ones, a new flag bit (the PHDR bytes are each case's header extra).
+NEWER_MINOR = dict(
+    ops=(Obj("cube", transform=translation(0.5, 0.0, 0.0), extra=b"later"), Planes(CUBE),
+         Group(0, 0, tuple(range(6))), Group(0, 9, tuple(range(6)), bounding=(4, 5), extra=b"\x00\x01\x02\x03"),
+         Group(0, GroupKind.PSEUDO_CONVEX, tuple(range(6)), bounding=(4,))),
+    decoded_bbox=True, assembled_only=True, header_flags=0x0100,
+    findings=("SKIPPED_GROUP_KIND",), findings_optional=("NEWER_MINOR_VERSION",))
+
 CASES = [
     ValidCase("cube_float32", "the unit cube of spec §12, float32, metres, with index: the 401 bytes printed there",
               SPEC_HEADER, cube_ops()),
@@ -419,11 +428,7 @@ CASES = [
     ValidCase("minor_1_1", "version 1.1: 8 more PHDR bytes and a new flag bit, 5 more OBJT bytes after the "
               "transform, a group of unknown kind 9 (skipped) between two known ones",
               dataclasses.replace(SPEC_HEADER, version=(1, 1), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
-              (Obj("cube", transform=translation(0.5, 0.0, 0.0), extra=b"later"), Planes(CUBE),
-               Group(0, 0, tuple(range(6))), Group(0, 9, tuple(range(6)), bounding=(4, 5), extra=b"\x00\x01\x02\x03"),
-               Group(0, GroupKind.PSEUDO_CONVEX, tuple(range(6)), bounding=(4,))),
-              decoded_bbox=True, assembled_only=True, header_flags=0x0100,
-              findings=("SKIPPED_GROUP_KIND",), findings_optional=("NEWER_MINOR_VERSION",)),
+              **NEWER_MINOR),
     ValidCase("l_v2_predicted", "version 2.0: the L of bsp_l in the predicted coding 8/8/8 over h in [-1, 2] "
               "(every plane exact), sorted by code so that runs of one nu and of one normal occur, and its tree "
               "as varint tokens", V2_L,
@@ -461,11 +466,7 @@ CASES = [
     ValidCase("minor_3_1", "version 3.1: 8 more PHDR bytes after the counts and a new flag bit, 5 more OBJT bytes "
               "after the transform, a group of unknown kind 9 (skipped) between two known ones",
               dataclasses.replace(V3_CUBE, version=(3, 1), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
-              (Obj("cube", transform=translation(0.5, 0.0, 0.0), extra=b"later"), Planes(CUBE),
-               Group(0, 0, tuple(range(6))), Group(0, 9, tuple(range(6)), bounding=(4, 5), extra=b"\x00\x01\x02\x03"),
-               Group(0, GroupKind.PSEUDO_CONVEX, tuple(range(6)), bounding=(4,))),
-              decoded_bbox=True, assembled_only=True, header_flags=0x0100,
-              findings=("SKIPPED_GROUP_KIND",), findings_optional=("NEWER_MINOR_VERSION",)),
+              **NEWER_MINOR),
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),
 ]

@@ -81,7 +81,8 @@ CRITICAL_TYPES = frozenset({PHDR, OBJT, PLNS, GRUP, PEND})
 FLAG_LOSSY = 0x0001
 FLAG_COUNTS_KNOWN = 0x0002
 FLAG_BBOX_KNOWN = 0x0004
-Header = cs.Struct(
+#: The first 9 bytes, the same in every version (version 3 has nothing else that is fixed).
+HEADER_FIXED = (
     "version_major" / cs.Int8ul,
     "version_minor" / cs.Int8ul,
     "flags" / cs.Int16ul,
@@ -90,6 +91,9 @@ Header = cs.Struct(
     "bits_phi" / cs.Int8ul,
     "bits_h" / cs.Int8ul,
     "units" / cs.Int8ul,
+)
+Header = cs.Struct(
+    *HEADER_FIXED,
     "reserved" / cs.Bytes(3),
     "h_min" / cs.Float64l,
     "h_max" / cs.Float64l,
@@ -202,14 +206,7 @@ END_SIZE = 8
 HEADER3_FIXED = 9
 CODINGS_WITH_RANGE = (2, 3)
 Header3 = cs.Struct(
-    "version_major" / cs.Int8ul,
-    "version_minor" / cs.Int8ul,
-    "flags" / cs.Int16ul,
-    "coding" / cs.Int8ul,
-    "bits_nu" / cs.Int8ul,
-    "bits_phi" / cs.Int8ul,
-    "bits_h" / cs.Int8ul,
-    "units" / cs.Int8ul,
+    *HEADER_FIXED,
     "h_range" / cs.If(lambda this: this.coding in CODINGS_WITH_RANGE, cs.Array(2, cs.Float64l)),
     "bbox" / cs.If(cs.this.flags & FLAG_BBOX_KNOWN, cs.Array(6, cs.Float32l)),
     "tolerance" / cs.Float32l,
