@@ -948,11 +948,12 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                 found = attempt(cod, q, pieces=_FINAL_PIECES)
             if found is not None:
                 return found
+    # Closed objects whose float64 decoding is no solid: what watertight=False would store open.
+    opened = [k for k, (m, o) in enumerate(zip(base_meshes, objects))
+              if o.closed and structure_problem(m, o) is not None]
     if not watertight:
         # Only when the solid cannot be had: coarser widths that open a solid that finer ones keep
         # closed would otherwise win.
-        opened = [k for k, (m, o) in enumerate(zip(base_meshes, objects))
-                  if o.closed and structure_problem(m, o) is not None]
         if opened:
             found = _choose([replace(o, closed=False) if k in opened else o for k, o in enumerate(objects)],
                             tolerance, coding, bits)
@@ -961,8 +962,7 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                               f"(distance and area kept, not watertight), marked lossy", PlnWarning, stacklevel=3)
             return replace(found, lossy=True)
     hint = ""
-    if watertight and any(o.closed and not is_closed_manifold(m.faces, len(m.vertices))
-                          for m, o in zip(base_meshes, objects)):
+    if watertight and opened:
         hint = "; watertight=False (pln convert --allow-open) would store it as an open surface"
     raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g} (two-sided Hausdorff distance; "
                         f"closed sources must also decode closed, with their volume and Euler characteristic, "
