@@ -51,7 +51,8 @@ def encode_header(h: Header) -> bytes:
     if h.version[0] == 3:
         return schema.Header3.build(dict(
             fields, h_range=[q.h_min, q.h_max] if h.coding.quantized else None,
-            bbox=None if h.bbox is None else [*_f32_toward(bbox[0], -math.inf), *_f32_toward(bbox[1], math.inf)],
+            bbox=None if h.bbox is None else [*_f32_toward(bbox[0], -math.inf, "a bounding box coordinate"),
+                                              *_f32_toward(bbox[1], math.inf, "a bounding box coordinate")],
             tolerance=_f32_up(h.tolerance, "tolerance"), error_bound=_f32_up(h.error_bound, "error_bound"),
             counts=dict(plane_count=counts[0], object_count=counts[1], group_count=counts[2])
             if flags & schema.FLAG_COUNTS_KNOWN else None))
@@ -63,7 +64,7 @@ def encode_header(h: Header) -> bytes:
     ))
 
 
-def _f32_toward(values: np.ndarray, direction: float) -> list[float]:
+def _f32_toward(values: np.ndarray, direction: float, what: str) -> list[float]:
     """Each value rounded to the nearest float32 on the side of ``direction`` (spec 3.0 §5)."""
     v = np.asarray(values, dtype=np.float64)
     with np.errstate(over="ignore"):
@@ -71,17 +72,12 @@ def _f32_toward(values: np.ndarray, direction: float) -> list[float]:
     wrong = (f < v) if direction > 0 else (f > v)
     f = np.where(wrong, np.nextafter(f, np.float32(direction)), f)
     if not np.isfinite(f).all():
-        raise PlnError("a bounding box coordinate is beyond the float32 range", code="BAD_HEADER_VALUE")
+        raise PlnError(f"{what} is beyond the float32 range", code="BAD_HEADER_VALUE")
     return [float(x) for x in f]
 
 
 def _f32_up(value: float, name: str) -> float:
-    if math.isnan(value):
-        return value
-    (up,) = _f32_toward(np.array([value]), math.inf) if math.isfinite(value) else [math.inf]
-    if not math.isfinite(up):
-        raise PlnError(f"{name} {value} is beyond the float32 range", code="BAD_HEADER_VALUE")
-    return up
+    return value if math.isnan(value) else _f32_toward(np.array([value]), math.inf, f"{name} {value}")[0]
 
 
 def header_size(major: int) -> int:
