@@ -154,12 +154,12 @@ def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes:
     order = np.lexsort((key, owner))
     seq, owner = seq[order], owner[order]
     grown = np.bincount(poly[edge], minlength=len(size)) > 0
-    seq, owner, grown, source = _loops(seq, owner, grown, len(size))
-    vertices, tris, polygon = _triangulate(vertices, seq, owner, grown, len(grown))
+    seq, owner, grown, source = loops(seq, owner, grown, len(size))
+    vertices, tris, polygon = triangulate(vertices, seq, owner, grown, len(grown))
     return vertices, tris, source[polygon]
 
 
-def _loops(seq: np.ndarray, owner: np.ndarray, grown: np.ndarray, count: int
+def loops(seq: np.ndarray, owner: np.ndarray, grown: np.ndarray, count: int
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Rings that pass a vertex twice (welding joined two corners of a thin polygon) split into
     their simple loops: ``(seq, owner, grown, source)``, ``source`` the input ring of each loop.
@@ -236,7 +236,7 @@ def _on_edges(vertices: np.ndarray, verr: np.ndarray, a: np.ndarray, b: np.ndarr
     return edge[inside], cand[inside], t[inside]
 
 
-def _triangulate(vertices: np.ndarray, seq: np.ndarray, owner: np.ndarray, grown: np.ndarray,
+def triangulate(vertices: np.ndarray, seq: np.ndarray, owner: np.ndarray, grown: np.ndarray,
                  count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Fan triangles of the rings ``seq`` grouped by ``owner``: from the first corner, or the
     centroid of grown rings."""

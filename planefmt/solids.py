@@ -45,6 +45,7 @@ from scipy.spatial import ConvexHull, QhullError
 from .clipping import clip_triangles, vertex_sides
 from .errors import GeometryError
 from .bsptree import boundary, parse
+from .exactbsp import exact_boundary
 from .model import BSP_IN, BSP_OUT
 from .polygonize import edge_adjacency
 from .seams import Planes, close_cracks, fill_slits, stitch
@@ -248,14 +249,23 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
         if closed is not None:
             return closed[0], closed[1], first[2][closed[2]]
         plain = plain or first
-    # Last, slits that faces nearly coinciding leave, closed flat (the encoder verifies the result).
+    # Then slits that faces nearly coinciding leave, closed flat (the encoder verifies the result).
     for weld, vertices, triangles, planes in welded:
         slits = fill_slits(vertices, triangles, weld * reach)
         if slits is not None and len(slits[0]):
             filled = np.concatenate([triangles, slits[0]])
             if edge_adjacency(filled, len(vertices)).closed:
                 return vertices, filled, np.concatenate([planes, planes[slits[1]]])
-    return plain
+    # Last, the surface exact arithmetic makes: where the rounded decisions above misplace pieces
+    # (many nearly coincident or concurrent planes), it has no cracks to weld. It comes last so that
+    # every surface the rounded decoding closes decodes as it did; its sub-rounding features
+    # (tunnels, sheets touching along an edge) can differ from the source's topology, which the
+    # encoder checks.
+    try:
+        exact = exact_boundary(tree, omega, h, size, face)
+    except GeometryError:
+        return plain
+    return exact if edge_adjacency(exact[1], len(exact[0])).closed else plain
 
 
 def decode_bsp_group(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
