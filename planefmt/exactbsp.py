@@ -12,8 +12,11 @@ polygon's own, and the two of its edges), a crossing on edge ``e`` of a
 polygon on ``p`` cut by ``q`` is ``(p, e, q)``, and every side test is the
 exact sign of :mod:`planefmt.predicates`. So the pieces are those exact
 arithmetic on the stored planes makes, a corner shared by two pieces is the
-same triple in both, and the surface is closed by construction; only the
-final coordinates are rounded.
+same triple in both, and the surface has no crack: every edge is on an even
+number of triangles (two, except where sheets touch along an edge). Only the
+final coordinates are rounded. Features below the planes' rounding (a tunnel
+where a dozen planes nearly meet) are exact features of the stored solid and
+stay; :func:`planefmt.solids.decode_tree` therefore tries this last.
 
 Sewing: corners with the same (sorted) triple are one vertex; distinct
 triples are one vertex only when the point of one lies exactly on the planes
@@ -35,7 +38,7 @@ from scipy.spatial import cKDTree
 from .bsptree import IN, OUT, SPLIT, Tree
 from .errors import GeometryError
 from .predicates import points, sides
-from .seams import loops, triangulate
+from .seams import fan_rings
 
 
 
@@ -339,15 +342,7 @@ def _sew(s: _Batch, w: np.ndarray, c: np.ndarray, slot: np.ndarray) -> tuple[np.
     ends = start[1:][size > 0] - 1
     nxt[ends] = start[:-1][size > 0]
     edge, ins, t = _on_edges(w, c, vertices, tri_vid, ring, ring[nxt], ctri, ctri[nxt], s.plane[poly], elabel)
-    key = np.concatenate([np.arange(len(ring), dtype=np.float64), edge + t])
-    seq = np.concatenate([ring, ins])
-    owner = np.concatenate([poly, poly[edge]])
-    order = np.lexsort((key, owner))
-    seq, owner = seq[order], owner[order]
-    grown = np.bincount(poly[edge], minlength=len(size)) > 0
-    seq, owner, grown, source = loops(seq, owner, grown, len(size))
-    vertices, tris, polygon = triangulate(vertices, seq, owner, grown, len(grown))
-    return vertices, tris, source[polygon]
+    return fan_rings(vertices, ring, poly, len(size), edge, ins, t)
 
 
 def _same_points(w: np.ndarray, c: np.ndarray, triples: np.ndarray, pts: np.ndarray) -> np.ndarray:

@@ -147,19 +147,25 @@ def stitch(points: np.ndarray, offsets: np.ndarray, corners: np.ndarray, planes:
     ends = start[1:][size > 0] - 1
     nxt[ends] = start[:-1][size > 0]
     edge, ins, t = _on_edges(vertices, verr, ring, ring[nxt], tol, carried)
-    # Rebuild each ring with the inserted vertices, in order along their edge.
+    return fan_rings(vertices, ring, poly, len(size), edge, ins, t)
+
+
+def fan_rings(vertices: np.ndarray, ring: np.ndarray, poly: np.ndarray, count: int, edge: np.ndarray,
+              ins: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Triangles of ``count`` rings of vertex ids ``ring`` (grouped by ``poly``, in order) with the vertices
+    ``ins`` inserted into ring edges ``edge`` at positions ``t`` in (0, 1): ``(vertices, triangles, polygon)``."""
     key = np.concatenate([np.arange(len(ring), dtype=np.float64), edge + t])
     seq = np.concatenate([ring, ins])
     owner = np.concatenate([poly, poly[edge]])
     order = np.lexsort((key, owner))
     seq, owner = seq[order], owner[order]
-    grown = np.bincount(poly[edge], minlength=len(size)) > 0
-    seq, owner, grown, source = loops(seq, owner, grown, len(size))
-    vertices, tris, polygon = triangulate(vertices, seq, owner, grown, len(grown))
+    grown = np.bincount(poly[edge], minlength=count) > 0
+    seq, owner, grown, source = _loops(seq, owner, grown, count)
+    vertices, tris, polygon = _triangulate(vertices, seq, owner, grown, len(grown))
     return vertices, tris, source[polygon]
 
 
-def loops(seq: np.ndarray, owner: np.ndarray, grown: np.ndarray, count: int
+def _loops(seq: np.ndarray, owner: np.ndarray, grown: np.ndarray, count: int
            ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Rings that pass a vertex twice (welding joined two corners of a thin polygon) split into
     their simple loops: ``(seq, owner, grown, source)``, ``source`` the input ring of each loop.
@@ -236,7 +242,7 @@ def _on_edges(vertices: np.ndarray, verr: np.ndarray, a: np.ndarray, b: np.ndarr
     return edge[inside], cand[inside], t[inside]
 
 
-def triangulate(vertices: np.ndarray, seq: np.ndarray, owner: np.ndarray, grown: np.ndarray,
+def _triangulate(vertices: np.ndarray, seq: np.ndarray, owner: np.ndarray, grown: np.ndarray,
                  count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Fan triangles of the rings ``seq`` grouped by ``owner``: from the first corner, or the
     centroid of grown rings."""
