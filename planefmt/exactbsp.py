@@ -37,8 +37,12 @@ from scipy.spatial import cKDTree
 
 from .bsptree import IN, OUT, SPLIT, Tree
 from .errors import GeometryError
-from .predicates import points, sides
+from .predicates import ExactPlanes
 from .seams import fan_rings
+
+#: Exact (integer) side tests one decoding may spend, about 40 s of them: King_geom's 4,608-triangle
+#: torus on its own planes needs 2.6e5; planes concurrent everywhere (a hostile file) stop here.
+EXACT_LIMIT = 1_000_000
 
 
 
@@ -88,7 +92,7 @@ def _concat(batches: list[_Batch]) -> _Batch:
     return _Batch(corner, labels, *(np.concatenate([getattr(b, f) for b in batches]) for f in _TAGS))
 
 
-def _split(b: _Batch, omega: np.ndarray, h: np.ndarray, q: int, want: tuple[int, ...] = (-1, 1)
+def _split(b: _Batch, planes: ExactPlanes, q: int, want: tuple[int, ...] = (-1, 1)
            ) -> tuple[_Batch | None, _Batch | None, np.ndarray]:
     """``b`` split by plane ``q``: ``(inner, outer, on)``; ``on`` marks polygons with every corner on ``q``.
 
@@ -98,7 +102,7 @@ def _split(b: _Batch, omega: np.ndarray, h: np.ndarray, q: int, want: tuple[int,
     n, m = b.count.shape[0], b.corner.shape[1]
     live = np.arange(m)[None, :] < b.count[:, None]
     side = np.zeros((n, m), dtype=np.int8)
-    side[live] = sides(omega, h, b.corner[live], q)
+    side[live] = planes.sides(b.corner[live], q)
     lo = (side < 0).any(axis=1)
     hi = (side > 0).any(axis=1)
     on = ~lo & ~hi
@@ -164,10 +168,10 @@ def _squares(tree: Tree, omega: np.ndarray, nodes: np.ndarray, box: int) -> _Bat
     return _Batch(corner, edges, z + 4, p, nodes.astype(np.int64), z + 1, z, z)
 
 
-def _sub_hyperplanes(tree: Tree, omega: np.ndarray, h: np.ndarray, box: int) -> dict[int, _Batch]:
+def _sub_hyperplanes(tree: Tree, planes: ExactPlanes, box: int) -> dict[int, _Batch]:
     """``R_N = cell(N) ∩ plane(N)`` for every split node (absent where empty), clipped root first."""
     nodes = np.flatnonzero(tree.kind == SPLIT)
-    allb = _squares(tree, omega, nodes, box)
+    allb = _squares(tree, planes.omega, nodes, box)
     width = 4
     corner = np.zeros((len(tree.kind), width, 3), dtype=np.int64)
     labels = np.zeros((len(tree.kind), width), dtype=np.int64)
@@ -183,7 +187,7 @@ def _sub_hyperplanes(tree: Tree, omega: np.ndarray, h: np.ndarray, box: int) -> 
                 continue
             z = np.zeros(len(live), dtype=np.int64)
             b = _Batch(corner[live], labels[live], count[live], tree.plane[live], live.astype(np.int64), z, z, z)
-            inner, outer, _ = _split(b, omega, h, j, (keep,))
+            inner, outer, _ = _split(b, planes, j, (keep,))
             piece = inner if keep < 0 else outer
             assert piece is not None
             if piece.corner.shape[1] > corner.shape[1]:
@@ -205,9 +209,9 @@ def _sub_hyperplanes(tree: Tree, omega: np.ndarray, h: np.ndarray, box: int) -> 
     return out
 
 
-def _surface(tree: Tree, omega: np.ndarray, h: np.ndarray, box: int) -> _Batch:
+def _surface(tree: Tree, planes: ExactPlanes, box: int) -> _Batch:
     """The surface polygons of the union of IN leaves, oriented counter-clockwise seen from outside."""
-    regions = _sub_hyperplanes(tree, omega, h, box)
+    regions = _sub_hyperplanes(tree, planes, box)
     surface: list[_Batch] = []
     result = _empty()
     # Frames: [node, stage, batch, pieces returned by the inner subtree].
@@ -222,7 +226,7 @@ def _surface(tree: Tree, omega: np.ndarray, h: np.ndarray, box: int) -> _Batch:
             continue
         j = int(tree.plane[node])
         if stage == 0:
-            inner, outer, on = _split(batch, omega, h, j)
+            inner, outer, on = _split(batch, planes, j)
             assert inner is not None and outer is not None
             inside = [inner, batch.take(np.flatnonzero(on))]
             if node in regions:
@@ -269,14 +273,15 @@ def exact_boundary(tree: Tree, omega: np.ndarray, h: np.ndarray, size: float, fa
     eye = np.eye(3)
     w = np.concatenate([omega, np.repeat(eye, 2, axis=0) * np.tile([1.0, -1.0], 3)[:, None]])
     c = np.concatenate([h, np.full(6, size)])
-    s = _surface(tree, w, c, m)
+    planes = ExactPlanes(w, c, EXACT_LIMIT)
+    s = _surface(tree, planes, m)
     slot = np.arange(s.corner.shape[1])[None, :] < s.count[:, None]
     if (s.labels[slot] >= m).any():
         raise GeometryError("an IN leaf of the BSP tree does not end", code="UNBOUNDED_POLYTOPE")
     if face is not None:
         s = s.take(np.flatnonzero(np.asarray(face, dtype=bool)[s.plane]))
         slot = np.arange(s.corner.shape[1])[None, :] < s.count[:, None]
-    vertices, triangles, polygon = _sew(s, w, c, slot)
+    vertices, triangles, polygon = _sew(s, planes, slot)
     vertices, triangles = split_pinches(vertices, triangles)
     return vertices, triangles, s.plane[polygon]
 
@@ -311,15 +316,15 @@ def split_pinches(vertices: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarr
     return vertices[triangles.reshape(-1)[first]], new.reshape(t, 3)
 
 
-def _sew(s: _Batch, w: np.ndarray, c: np.ndarray, slot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _sew(s: _Batch, planes: ExactPlanes, slot: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """One triangle mesh from the symbolic polygons: vertices by triple, T-junctions split, fanned."""
     poly = np.repeat(np.arange(len(s)), s.count)
     triples = np.sort(s.corner[slot], axis=1)
     elabel = s.labels[slot]
     uniq, label = np.unique(triples, axis=0, return_inverse=True)
     label = label.reshape(-1)
-    pts = points(w, c, uniq)
-    label = _same_points(w, c, uniq, pts)[label]
+    pts = planes.points(uniq)
+    label = _same_points(planes, uniq, pts)[label]
     # Vertex ids after merging exactly equal points; a vertex's planes are all its triples'.
     ids, vid = np.unique(label, return_inverse=True)
     vid = vid.reshape(-1)
@@ -341,11 +346,11 @@ def _sew(s: _Batch, w: np.ndarray, c: np.ndarray, slot: np.ndarray) -> tuple[np.
     nxt = np.arange(len(ring)) + 1
     ends = start[1:][size > 0] - 1
     nxt[ends] = start[:-1][size > 0]
-    edge, ins, t = _on_edges(w, c, vertices, tri_vid, ring, ring[nxt], ctri, ctri[nxt], s.plane[poly], elabel)
+    edge, ins, t = _on_edges(planes, vertices, tri_vid, ring, ring[nxt], ctri, ctri[nxt], s.plane[poly], elabel)
     return fan_rings(vertices, ring, poly, len(size), edge, ins, t)
 
 
-def _same_points(w: np.ndarray, c: np.ndarray, triples: np.ndarray, pts: np.ndarray) -> np.ndarray:
+def _same_points(planes: ExactPlanes, triples: np.ndarray, pts: np.ndarray) -> np.ndarray:
     """For distinct triples, the smallest index of a triple naming exactly the same point."""
     n = len(triples)
     scale = float(np.abs(pts).max(initial=1.0))
@@ -356,7 +361,7 @@ def _same_points(w: np.ndarray, c: np.ndarray, triples: np.ndarray, pts: np.ndar
     a, b = pairs[:, 0], pairs[:, 1]
     same = np.ones(len(pairs), dtype=bool)
     for k in range(3):
-        same &= sides(w, c, triples[a], triples[b, k]) == 0
+        same &= planes.sides(triples[a], triples[b, k]) == 0
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -370,7 +375,7 @@ def _same_points(w: np.ndarray, c: np.ndarray, triples: np.ndarray, pts: np.ndar
     return first[comp]
 
 
-def _on_edges(w: np.ndarray, c: np.ndarray, vertices: np.ndarray, tri_vid: np.ndarray, a: np.ndarray,
+def _on_edges(planes: ExactPlanes, vertices: np.ndarray, tri_vid: np.ndarray, a: np.ndarray,
               b: np.ndarray, ta: np.ndarray, tb: np.ndarray, p: np.ndarray, e: np.ndarray
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Vertices strictly inside edges ``a -> b`` (corner triples ``ta``, ``tb``) on planes ``p`` and
@@ -405,7 +410,7 @@ def _on_edges(w: np.ndarray, c: np.ndarray, vertices: np.ndarray, tri_vid: np.nd
     tv = tri_vid[first[vid], 1:]
     inside = np.ones(len(edge), dtype=bool)
     for end, other in ((ta, tb), (tb, ta)):
-        inside &= _beyond(w, c, end[edge], other[edge], tv, p[edge], e[edge])
+        inside &= _beyond(planes, end[edge], other[edge], tv, p[edge], e[edge])
     edge, vid, tv = edge[inside], vid[inside], tv[inside]
     # Order along each edge, exactly: one vertex precedes another when the other lies beyond it
     # (rounded positions of points solved from nearly dependent planes can be in either order).
@@ -421,14 +426,14 @@ def _on_edges(w: np.ndarray, c: np.ndarray, vertices: np.ndarray, tri_vid: np.nd
         j = np.repeat(lo[many], per) + (np.arange(int(per.sum())) - np.repeat(np.cumsum(per) - per, per))
         i, j = i[i != j], j[i != j]
         k = edge[i]
-        after = _beyond(w, c, tv[j], tb[k], tv[i], p[k], e[k])
+        after = _beyond(planes, tv[j], tb[k], tv[i], p[k], e[k])
         np.add.at(rank, i[after], 1)
     order = np.lexsort((rank, edge))
     edge, vid = edge[order], vid[order]
     return edge, vid, (np.arange(len(edge)) - lo + 1.0) / (total + 1.0)
 
 
-def _beyond(w: np.ndarray, c: np.ndarray, end: np.ndarray, other: np.ndarray, v: np.ndarray, p: np.ndarray,
+def _beyond(planes: ExactPlanes, end: np.ndarray, other: np.ndarray, v: np.ndarray, p: np.ndarray,
             e: np.ndarray) -> np.ndarray:
     """Whether points ``v`` on the line of planes ``p, e`` lie strictly beyond ``end`` towards ``other``
     (all given as triples on that line): on ``other``'s side of a plane of ``end`` crossing the line."""
@@ -437,8 +442,8 @@ def _beyond(w: np.ndarray, c: np.ndarray, end: np.ndarray, other: np.ndarray, v:
     for k in range(3):
         x = end[:, k]
         idx = np.flatnonzero(~decided & (x != p) & (x != e))
-        so = sides(w, c, other[idx], x[idx])
+        so = planes.sides(other[idx], x[idx])
         idx, so = idx[so != 0], so[so != 0]
-        out[idx] = sides(w, c, v[idx], x[idx]) == so
+        out[idx] = planes.sides(v[idx], x[idx]) == so
         decided[idx] = True
     return out

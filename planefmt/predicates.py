@@ -22,6 +22,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import GeometryError
+
 _EPS = float(np.finfo(np.float64).eps)
 #: Forward error bounds of the float64 evaluations below, in units of eps times the permanent
 #: (the same products with absolute values): above the few roundings each term takes.
@@ -81,10 +83,43 @@ def _exact_side(omega: np.ndarray, h: np.ndarray, t: np.ndarray, q: int) -> int:
     return int(np.sign(d4) * np.sign(d3))
 
 
-def sides(omega: np.ndarray, h: np.ndarray, triples: np.ndarray, q: np.ndarray) -> np.ndarray:
+class ExactBudget:
+    """A cap on the exact (integer) evaluations a computation may spend: a file whose every plane
+    passes through one point cannot make a decoder run them without end."""
+
+    def __init__(self, limit: int) -> None:
+        self.left = int(limit)
+
+    def spend(self, count: int) -> None:
+        self.left -= count
+        if self.left < 0:
+            raise GeometryError("too many exact side tests (planes nearly concurrent everywhere)",
+                                code="LIMIT_EXCEEDED")
+
+
+class ExactPlanes:
+    """Planes ``omega`` (n, 3), ``h`` (n,) for exact tests, spending from one :class:`ExactBudget`."""
+
+    def __init__(self, omega: np.ndarray, h: np.ndarray, limit: int) -> None:
+        self.omega = np.asarray(omega, dtype=np.float64)
+        self.h = np.asarray(h, dtype=np.float64)
+        self.budget = ExactBudget(limit)
+
+    def sides(self, triples: np.ndarray, q: np.ndarray | int) -> np.ndarray:
+        """:func:`sides` on these planes."""
+        return sides(self.omega, self.h, triples, q, self.budget)
+
+    def points(self, triples: np.ndarray) -> np.ndarray:
+        """:func:`points` on these planes."""
+        return points(self.omega, self.h, triples)
+
+
+def sides(omega: np.ndarray, h: np.ndarray, triples: np.ndarray, q: np.ndarray | int,
+          budget: ExactBudget | None = None) -> np.ndarray:
     """Exact ``sign(omega_q . X(t) - h_q)`` (int8, -1 inside) of points ``triples`` (n, 3) for planes ``q`` (n,).
 
-    0 where ``q`` is one of the point's planes, or the point lies on ``q`` exactly.
+    0 where ``q`` is one of the point's planes, or the point lies on ``q`` exactly. Signs the
+    float64 bound cannot decide are charged to ``budget`` (``LIMIT_EXCEEDED`` when spent).
     """
     triples = np.asarray(triples, dtype=np.int64).reshape(-1, 3)
     q = np.broadcast_to(np.asarray(q, dtype=np.int64), (len(triples),))
@@ -98,7 +133,10 @@ def sides(omega: np.ndarray, h: np.ndarray, triples: np.ndarray, q: np.ndarray) 
     d3, p3 = _det3(omega[t[:, 0]], omega[t[:, 1]], omega[t[:, 2]])
     sure = (np.abs(d4) > DET4_BOUND * p4) & (np.abs(d3) > DET3_BOUND * p3)
     out[free[sure]] = (np.sign(d4[sure]) * np.sign(d3[sure])).astype(np.int8)
-    for k in np.flatnonzero(~sure):
+    undecided = np.flatnonzero(~sure)
+    if budget is not None:
+        budget.spend(len(undecided))
+    for k in undecided:
         out[free[k]] = _exact_side(omega, h, t[k], int(qq[k]))
     return out
 

@@ -149,3 +149,23 @@ def test_exact_decoding_closes_what_rounded_decisions_misplace(monkeypatch):
     assert abs(signed_volume(dv, dt) - vol) <= 1e-9 * abs(vol)
     d, _ = TriangleIndex(poly.vertices, ff).query(dv[np.unique(dt)])
     assert d.max() <= 1e-6 * diag
+
+
+def test_exact_side_tests_are_capped(monkeypatch):
+    """A square pyramid: its four side planes pass (within rounding) through the apex, where no
+    float64 bound decides a side; with no exact test allowed the decoding stops with
+    LIMIT_EXCEEDED (decode_tree then keeps its rounded surface, as the King test shows)."""
+    import planefmt.exactbsp as exactbsp
+    from planefmt.errors import GeometryError
+
+    omega = np.array([[1.0, 0, 1], [-1.0, 0, 1], [0, 1.0, 1], [0, -1.0, 1], [0, 0, -1.0]])
+    omega /= np.linalg.norm(omega, axis=1)[:, None]
+    h = omega @ np.array([0.0, 0.0, 1.0])
+    h[4] = 0.0
+    tokens = np.array([0, 1, 2, 3, 4, 0xFFFFFFFE] + [0xFFFFFFFF] * 5, dtype=np.uint32)
+    dv, dt, _ = exact_boundary(parse(tokens, 5), omega, h, 8.0)
+    assert is_closed_manifold(dt, len(dv)) and abs(signed_volume(dv, dt) - 4.0 / 3.0) <= 1e-12
+    monkeypatch.setattr(exactbsp, "EXACT_LIMIT", 0)
+    with pytest.raises(GeometryError) as err:
+        exact_boundary(parse(tokens, 5), omega, h, 8.0)
+    assert err.value.code == "LIMIT_EXCEEDED"
