@@ -27,6 +27,7 @@ counter-clockwise seen from outside.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol, TypeVar
 
 import numpy as np
 
@@ -330,22 +331,50 @@ def boundary(tree: Tree, omega: np.ndarray, h: np.ndarray, size: float,
             frame[1], frame[2] = 1, parts[1]
             stack.append([node + 1, 0, _concat(inside), None])
         elif stage == 1:
-            mine = (result.src == node) & (result.phase == 1)
-            moved = result.take(np.flatnonzero(mine))
-            moved.phase = np.full(len(moved), 2, dtype=np.int64)
-            moved.face = np.where(moved.cls == IN, 1, -1)
-            frame[3] = result.take(np.flatnonzero(~mine))
+            moved, frame[3] = inner_done(result, node)
             frame[1] = 2
             stack.append([tree.outer[node], 0, _concat([batch, moved]), None])
         else:
-            mine = (result.src == node) & (result.phase == 2)
-            up = ((result.face == 1) & (result.cls == OUT)) | ((result.face == -1) & (result.cls == IN))
-            out = np.flatnonzero(mine & up)
-            if len(out):
-                surface.append(result.take(out))
-            result = _concat([frame[3], result.take(np.flatnonzero(~mine))])
+            result = _concat([frame[3], outer_done(result, node, surface)])
             stack.pop()
     return _orient(_concat(surface), tree)
+
+
+class Pieces(Protocol):
+    """Polygons travelling down a tree, however their corners are held (:class:`_Batch`, or the
+    symbolic batches of :mod:`planefmt.exactbsp`)."""
+
+    src: np.ndarray
+    phase: np.ndarray
+    face: np.ndarray
+    cls: np.ndarray
+
+    def take(self: "P", idx: np.ndarray) -> "P": ...
+
+
+P = TypeVar("P", bound=Pieces)
+
+
+def inner_done(result: P, node: int) -> tuple[P, P]:
+    """Pieces of ``node``'s sub-hyperplane back from its inner subtree, tagged with the class they
+    reached there, to travel the outer one: ``(moved, rest)`` (any batch with ``src``, ``phase``,
+    ``face``, ``cls`` and ``take``)."""
+    mine = (result.src == node) & (result.phase == 1)
+    moved = result.take(np.flatnonzero(mine))
+    moved.phase = np.full(len(moved), 2, dtype=np.int64)
+    moved.face = np.where(moved.cls == IN, 1, -1)
+    return moved, result.take(np.flatnonzero(~mine))
+
+
+def outer_done(result: P, node: int, surface: list[P]) -> P:
+    """Pieces of ``node``'s sub-hyperplane back from its outer subtree: those with different classes
+    on the two sides go to ``surface``; returns the other pieces of ``result``."""
+    mine = (result.src == node) & (result.phase == 2)
+    up = ((result.face == 1) & (result.cls == OUT)) | ((result.face == -1) & (result.cls == IN))
+    out = np.flatnonzero(mine & up)
+    if len(out):
+        surface.append(result.take(out))
+    return result.take(np.flatnonzero(~mine))
 
 
 def _chains(tree: Tree) -> np.ndarray:

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .bsptree import IN, OUT, SPLIT, Tree
+from .bsptree import SPLIT, Tree, inner_done, outer_done
 from .errors import GeometryError
 from .predicates import ExactPlanes
 from .seams import fan_rings
@@ -234,20 +234,11 @@ def _surface(tree: Tree, planes: ExactPlanes, box: int) -> _Batch:
             frame[1], frame[2] = 1, outer
             stack.append([node + 1, 0, _concat(inside), None])
         elif stage == 1:
-            mine = (result.src == node) & (result.phase == 1)
-            moved = result.take(np.flatnonzero(mine))
-            moved.phase = np.full(len(moved), 2, dtype=np.int64)
-            moved.face = np.where(moved.cls == IN, 1, -1)
-            frame[3] = result.take(np.flatnonzero(~mine))
+            moved, frame[3] = inner_done(result, node)
             frame[1] = 2
             stack.append([tree.outer[node], 0, _concat([batch, moved]), None])
         else:
-            mine = (result.src == node) & (result.phase == 2)
-            up = ((result.face == 1) & (result.cls == OUT)) | ((result.face == -1) & (result.cls == IN))
-            out = np.flatnonzero(mine & up)
-            if len(out):
-                surface.append(result.take(out))
-            result = _concat([frame[3], result.take(np.flatnonzero(~mine))])
+            result = _concat([frame[3], outer_done(result, node, surface)])
             stack.pop()
     s = _concat(surface)
     for i in np.flatnonzero(s.face < 0):

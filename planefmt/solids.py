@@ -205,13 +205,15 @@ WELD_TOL = (4e-11, 1e-9, 1e-8, 1e-7, 1e-6)
 CRACK_WELD = (1e-7, 1e-6, 1e-5, 1e-4)
 
 
-def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
+def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray, exact: bool = True
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The closed surface of a BSP group: ``(vertices (V, 3), triangles (T, 3), plane (T,))``.
 
     ``omega`` (m, 3), ``h`` (m,) are the group's planes in reference order,
     ``face`` (m,) True for face planes (cut planes carry no surface, spec
-    §8.2.1); ``plane`` is the reference each triangle lies on. Raises
+    §8.2.1); ``plane`` is the reference each triangle lies on; ``exact``
+    False skips the exact last resort (an encoder trying many trees, which
+    then only refuses some a reader would decode closed). Raises
     ``BAD_GROUP_STRUCTURE`` for a malformed tree and ``UNBOUNDED_POLYTOPE``
     when an IN leaf does not end.
     """
@@ -261,11 +263,13 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
     # every surface the rounded decoding closes decodes as it did; its sub-rounding features
     # (tunnels, sheets touching along an edge) can differ from the source's topology, which the
     # encoder checks.
+    if not exact:
+        return plain
     try:
-        exact = exact_boundary(tree, omega, h, size, face)
+        surface = exact_boundary(tree, omega, h, size, face)
     except GeometryError:
         return plain
-    return exact if edge_adjacency(exact[1], len(exact[0])).closed else plain
+    return surface if edge_adjacency(surface[1], len(surface[0])).closed else plain
 
 
 def decode_bsp_group(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
