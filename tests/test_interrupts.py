@@ -1,5 +1,6 @@
 """Interrupted conversions (issue 7): SIGKILL, SIGTERM or SIGINT at any moment leave nothing under
-the target name, and never touch the input."""
+the target name but the whole output (when they arrive after it was renamed into place), and never
+touch the input."""
 
 from __future__ import annotations
 
@@ -64,5 +65,11 @@ def test_sigterm_and_sigint_clean_up_and_exit_non_zero(sig: signal.Signals, tmp_
     if proc.returncode == 0:
         pytest.skip("the conversion finished before the signal arrived")
     assert proc.returncode != 0 and "Traceback" not in err, err
-    assert not target.exists()
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["reference.glb"], "temporary files left behind"
+    if target.exists():
+        # The signal came after the output was renamed into place (a loaded machine runs the second
+        # conversion faster than the timed one): then it is the whole output, never a part.
+        assert len(trimesh.load(target, force="mesh").faces) > 60_000
+        left = ["out.glb", "reference.glb"]
+    else:
+        left = ["reference.glb"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == left, "temporary files left behind"
