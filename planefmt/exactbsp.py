@@ -38,12 +38,11 @@ from scipy.spatial import cKDTree
 from .bsptree import SPLIT, Tree, inner_done, outer_done
 from .errors import GeometryError
 from .predicates import ExactPlanes
-from .seams import fan_rings
+from .seams import components, fan_rings
 
 #: Exact (integer) side tests one decoding may spend, about 40 s of them: King_geom's 4,608-triangle
 #: torus on its own planes needs 2.6e5; planes concurrent everywhere (a hostile file) stop here.
 EXACT_LIMIT = 1_000_000
-
 
 
 @dataclass
@@ -298,12 +297,7 @@ def split_pinches(vertices: np.ndarray, triangles: np.ndarray) -> tuple[np.ndarr
     same = (key[1:] == key[:-1]).all(axis=1)
     pairs = np.concatenate([np.column_stack([ca[:-1][same, 0], ca[1:][same, 0]]),
                             np.column_stack([ca[:-1][same, 1], ca[1:][same, 1]])])
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    g = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(3 * t, 3 * t))
-    fan = connected_components(g, directed=False)[1]
-    ids, first, new = np.unique(fan, return_index=True, return_inverse=True)
+    _, first, new = np.unique(components(pairs, 3 * t), return_index=True, return_inverse=True)
     return vertices[triangles.reshape(-1)[first]], new.reshape(t, 3)
 
 
@@ -353,14 +347,10 @@ def _same_points(planes: ExactPlanes, triples: np.ndarray, pts: np.ndarray) -> n
     same = np.ones(len(pairs), dtype=bool)
     for k in range(3):
         same &= planes.sides(triples[a], triples[b, k]) == 0
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
     good = pairs[same]
     if len(good) == 0:
         return rep
-    g = coo_matrix((np.ones(len(good), dtype=np.int8), (good[:, 0], good[:, 1])), shape=(n, n))
-    comp = connected_components(g, directed=False)[1]
+    comp = components(good, n)
     first = np.full(comp.max() + 1, n, dtype=np.int64)
     np.minimum.at(first, comp, np.arange(n))
     return first[comp]

@@ -34,6 +34,12 @@ def weld(points: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
     return _merge(points, cKDTree(points).query_pairs(tol, output_type="ndarray"))
 
 
+def components(pairs: np.ndarray, n: int) -> np.ndarray:
+    """Component label (n,) of each of ``n`` items joined by index ``pairs`` (k, 2), transitively."""
+    g = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    return connected_components(g, directed=False)[1].astype(np.int64)
+
+
 def _merge(points: np.ndarray, pairs: np.ndarray, weight: np.ndarray | None = None
            ) -> tuple[np.ndarray, np.ndarray]:
     """Connected components of ``pairs`` over ``points``: ``(means (k, 3), label (n,))``, each mean
@@ -41,8 +47,7 @@ def _merge(points: np.ndarray, pairs: np.ndarray, weight: np.ndarray | None = No
     n = len(points)
     if len(pairs) == 0:
         return points.copy(), np.arange(n)
-    g = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    label = connected_components(g, directed=False)[1].astype(np.int64)
+    label = components(pairs, n)
     k = int(label.max()) + 1
     wt = np.ones(n) if weight is None else weight
     count = np.bincount(label, weights=wt, minlength=k)
