@@ -336,8 +336,10 @@ def hausdorff(vertices_a: np.ndarray, faces_a: np.ndarray, vertices_b: np.ndarra
     margin = 64.0 * _EPS * (float(np.abs(used).max()) + diag)
     merge_tol = PATCH_TOLERANCE_FRACTION * (target if target is not None else tolerance)
     index_a, index_b = TriangleIndex(*a), TriangleIndex(*b)
-    sides = (_Direction(a, index_b, ConvexPatches(*b, merge_tol), margin),
-             _Direction(b, index_a, ConvexPatches(*a, merge_tol), margin))
+    # A region bound is never below its flatness: flatter than the goal or of no use.
+    flatness = target if target is not None else tolerance
+    sides = (_Direction(a, index_b, ConvexPatches(*b, merge_tol, flatness), margin),
+             _Direction(b, index_a, ConvexPatches(*a, merge_tol, flatness), margin))
     evaluated = len(a[1]) + len(b[1])
     certified = False
     while True:

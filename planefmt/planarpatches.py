@@ -42,10 +42,14 @@ class ConvexPatches:
     """The convex planar patches of a mesh, their slacks and the cut planes between neighbours.
 
     ``merge_tol`` (model units) bounds the slack of every merged patch and the
-    off-plane distance of triangles considered coplanar.
+    off-plane distance of triangles considered coplanar. ``flatness`` (model
+    units) bounds the flatness ``tau`` of a coplanar region: a region less flat
+    is split where its triangles' planes part, and what is still less flat
+    serves no region bound.
     """
 
-    def __init__(self, vertices: np.ndarray, faces: np.ndarray, merge_tol: float) -> None:
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, merge_tol: float,
+                 flatness: float = np.inf) -> None:
         self.vertices, self.faces = vertices, faces
         tri = vertices[faces]
         cross = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
@@ -53,6 +57,9 @@ class ConvexPatches:
         longest = np.max(np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2), axis=1)
         # Degenerate triangles (no reliable normal) never join a patch.
         self._solid = norm > 1e-9 * longest**2
+        self._longest = longest
+        self._height = norm / np.where(longest > 0, longest, 1.0)
+        self._flatness = flatness
         self._unit = np.where(self._solid[:, None], cross / np.where(norm > 0, norm, 1.0)[:, None], 0.0)
         self._area_normal = cross
         self._pairs = _manifold_edge_pairs(faces)
@@ -208,7 +215,7 @@ class ConvexPatches:
         patch_of[rest] = len(slack) + np.arange(len(rest))
         fans.extend([] for _ in rest)
         slack = np.concatenate([np.asarray(slack, dtype=np.float64), np.zeros(len(rest))])
-        self._build_regions(region, f1[flat], f2[flat], shared[flat])
+        self._build_regions(region, f1[flat], f2[flat], shared[flat], tol)
         return patch_of, fans, slack
 
     def _quad_shapes(self, f1: np.ndarray, f2: np.ndarray,
@@ -383,38 +390,69 @@ class ConvexPatches:
         fan = [(ids[0], ids[i], ids[i + 1]) for i in range(1, len(ids) - 1)]
         return fan, 2.0 * tau + pocket
 
-    def _build_regions(self, region: np.ndarray, f1: np.ndarray, f2: np.ndarray, shared: np.ndarray) -> None:
+    def _build_regions(self, region: np.ndarray, f1: np.ndarray, f2: np.ndarray, shared: np.ndarray,
+                       tol: float) -> None:
         """Planes, flatness and boundary edges of the coplanar regions of two or more triangles.
 
         A region qualifies when every triangle faces the side of its fitted plane,
         so that projected onto the plane the region is the image of an immersion
-        whose boundary lies in the projection of its boundary edges.
+        whose boundary lies in the projection of its boundary edges, and when its
+        flatness is within ``self._flatness``.
+
+        Flatness is not transitive: a triangle thinner than ``tol`` lies within
+        ``tol`` of every plane through its long edge, so a chain of them joins
+        faces at any angle (angle_block.STL's exact decoding has facets 1e-10
+        across: one region 0.35 of the diagonal thick, whose boundary edges
+        fell within reach of every piece, 76 million pairs). A region less flat
+        than allowed keeps only the pairs of triangles thicker than ``tol``
+        whose planes stay within ``tol`` of each other across the pair.
         """
         v, f = self.vertices, self.faces
+        normal, offset, tau, facing = self._region_planes(region)
+        rough = tau > self._flatness
+        if rough.any():
+            spread = np.linalg.norm(np.cross(self._unit[f1], self._unit[f2]), axis=1) * np.maximum(
+                self._longest[f1], self._longest[f2])
+            keep = (rough[region[f1]] & (self._height[f1] > tol) & (self._height[f2] > tol) & (spread <= tol))
+            n = len(f)
+            graph = coo_matrix((np.ones(keep.sum()), (f1[keep], f2[keep])), shape=(n, n))
+            _, split = connected_components(graph, directed=False)
+            # Triangles outside rough regions keep their region's label; pairs keep theirs.
+            key = np.where(rough[region], len(tau) + split, region)
+            _, region = np.unique(key, return_inverse=True)
+            normal, offset, tau, facing = self._region_planes(region)
         sizes = np.bincount(region)
-        normal = np.zeros((len(sizes), 3))
-        np.add.at(normal, region, self._area_normal)
-        normal /= np.maximum(np.linalg.norm(normal, axis=1), np.finfo(np.float64).tiny)[:, None]
-        facing = np.full(len(sizes), np.inf)
-        np.minimum.at(facing, region, np.einsum("ij,ij->i", self._unit, normal[region]))
-        heights = np.einsum("tkj,tj->tk", v[f], normal[region])
-        top = np.full(len(sizes), -np.inf)
-        bottom = np.full(len(sizes), np.inf)
-        np.maximum.at(top, region, heights.max(axis=1))
-        np.minimum.at(bottom, region, heights.min(axis=1))
-        valid = (sizes > 1) & (facing > 0)
+        valid = (sizes > 1) & (facing > 0) & (tau <= self._flatness)
         self.region_of = np.where(valid[region], region, -1)
         self.region_normal = normal
-        self.region_offset = 0.5 * (top + bottom)
-        self.region_tau = 0.5 * (top - bottom)
+        self.region_offset = offset
+        self.region_tau = tau
         internal = np.zeros(f.shape, dtype=bool)
-        internal[f1, shared[:, 0]] = True
-        internal[f2, shared[:, 1]] = True
+        joined = region[f1] == region[f2]
+        internal[f1[joined], shared[joined, 0]] = True
+        internal[f2[joined], shared[joined, 1]] = True
         edge = ~internal & valid[region][:, None]
         t, k = np.nonzero(edge)
         segments = np.column_stack([f[t, k], f[t, (k + 1) % 3], f[t, (k + 1) % 3]])
         self.boundary = TriangleIndex(v, segments) if len(segments) else None
         self._boundary_region = region[t]
+
+    def _region_planes(self, region: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per region label: unit area-weighted normal, mid offset, flatness ``tau`` (half the spread
+        of its vertices' heights) and the least cosine of a member's normal to the region's."""
+        v, f = self.vertices, self.faces
+        count = int(region.max(initial=-1)) + 1
+        normal = np.zeros((count, 3))
+        np.add.at(normal, region, self._area_normal)
+        normal /= np.maximum(np.linalg.norm(normal, axis=1), np.finfo(np.float64).tiny)[:, None]
+        facing = np.full(count, np.inf)
+        np.minimum.at(facing, region, np.einsum("ij,ij->i", self._unit, normal[region]))
+        heights = np.einsum("tkj,tj->tk", v[f], normal[region])
+        top = np.full(count, -np.inf)
+        bottom = np.full(count, np.inf)
+        np.maximum.at(top, region, heights.max(axis=1))
+        np.minimum.at(bottom, region, heights.min(axis=1))
+        return normal, 0.5 * (top + bottom), 0.5 * (top - bottom), facing
 
     def _build_cuts(self) -> None:
         f1, f2, shared = self._pairs

@@ -44,7 +44,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .clipping import clip_triangles, vertex_sides
 from .errors import GeometryError
-from .bsptree import boundary, parse
+from .bsptree import Tree, boundary, parse
 from .exactbsp import exact_boundary
 from .model import BSP_IN, BSP_OUT
 from .polygonize import edge_adjacency
@@ -218,15 +218,7 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
     when an IN leaf does not end.
     """
     tree = parse(tokens, len(h))
-    reach = float(np.abs(h).max(initial=0.0))
-    reach = reach if reach > 0 else 1.0
-    eps = SPLIT_EPS * reach
-    for size in (8.0 * reach, 8e3 * reach):
-        pts, count, labels, plane = boundary(tree, omega, h, size, eps)
-        if not (labels[np.arange(labels.shape[1])[None, :] < count[:, None]] < 0).any():
-            break
-    else:
-        raise GeometryError("an IN leaf of the BSP tree does not end", code="UNBOUNDED_POLYTOPE")
+    reach, size, (pts, count, labels, plane) = _extent(tree, omega, h)
     keep = face[plane]
     pts, count, labels, plane = pts[keep], count[keep], labels[keep], plane[keep]
     slot = np.arange(pts.shape[1])[None, :] < count[:, None]
@@ -265,11 +257,40 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
     # encoder checks.
     if not exact:
         return plain
+    return _exact_surface(tree, omega, h, size, face) or plain
+
+
+def exact_tree_surface(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+    """The surface :func:`decode_tree` ends with when no rounded one closes: exact arithmetic's,
+    or None where that is not closed either (arguments and result as :func:`decode_tree`)."""
+    tree = parse(tokens, len(h))
+    _, size, _ = _extent(tree, omega, h)
+    return _exact_surface(tree, omega, h, size, face)
+
+
+def _extent(tree: Tree, omega: np.ndarray, h: np.ndarray
+            ) -> tuple[float, float, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+    """``(reach, size, boundary)``: the planes' reach, the half-size of the box every IN leaf ends
+    in, and the rounded boundary polygons cut to that box."""
+    reach = float(np.abs(h).max(initial=0.0))
+    reach = reach if reach > 0 else 1.0
+    eps = SPLIT_EPS * reach
+    for size in (8.0 * reach, 8e3 * reach):
+        polygons = boundary(tree, omega, h, size, eps)
+        labels, count = polygons[2], polygons[1]
+        if not (labels[np.arange(labels.shape[1])[None, :] < count[:, None]] < 0).any():
+            return reach, size, polygons
+    raise GeometryError("an IN leaf of the BSP tree does not end", code="UNBOUNDED_POLYTOPE")
+
+
+def _exact_surface(tree: Tree, omega: np.ndarray, h: np.ndarray, size: float, face: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
     try:
         surface = exact_boundary(tree, omega, h, size, face)
     except GeometryError:
-        return plain
-    return surface if edge_adjacency(surface[1], len(surface[0])).closed else plain
+        return None
+    return surface if edge_adjacency(surface[1], len(surface[0])).closed else None
 
 
 def decode_bsp_group(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray

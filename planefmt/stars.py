@@ -249,4 +249,5 @@ def _barycentric(c: np.ndarray, y: np.ndarray) -> np.ndarray:
     with np.errstate(invalid="ignore", divide="ignore"):
         b1 = (d11 * d20 - d01 * d21) / den
         b2 = (d00 * d21 - d01 * d20) / den
-    return np.column_stack([1.0 - b1 - b2, b1, b2])
+        # Degenerate triangles give NaN coordinates, which no inside test accepts.
+        return np.column_stack([1.0 - b1 - b2, b1, b2])
