@@ -21,6 +21,7 @@ where ``omega . x <= h``.
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -29,12 +30,13 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import QhullError
 
 from .errors import GeometryError
-from .model import GroupKind
-from .patches import Patch, PatchReport, PlaneTable, encode_patches
-from .planes import from_triplets, to_triplets
-from .polygonize import edge_adjacency
-from .repair import merge_close_vertices
+from .halfspace import intersect
 from .hausdorff import hausdorff
+from .model import GroupKind
+from .patches import Patch, PatchReport, PlaneTable, decode_patch_faces, encode_patches
+from .planes import from_triplets, to_triplets
+from .polygonize import COPLANAR_TOLERANCE, edge_adjacency, polygonize
+from .repair import merge_close_vertices
 from .solids import decode_tree, exact_tree_surface, partition
 from .trianglegeom import TriangleIndex
 
@@ -164,8 +166,6 @@ def reflex_planes(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarra
 def exact_planes(vertices: np.ndarray, faces: np.ndarray, table: PlaneTable) -> np.ndarray:
     """Each face's plane in a polygonization that merges only coplanar faces (within
     :data:`EXACT_COPLANAR` of the diagonal), added to ``table``; -1 for faces of no area."""
-    from .polygonize import polygonize
-
     poly = polygonize(vertices, faces, tolerance=EXACT_COPLANAR)
     index = np.array([table.add(w, float(c)) for w, c in zip(poly.omega, poly.h)], dtype=np.int64)
     return np.where(poly.face_plane >= 0, index[np.maximum(poly.face_plane, 0)], -1)
@@ -305,8 +305,6 @@ def encode_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray,
     input planes; ``drift`` (per input plane) the fitting drift; ``target``
     the error bound to meet (model units).
     """
-    import time
-
     labels = body_labels(faces, len(vertices))
     parts = [labels == b for b in range(int(labels.max(initial=0)) + 1)]
     if len(parts) > 1 and all(is_closed_manifold(faces[p], len(vertices)) for p in parts):
@@ -382,8 +380,6 @@ def encode_groups(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float =
     One plane table serves all bodies, so planes shared by bodies (and the
     bounding planes patches share) are stored once.
     """
-    from .polygonize import COPLANAR_TOLERANCE, polygonize
-
     v = np.asarray(vertices, dtype=np.float64)
     diag = float(np.linalg.norm(np.ptp(v[np.unique(faces)], axis=0)))
     v, f, _, _ = merge_close_vertices(v, faces, 1e-3 * tolerance * diag)
@@ -416,9 +412,6 @@ def encode_groups(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float =
 
 def decode_groups(omega: np.ndarray, h: np.ndarray, groups: list[Group]) -> tuple[np.ndarray, np.ndarray]:
     """Triangles ``(vertices, faces)`` of all groups; patches are decoded in one batch."""
-    from .halfspace import intersect
-    from .patches import decode_patch_faces
-
     parts_v, parts_f = [], []
     patch = [g for g in groups if g.kind in (GroupKind.PSEUDO_CONVEX, GroupKind.PSEUDO_CONCAVE)]
     for g in groups:

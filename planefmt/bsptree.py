@@ -33,6 +33,7 @@ import numpy as np
 
 from .clipping import split_polygons
 from .errors import GeometryError
+from .halfspace import intersect
 from .model import BSP_IN, BSP_MAX_SPLIT, BSP_OUT
 from .planes import in_plane_basis
 
@@ -152,8 +153,6 @@ def piece_faces(tree: Tree, start: int, leaf: int, omega: np.ndarray, h: np.ndar
     square is clipped by every half-space instead. Pieces are tagged as
     surface facing their plane's normal.
     """
-    from .halfspace import intersect
-
     path: list[tuple[int, int]] = []  # (plane, side) of the ancestors of start, root first
     node = 0
     while node != start:
