@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import planefmt.bodies as bodies
 import planefmt.solids as solids
 from planefmt.bodies import (encode_groups, euler_characteristic, is_closed_manifold, plane_positions,
                              reflex_planes, signed_volume)
@@ -149,6 +150,12 @@ def test_exact_decoding_closes_what_rounded_decisions_misplace(monkeypatch):
     assert abs(signed_volume(dv, dt) - vol) <= 1e-9 * abs(vol)
     d, _ = TriangleIndex(poly.vertices, ff).query(dv[np.unique(dt)])
     assert d.max() <= 1e-6 * diag
+    # The encoder takes the same surface on its own and keeps it only once its distance certifies.
+    ev, et, _ = solids.exact_tree_surface(w, c, tokens, face)
+    assert np.array_equal(ev, dv) and np.array_equal(et, dt)
+    assert bodies._certify(poly.vertices, ff, dv, dt, 1e-6 * diag) is None
+    monkeypatch.setattr(bodies, "EXACT_CERTIFY_PIECES", 1)
+    assert "not certified" in bodies._certify(poly.vertices, ff, dv, dt, 1e-6 * diag)
 
 
 def test_exact_side_tests_are_capped(monkeypatch):
