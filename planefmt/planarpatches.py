@@ -417,7 +417,7 @@ class ConvexPatches:
             n = len(f)
             graph = coo_matrix((np.ones(keep.sum()), (f1[keep], f2[keep])), shape=(n, n))
             _, split = connected_components(graph, directed=False)
-            # Triangles outside rough regions keep their region's label; pairs keep theirs.
+            # A rough region's triangles take their component's label (offset past the old ones).
             key = np.where(rough[region], len(tau) + split, region)
             _, region = np.unique(key, return_inverse=True)
             normal, offset, tau, facing = self._region_planes(region)
