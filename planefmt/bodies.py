@@ -37,7 +37,7 @@ from .patches import Patch, PatchReport, PlaneTable, decode_patch_faces, encode_
 from .planes import from_triplets, to_triplets
 from .polygonize import COPLANAR_TOLERANCE, edge_adjacency, polygonize
 from .repair import merge_close_vertices
-from .solids import decode_tree, exact_tree_surface, partition
+from .solids import TreeSurface, decode_tree, partition
 from .trianglegeom import TriangleIndex
 
 #: Splitter seeds tried before a closed body falls back to patches.
@@ -198,14 +198,14 @@ def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
             tokens[part.tokens <= np.uint32(0xFFFFFFEF)] = local.astype(np.uint32)
             # Decoded from the planes as a float64 file holds them, (nu, phi, h): the surface a reader makes.
             w, c = from_triplets(to_triplets(omega[used], h[used]))
-            face = np.ones(len(used), dtype=bool)
-            dv, dt, _ = decode_tree(w, c, tokens, face, exact=False)
+            surface = TreeSurface(w, c, tokens, np.ones(len(used), dtype=bool))
+            dv, dt, _ = surface.rounded
             # The decoder's exact last resort doubles the time a failing tree takes: tried for the
             # first seed of each plane set only (a tree it would close may then be refused, never
             # one accepted that a reader decodes otherwise).
-            exact = seed == SEEDS[0] and not is_closed_manifold(dt, len(dv))
+            exact = seed == SEEDS[0] and not surface.closed
             if exact:
-                dv, dt, _ = exact_tree_surface(w, c, tokens, face) or (dv, dt, None)
+                dv, dt, _ = surface.exact() or surface.rounded
         except GeometryError as err:
             reasons.append(f"seed {seed}: {err.reason}")
             continue

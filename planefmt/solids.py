@@ -217,8 +217,49 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
     ``BAD_GROUP_STRUCTURE`` for a malformed tree and ``UNBOUNDED_POLYTOPE``
     when an IN leaf does not end.
     """
-    tree = parse(tokens, len(h))
-    reach, size, (pts, count, labels, plane) = _extent(tree, omega, h)
+    surface = TreeSurface(omega, h, tokens, face)
+    if surface.closed or not exact:
+        return surface.rounded
+    return surface.exact() or surface.rounded
+
+
+class TreeSurface:
+    """The surfaces :func:`decode_tree` chooses from, for an encoder that weighs them itself.
+
+    ``rounded`` is the surface of the rounded decisions (welded, cracks and
+    slits closed where that closes it) and ``closed`` whether it is closed;
+    :meth:`exact` the surface exact arithmetic makes, computed on demand.
+    Arguments and raised errors as :func:`decode_tree`.
+    """
+
+    def __init__(self, omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray) -> None:
+        self._omega, self._h, self._face = omega, h, face
+        self._tree = parse(tokens, len(h))
+        reach, self._size, polygons = _extent(self._tree, omega, h)
+        self.rounded, self.closed = _rounded_surface(polygons, omega, h, face, reach)
+
+    def exact(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """The exact surface, or None where it is not closed either (or exceeds its budget).
+
+        It comes last in :func:`decode_tree` so that every surface the rounded decoding closes
+        decodes as it did: where the rounded decisions misplace pieces (many nearly coincident or
+        concurrent planes) it has no cracks to weld, but its sub-rounding features (tunnels,
+        sheets touching along an edge) can differ from the source's topology, which the encoder
+        checks.
+        """
+        try:
+            surface = exact_boundary(self._tree, self._omega, self._h, self._size, self._face)
+        except GeometryError:
+            return None
+        return surface if edge_adjacency(surface[1], len(surface[0])).closed else None
+
+
+def _rounded_surface(polygons: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], omega: np.ndarray,
+                     h: np.ndarray, face: np.ndarray, reach: float
+                     ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray], bool]:
+    """The first closed surface the welds, crack closing and slit filling make of the rounded
+    boundary ``polygons``, and True; else the plain welded surface and False."""
+    pts, count, labels, plane = polygons
     keep = face[plane]
     pts, count, labels, plane = pts[keep], count[keep], labels[keep], plane[keep]
     slot = np.arange(pts.shape[1])[None, :] < count[:, None]
@@ -235,13 +276,13 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
             vertices, triangles, polygon = stitch(pts[slot], offsets, np.arange(int(count.sum())),
                                                   Planes(omega, h), plane, labels[slot], weld * reach, reach, carried)
             if edge_adjacency(triangles, len(vertices)).closed:
-                return vertices, triangles, plane[polygon]
+                return (vertices, triangles, plane[polygon]), True
             first = first or (vertices, triangles, plane[polygon])
             if not carried:
                 welded.append((weld, vertices, triangles, plane[polygon]))
         closed = close_cracks(first[0], first[1], tuple(r * reach for r in CRACK_WELD))
         if closed is not None:
-            return closed[0], closed[1], first[2][closed[2]]
+            return (closed[0], closed[1], first[2][closed[2]]), True
         plain = plain or first
     # Then slits that faces nearly coinciding leave, closed flat (the encoder verifies the result).
     for weld, vertices, triangles, planes in welded:
@@ -249,24 +290,8 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
         if slits is not None and len(slits[0]):
             filled = np.concatenate([triangles, slits[0]])
             if edge_adjacency(filled, len(vertices)).closed:
-                return vertices, filled, np.concatenate([planes, planes[slits[1]]])
-    # Last, the surface exact arithmetic makes: where the rounded decisions above misplace pieces
-    # (many nearly coincident or concurrent planes), it has no cracks to weld. It comes last so that
-    # every surface the rounded decoding closes decodes as it did; its sub-rounding features
-    # (tunnels, sheets touching along an edge) can differ from the source's topology, which the
-    # encoder checks.
-    if not exact:
-        return plain
-    return _exact_surface(tree, omega, h, size, face) or plain
-
-
-def exact_tree_surface(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    """The surface :func:`decode_tree` ends with when no rounded one closes: exact arithmetic's,
-    or None where that is not closed either (arguments and result as :func:`decode_tree`)."""
-    tree = parse(tokens, len(h))
-    _, size, _ = _extent(tree, omega, h)
-    return _exact_surface(tree, omega, h, size, face)
+                return (vertices, filled, np.concatenate([planes, planes[slits[1]]])), True
+    return plain, False
 
 
 def _extent(tree: Tree, omega: np.ndarray, h: np.ndarray
@@ -282,15 +307,6 @@ def _extent(tree: Tree, omega: np.ndarray, h: np.ndarray
         if not (labels[np.arange(labels.shape[1])[None, :] < count[:, None]] < 0).any():
             return reach, size, polygons
     raise GeometryError("an IN leaf of the BSP tree does not end", code="UNBOUNDED_POLYTOPE")
-
-
-def _exact_surface(tree: Tree, omega: np.ndarray, h: np.ndarray, size: float, face: np.ndarray
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
-    try:
-        surface = exact_boundary(tree, omega, h, size, face)
-    except GeometryError:
-        return None
-    return surface if edge_adjacency(surface[1], len(surface[0])).closed else None
 
 
 def decode_bsp_group(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray

@@ -136,23 +136,17 @@ def test_exact_decoding_closes_what_rounded_decisions_misplace(monkeypatch):
     w, c = from_triplets(to_triplets(poly.omega[used], poly.h[used]))
     face = np.ones(len(used), dtype=bool)
 
-    def unavailable(*args, **kwargs):
-        raise solids.GeometryError("exact decoding switched off", code="DEGENERATE_GEOMETRY")
-
-    with monkeypatch.context() as m:
-        m.setattr(solids, "exact_boundary", unavailable)
-        rv, rt, _ = solids.decode_tree(w, c, tokens, face)
-    assert not is_closed_manifold(rt, len(rv))
-    dv, dt, _ = solids.decode_tree(w, c, tokens, face)
+    surface = solids.TreeSurface(w, c, tokens, face)
+    rv, rt, _ = surface.rounded
+    assert not surface.closed and not is_closed_manifold(rt, len(rv))
+    dv, dt, _ = surface.exact()
     assert is_closed_manifold(dt, len(dv))
     assert euler_characteristic(dt) == euler_characteristic(ff) == 2
     vol = signed_volume(poly.vertices, ff)
     assert abs(signed_volume(dv, dt) - vol) <= 1e-9 * abs(vol)
     d, _ = TriangleIndex(poly.vertices, ff).query(dv[np.unique(dt)])
     assert d.max() <= 1e-6 * diag
-    # The encoder takes the same surface on its own and keeps it only once its distance certifies.
-    ev, et, _ = solids.exact_tree_surface(w, c, tokens, face)
-    assert np.array_equal(ev, dv) and np.array_equal(et, dt)
+    # The encoder keeps it only once its distance certifies.
     assert bodies._certify(poly.vertices, ff, dv, dt, 1e-6 * diag) is None
     monkeypatch.setattr(bodies, "EXACT_CERTIFY_PIECES", 1)
     assert "not certified" in bodies._certify(poly.vertices, ff, dv, dt, 1e-6 * diag)
