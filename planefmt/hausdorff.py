@@ -334,12 +334,12 @@ def hausdorff(vertices_a: np.ndarray, faces_a: np.ndarray, vertices_b: np.ndarra
     if tolerance is None:
         tolerance = DEFAULT_RELATIVE_TOLERANCE * diag
     margin = 64.0 * _EPS * (float(np.abs(used).max()) + diag)
-    merge_tol = PATCH_TOLERANCE_FRACTION * (target if target is not None else tolerance)
+    goal = target if target is not None else tolerance
+    merge_tol = PATCH_TOLERANCE_FRACTION * goal
     index_a, index_b = TriangleIndex(*a), TriangleIndex(*b)
-    # A region bound is never below its flatness: flatter than the goal or of no use.
-    flatness = target if target is not None else tolerance
-    sides = (_Direction(a, index_b, ConvexPatches(*b, merge_tol, flatness), margin),
-             _Direction(b, index_a, ConvexPatches(*a, merge_tol, flatness), margin))
+    # A region bound is never below its flatness: regions flatter than the goal, or of no use.
+    sides = (_Direction(a, index_b, ConvexPatches(*b, merge_tol, goal), margin),
+             _Direction(b, index_a, ConvexPatches(*a, merge_tol, goal), margin))
     evaluated = len(a[1]) + len(b[1])
     certified = False
     while True:

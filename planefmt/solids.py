@@ -44,7 +44,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from .clipping import clip_triangles, vertex_sides
 from .errors import GeometryError
-from .bsptree import Tree, boundary, parse
+from .bsptree import boundary, parse
 from .exactbsp import exact_boundary
 from .model import BSP_IN, BSP_OUT
 from .polygonize import edge_adjacency
@@ -205,20 +205,18 @@ WELD_TOL = (4e-11, 1e-9, 1e-8, 1e-7, 1e-6)
 CRACK_WELD = (1e-7, 1e-6, 1e-5, 1e-4)
 
 
-def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray, exact: bool = True
+def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The closed surface of a BSP group: ``(vertices (V, 3), triangles (T, 3), plane (T,))``.
 
     ``omega`` (m, 3), ``h`` (m,) are the group's planes in reference order,
     ``face`` (m,) True for face planes (cut planes carry no surface, spec
-    §8.2.1); ``plane`` is the reference each triangle lies on; ``exact``
-    False skips the exact last resort (an encoder trying many trees, which
-    then only refuses some a reader would decode closed). Raises
+    §8.2.1); ``plane`` is the reference each triangle lies on. Raises
     ``BAD_GROUP_STRUCTURE`` for a malformed tree and ``UNBOUNDED_POLYTOPE``
     when an IN leaf does not end.
     """
     surface = TreeSurface(omega, h, tokens, face)
-    if surface.closed or not exact:
+    if surface.closed:
         return surface.rounded
     return surface.exact() or surface.rounded
 
@@ -235,7 +233,16 @@ class TreeSurface:
     def __init__(self, omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray) -> None:
         self._omega, self._h, self._face = omega, h, face
         self._tree = parse(tokens, len(h))
-        reach, self._size, polygons = _extent(self._tree, omega, h)
+        reach = float(np.abs(h).max(initial=0.0))
+        reach = reach if reach > 0 else 1.0
+        for size in (8.0 * reach, 8e3 * reach):
+            polygons = boundary(self._tree, omega, h, size, SPLIT_EPS * reach)
+            labels, count = polygons[2], polygons[1]
+            if not (labels[np.arange(labels.shape[1])[None, :] < count[:, None]] < 0).any():
+                break
+        else:
+            raise GeometryError("an IN leaf of the BSP tree does not end", code="UNBOUNDED_POLYTOPE")
+        self._size = size
         self.rounded, self.closed = _rounded_surface(polygons, omega, h, face, reach)
 
     def exact(self) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
@@ -292,21 +299,6 @@ def _rounded_surface(polygons: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndar
             if edge_adjacency(filled, len(vertices)).closed:
                 return (vertices, filled, np.concatenate([planes, planes[slits[1]]])), True
     return plain, False
-
-
-def _extent(tree: Tree, omega: np.ndarray, h: np.ndarray
-            ) -> tuple[float, float, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
-    """``(reach, size, boundary)``: the planes' reach, the half-size of the box every IN leaf ends
-    in, and the rounded boundary polygons cut to that box."""
-    reach = float(np.abs(h).max(initial=0.0))
-    reach = reach if reach > 0 else 1.0
-    eps = SPLIT_EPS * reach
-    for size in (8.0 * reach, 8e3 * reach):
-        polygons = boundary(tree, omega, h, size, eps)
-        labels, count = polygons[2], polygons[1]
-        if not (labels[np.arange(labels.shape[1])[None, :] < count[:, None]] < 0).any():
-            return reach, size, polygons
-    raise GeometryError("an IN leaf of the BSP tree does not end", code="UNBOUNDED_POLYTOPE")
 
 
 def decode_bsp_group(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.ndarray
