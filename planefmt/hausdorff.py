@@ -263,8 +263,10 @@ class _Direction:
             # One corner settled, the other not: the crossing (if any) hugs the unsettled one.
             one = settled[:, a] ^ settled[:, b]
             near = np.where(settled[:, a], b, a)
-            with np.errstate(divide="ignore"):
-                hug = err * length / np.maximum(gap - err, 0.0)
+            # A zero-length edge has no crossing off its corner (0/0 would make the bound NaN).
+            reach = err * length
+            with np.errstate(divide="ignore", invalid="ignore"):
+                hug = np.where(reach > 0, reach / np.maximum(gap - err, 0.0), 0.0)
             corner_bound = np.maximum(d_lo[np.arange(len(s)), near], d_hi[np.arange(len(s)), near]) + hug
             bound = np.where(one, np.maximum(bound, corner_bound), bound)
             r = np.flatnonzero(settled[:, a] & settled[:, b] & (np.sign(s[:, a]) != np.sign(s[:, b])))
