@@ -395,8 +395,8 @@ def _mixed_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
     A merged plane passes within the tolerance of its vertices, but where it meets a plane at a
     grazing angle their edge moves by that distance over the angle's sine (angle_block.STL at
     1e-6: a corner 1.9e-5 off for a target of 2.2e-6). Replacing only those planes keeps the
-    merged planes' fewer, wider faces elsewhere. ``report.note`` gets a ``"mixed planes: ...; "``
-    prefix when no round passes (empty when none was tried).
+    merged planes' fewer, wider faces elsewhere. When no round passes, ``report.note`` holds
+    their reasons as ``"mixed planes: ...; "``, the caller's to prefix (empty when none was tried).
     """
     fp = face_plane
     reasons = []
