@@ -3,8 +3,9 @@
 Prints one JSON object describing FILE and exits 0, or prints
 ``{"error": CODE}`` and exits 1 (README.md, "The contract"). Uses only
 planefmt's public API: ``planefmt.open`` and the records it yields,
-``Reader.group(k)`` for random access through the index, and, where it is
-installed, the geometry decoder ``planefmt.codec``.
+``Reader.group(k)`` for random access through the index, ``records.kinds_of``
+for the kinds a file's version has, and, where it is installed, the
+geometry decoder ``planefmt.codec``.
 """
 
 from __future__ import annotations
@@ -16,9 +17,10 @@ import sys
 import numpy as np
 
 import planefmt
-from planefmt import GroupKind
+from planefmt import GroupKind, records
 
-SOLID_KINDS = (GroupKind.CONVEX, GroupKind.CELLS, GroupKind.BSP)
+#: Kinds whose summary has a volume (README.md): solids, and sealed surfaces, closed as a rule.
+SOLID_KINDS = (GroupKind.CONVEX, GroupKind.CELLS, GroupKind.BSP, GroupKind.SEALED)
 
 
 def _float(x: float) -> float | None:
@@ -49,6 +51,9 @@ def _group(g: planefmt.PartGroup) -> dict:
         out["cells"] = [c.tolist() for c in g.cells]
     if g.tree is not None:
         out["tree"] = g.tree.tolist()
+    if g.vertex_planes is not None:
+        out["vertex_planes"] = g.vertex_planes.tolist()
+        out["facets"] = g.facets.tolist()
     return out
 
 
@@ -60,17 +65,19 @@ def _world(objects: list[planefmt.ObjectRecord]) -> list[np.ndarray]:
     return worlds
 
 
-def _geometry(groups: list[planefmt.PartGroup], objects: list[planefmt.ObjectRecord]) -> dict | None:
+def _geometry(groups: list[planefmt.PartGroup], objects: list[planefmt.ObjectRecord],
+              version: tuple[int, int]) -> dict | None:
     """Per-group summaries of the decoded surface, or None where planefmt cannot decode every group."""
     try:
         from planefmt import codec
     except ImportError:
         return None
     worlds = _world(objects)
+    kinds = records.kinds_of(*version)
     summaries, corners, complete = [], [], True
     for g in groups:
-        if g.kind not in GroupKind._value2member_map_:
-            summaries.append(None)  # a kind of a newer minor version, skipped
+        if g.kind not in kinds:
+            summaries.append(None)  # a kind of a newer minor version, skipped (kind 5 too, before 3.1)
             continue
         if int(g.kind) not in codec.DECODERS:
             complete = False  # still decode the others: their geometry errors count
@@ -121,7 +128,7 @@ def describe(path: str) -> dict:
             "groups": [_group(g) for g in groups],
             "colours": colours,
             "findings": sorted({code for code, _ in r.findings}),
-            "geometry": _geometry(groups, r.objects),
+            "geometry": _geometry(groups, r.objects, r.header.version),
         }
 
 

@@ -21,12 +21,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planefmt import records, schema
+from planefmt import records, schema, varint
 from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization, Units
 
 from . import reference
 from .build import CUBE, SPEC_HEADER, Layout, box, finish, frame, offsets
-from .cases_valid import IN, L_CELLS, L_PLANES, L_TREE, OUT
+from .cases_valid import IN, L_CELLS, L_PLANES, L_TREE, OUT, SEALED_CUBE_FACETS, SEALED_CUBE_VERTICES
 
 
 @dataclass(frozen=True)
@@ -116,11 +116,12 @@ def f32_bits(bits: int) -> float:
     return float(np.frombuffer(bits.to_bytes(4, "little"), "<f4")[0])
 
 
-def geometry_defect(code: str, kind: int, triplets, bounding=None, cells=None, tree=None) -> None:
+def geometry_defect(code: str, kind: int, triplets, bounding=None, cells=None, tree=None, vertex_planes=None,
+                    facets=None) -> None:
     """Check, with the reference decoder, that the planes really have the stated defect."""
     bounding = np.zeros(len(triplets), bool) if bounding is None else np.array(bounding, bool)
     try:
-        reference.summary(kind, np.asarray(triplets), bounding, cells, tree)
+        reference.summary(kind, np.asarray(triplets), bounding, cells, tree, vertex_planes, facets)
     except reference.Defect as exc:
         if exc.code == code:
             return
@@ -645,6 +646,77 @@ def _():
     return frame(layout + [(schema.INDX, index), (schema.PEND, records.encode_end(at[-1], 3))])
 
 
+# -- sealed groups (spec/pln-3.md §8.8, version 3.1) ---------------------------------------------
+
+V3_F64 = dataclasses.replace(V3_HEAD, coding=Coding.FLOAT64)
+
+
+def sealed_body(vertex_planes=SEALED_CUBE_VERTICES, facets=SEALED_CUBE_FACETS, *, roles: bytes = b"\0",
+                vertex_count: int | None = None) -> bytes:
+    """The body of a sealed group over the cube's 6 references (spec 2.0 §8.7, 3.1 §8.8), varint by
+    varint, since the writer refuses broken ones; ``facets`` rows are (face, i0, i1, i2), the face
+    stored as a difference."""
+    faces = [f[0] for f in facets]
+    stored = np.column_stack([np.diff(faces, prepend=0), [f[1:] for f in facets]])
+    count = len(vertex_planes) if vertex_count is None else vertex_count
+    refs = b"\x06\x00\x01\x01\x01\x01\x01"  # 6 references 0..5 as differences
+    return b"".join([refs, roles, varint.encode([count]), varint.encode(np.ravel(vertex_planes)),
+                     varint.encode([len(facets)]), varint.encode(stored)])
+
+
+def sealed_file(body: bytes, version: tuple[int, int] = (3, 1)) -> bytes:
+    """The cube of spec §12 as a version 3.1 file (or ``version``), float64 (its planes x <= 1 and
+    x >= 0 are then 1e-16 from parallel), with a sealed group of ``body`` in place of the convex one."""
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=5, compression=0, raw_size=len(body), body=body))
+    return v3(PHDR=header(version=version, coding=Coding.FLOAT64), PLNS=records.encode_planes(0, CUBE, V3_F64, False),
+              GRUP=group)
+
+
+@case("xv3_sealed_in_3_0", "UNKNOWN_GROUP_KIND", "a well-formed sealed cube (kind 5) in a version 3.0 file, "
+      "whose version has no kind 5")
+def _():
+    return sealed_file(sealed_body(), (3, 0))
+
+
+@case("xv3_sealed_plane_twice", "BAD_GROUP_STRUCTURE", "version 3.1 sealed cube whose vertex 0 is named by the "
+      "local references 2, 3, 3: one plane twice")
+def _():
+    return sealed_file(sealed_body(((2, 3, 3),) + SEALED_CUBE_VERTICES[1:]))
+
+
+@case("xv3_sealed_face_role", "BAD_GROUP_STRUCTURE", "version 3.1 sealed cube with role bit 1 on reference 5 "
+      "(z >= 0), the face plane of its last two triangles: triangles lie on face planes only")
+def _():
+    return sealed_file(sealed_body(roles=b"\x20"))
+
+
+@case("xv3_sealed_unused_vertex", "BAD_GROUP_STRUCTURE", "version 3.1 sealed cube with a ninth vertex (named as "
+      "vertex 7 is) that no triangle uses")
+def _():
+    return sealed_file(sealed_body(SEALED_CUBE_VERTICES + ((0, 1, 4),)))
+
+
+@case("xv3_sealed_vertex_count", "BAD_GROUP_STRUCTURE", "version 3.1 sealed cube whose vertex_count says 25, more "
+      "than a third of the 73 bytes left after it (checked before the varints are read)")
+def _():
+    return sealed_file(sealed_body(vertex_count=25))
+
+
+@case("xv3_sealed_cut", "BAD_PAYLOAD", "version 3.1 sealed cube whose last varint (a vertex of the last triangle) "
+      "has its continuation bit set: the body ends inside it")
+def _():
+    b = sealed_body()
+    return sealed_file(b[:-1] + bytes([b[-1] | 0x80]))
+
+
+@case("xv3_sealed_cut_after_defect", "BAD_PAYLOAD", "version 3.1 sealed cube whose vertex 0 names local "
+      "reference 3 twice (as in xv3_sealed_plane_twice) and whose last varint has its continuation bit set: a "
+      "reader checks the values only once it has read all the varints, so the cut varint decides")
+def _():
+    b = sealed_body(((2, 3, 3),) + SEALED_CUBE_VERTICES[1:])
+    return sealed_file(b[:-1] + bytes([b[-1] | 0x80]))
+
+
 @case("xgrup_deflate_bomb", "LIMIT_EXCEEDED", "a deflated GRUP body declaring raw_size 2^32-1 (a deflate bomb)",
       also=("SIZE_MISMATCH",))
 def _():
@@ -984,6 +1056,14 @@ def _():
 def _():
     geometry_defect("UNBOUNDED_POLYTOPE", 2, L_PLANES[:8], None, None, (6, IN, OUT))
     return l_file(grup(range(8), kind=2, tree=(6, IN, OUT)), L_PLANES[:8])
+
+
+@geometry_case("xgeom_v3_sealed_parallel", "BAD_VERTEX", "version 3.1 sealed cube whose vertex 7 is named by "
+               "x <= 1, x >= 0 and z <= 1: two parallel planes (|det| 1e-16 in float64)")
+def _():
+    vertices = SEALED_CUBE_VERTICES[:7] + ((0, 2, 4),)
+    geometry_defect("BAD_VERTEX", 5, CUBE, vertex_planes=vertices, facets=SEALED_CUBE_FACETS)
+    return sealed_file(sealed_body(vertices))
 
 
 @geometry_case("xgeom_cells_overlap", "BAD_GROUP_STRUCTURE", "a cells group whose two cells are the same prism: "

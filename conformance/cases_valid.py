@@ -30,8 +30,6 @@ from .build import (CUBE, SPEC_HEADER, box, finish, frame, header_json, rounded,
 #: Relative tolerance of geometry comparisons (see README.md).
 GEOMETRY_TOLERANCE = 1e-6
 
-KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
-
 
 @dataclass(frozen=True)
 class Obj:
@@ -54,6 +52,8 @@ class Group:
     bounding: tuple[int, ...] = ()  # local indices of bounding / cut planes
     cells: tuple[tuple[int, ...], ...] | None = None
     tree: tuple[int, ...] | None = None
+    vertex_planes: tuple[tuple[int, int, int], ...] | None = None  # sealed groups: local references
+    facets: tuple[tuple[int, int, int, int], ...] | None = None  # sealed groups: face reference, 3 vertices
     extra: bytes = b""  # kind data of a kind this version does not know
 
 
@@ -117,6 +117,14 @@ def _tree(g: Group):
     return None if g.tree is None else np.array(g.tree, dtype=np.uint32)
 
 
+def _vertex_planes(g: Group):
+    return None if g.vertex_planes is None else np.array(g.vertex_planes, dtype=np.uint32)
+
+
+def _facets(g: Group):
+    return None if g.facets is None else np.array(g.facets, dtype=np.uint32)
+
+
 class _Pipe(io.RawIOBase):
     """A write-only, non-seekable sink, as a pipe or socket is."""
 
@@ -146,7 +154,7 @@ def written(case: ValidCase, header: Header) -> bytes:
                 w.add_planes(op.triplets)
             elif isinstance(op, Group):
                 w.add_group(op.obj, op.kind, np.array(op.refs), _role_bits(op), cells=_cells(op), tree=_tree(op),
-                            extra=op.extra)
+                            extra=op.extra, vertex_planes=_vertex_planes(op), facets=_facets(op))
             elif isinstance(op, Colour):
                 w.add_colours(op.group, op.rgba)
             else:
@@ -172,7 +180,8 @@ def assembled(case: ValidCase, header: Header) -> bytes:
             planes += len(op.triplets)
         elif isinstance(op, Group):
             rec = PartGroup(groups, op.obj, op.kind, np.array(op.refs, dtype=np.uint32), _role_bits(op),
-                            cells=_cells(op), tree=_tree(op), extra=op.extra)
+                            cells=_cells(op), tree=_tree(op), extra=op.extra, vertex_planes=_vertex_planes(op),
+                            facets=_facets(op))
             layout.append((schema.GRUP, records.encode_group(rec, case.compress, header.version[0])))
             groups += 1
         elif isinstance(op, Colour):
@@ -186,11 +195,13 @@ def geometry(case: ValidCase) -> tuple[dict, np.ndarray | None]:
     """The expected geometry section and the world bounding box of the decoded surface."""
     worlds = world_matrices([(o.parent, o.transform) for o in case.objects])
     summaries, corners = [], []
+    kinds = records.kinds_of(*case.header.version)
     for g in case.groups:
-        if g.kind not in KNOWN_KINDS:
-            summaries.append(None)  # skipped: SKIPPED_GROUP_KIND
+        if g.kind not in kinds:
+            summaries.append(None)  # skipped: SKIPPED_GROUP_KIND (kind 5 too, in a version before 3.1)
             continue
-        s, points = reference.summary(g.kind, case.table[list(g.refs)], _role_bits(g), g.cells, g.tree)
+        s, points = reference.summary(g.kind, case.table[list(g.refs)], _role_bits(g), g.cells, g.tree,
+                                      g.vertex_planes, g.facets)
         summaries.append({k: v if k in ("vertices", "triangles") else rounded(v) for k, v in s.items()})
         corners.append(points @ worlds[g.obj][:3, :3].T + worlds[g.obj][:3, 3])
     world = None
@@ -213,6 +224,9 @@ def expected(case: ValidCase, header: Header, geo: dict) -> dict:
             entry["cells"] = [list(c) for c in g.cells]
         if g.tree is not None:
             entry["tree"] = list(g.tree)
+        if g.vertex_planes is not None:
+            entry["vertex_planes"] = [list(v) for v in g.vertex_planes]
+            entry["facets"] = [list(f) for f in g.facets]
         groups.append(entry)
     colours = [{"group": op.group, "rgba": np.asarray(op.rgba).tolist()} for op in case.ops
                if isinstance(op, Colour)]
@@ -333,6 +347,20 @@ V3_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 0))
 V3_Q221 = Header(version=(3, 0), coding=Coding.QUANTIZED, quantization=Quantization(2, 2, 1, 0.0, 1.0),
                  units=Units.MILLIMETRE, tolerance=1e-6, error_bound=2.2e-14)
 
+#: The unit cube as a sealed group (kind 5, spec 3.1 §8.8) over the planes of CUBE: vertex x + 2y + 4z
+#: is the corner (x, y, z), named by its three face planes (x = 1 or 0: 0 or 2, y: 1 or 3, z: 4 or 5).
+SEALED_CUBE_VERTICES = tuple((0 if x else 2, 1 if y else 3, 4 if z else 5)
+                             for z in (0, 1) for y in (0, 1) for x in (0, 1))
+#: Each face of CUBE (in its order) by its corners, counter-clockwise seen from outside.
+_CUBE_QUADS = ((1, 3, 7, 5), (2, 6, 7, 3), (0, 4, 6, 2), (0, 1, 5, 4), (4, 5, 7, 6), (0, 2, 3, 1))
+#: Two triangles per face, (face, i0, i1, i2), in order of face as sealed groups store them.
+SEALED_CUBE_FACETS = tuple((f, *t) for f, (a, b, c, d) in enumerate(_CUBE_QUADS) for t in ((a, b, c), (a, c, d)))
+#: A vertex plane through the corner (0, 0, 0): normal -(1, 1, 1)/sqrt 3 (nu = acos(-1/sqrt 3), phi = 5 pi/4,
+#: to 6 decimals), h = 0.
+CORNER_PLANE = np.array([[2.186276, 3.926991, 0.0]])
+#: SEALED_CUBE_VERTICES with the corner (0, 0, 0) named by x = 0, y = 0 and CORNER_PLANE (reference 6).
+SEALED_CORNER_VERTICES = ((2, 3, 6),) + SEALED_CUBE_VERTICES[1:]
+
 #: A newer minor version's additions: OBJT bytes after the transform, a group of unknown kind 9
 #: between two known ones, a new flag bit (the PHDR bytes are each case's header extra).
 NEWER_MINOR = dict(
@@ -429,6 +457,14 @@ CASES = [
               "transform, a group of unknown kind 9 (skipped) between two known ones",
               dataclasses.replace(SPEC_HEADER, version=(1, 1), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
               **NEWER_MINOR),
+    ValidCase("sealed_in_1_1", "version 1.1: a group of kind 5, which versions before 3.1 do not have, so a kind "
+              "of a newer minor version here (skipped), between two known ones; its 4 bytes of kind data 00 01 02 03 "
+              "are opaque (read as a sealed body they would be vertex_count 0)",
+              dataclasses.replace(SPEC_HEADER, version=(1, 1)),
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.CONVEX, tuple(range(6))),
+               Group(0, GroupKind.SEALED, tuple(range(6)), extra=b"\x00\x01\x02\x03"),
+               Group(0, GroupKind.PSEUDO_CONVEX, tuple(range(6)), bounding=(4,))),
+              findings=("SKIPPED_GROUP_KIND",), findings_optional=("NEWER_MINOR_VERSION",)),
     ValidCase("l_v2_predicted", "version 2.0: the L of bsp_l in the predicted coding 8/8/8 over h in [-1, 2] "
               "(every plane exact), sorted by code so that runs of one nu and of one normal occur, and its tree "
               "as varint tokens", V2_L,
@@ -463,9 +499,21 @@ CASES = [
                Obj("gem " + "g" * 126, parent=0, transform=translation(3.0, 0.0, 0.0)), Planes(GEM),
                Group(1, 0, tuple(range(6, 16)))),
               stream=True, compress=True),
-    ValidCase("minor_3_1", "version 3.1: 8 more PHDR bytes after the counts and a new flag bit, 5 more OBJT bytes "
+    ValidCase("sealed_cube_v3_1", "version 3.1: the unit cube as a sealed group (kind 5), float32, with index: 8 "
+              "vertices each named by its three face planes, 12 triangles counter-clockwise from outside, two per "
+              "face (face reference differences 0 within a face)", dataclasses.replace(V3_CUBE, version=(3, 1)),
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SEALED, tuple(range(6)),
+                                                vertex_planes=SEALED_CUBE_VERTICES, facets=SEALED_CUBE_FACETS))),
+    ValidCase("sealed_corner_v3_1", "version 3.1: the sealed cube in float64, no index, its corner (0, 0, 0) named by "
+              "x = 0, y = 0 and a vertex plane through it (reference 6, role bit 1, on no triangle) with normal "
+              "-(1, 1, 1)/sqrt 3", Header(version=(3, 1), coding=Coding.FLOAT64, units=Units.METRE),
+              (Obj("cube"), Planes(np.vstack([CUBE, CORNER_PLANE])),
+               Group(0, GroupKind.SEALED, tuple(range(7)), bounding=(6,), vertex_planes=SEALED_CORNER_VERTICES,
+                     facets=SEALED_CUBE_FACETS)),
+              decoded_bbox=True, index=False),
+    ValidCase("minor_3_2", "version 3.2: 8 more PHDR bytes after the counts and a new flag bit, 5 more OBJT bytes "
               "after the transform, a group of unknown kind 9 (skipped) between two known ones",
-              dataclasses.replace(V3_CUBE, version=(3, 1), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
+              dataclasses.replace(V3_CUBE, version=(3, 2), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
               **NEWER_MINOR),
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),

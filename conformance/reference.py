@@ -1,11 +1,12 @@
-"""Reference geometry of part groups (spec §8.2-§8.4), for the expected results of valid cases.
+"""Reference geometry of part groups (spec §8.2-§8.4, 3.1 §8.8), for the expected results of valid cases.
 
 Deliberately independent of planefmt's own decoder (``planefmt.halfspace``,
 ``planefmt.codec``): the suite checks that decoder against this one. It is
 written for clarity on the handful of small groups the suite holds, not for
 speed: linear programs (scipy's HiGHS) decide emptiness and boundedness,
 Qhull's half-space intersection gives the vertices, and faces are polygons
-gathered plane by plane.
+gathered plane by plane. A sealed group's vertices are solved by Cramer's
+rule, not by planefmt's LU solve.
 
 Every function takes planes as ``omega`` (n, 3) unit outward normals and
 ``h`` (n,) in model units, the solid side being ``omega . x <= h``.
@@ -26,6 +27,9 @@ WELD = 1e-9
 #: Vertex and triangle counts are only stated where distinct vertices are at least this
 #: fraction of the extent apart, so that no sane decoder's vertex welding can change them.
 DISTINCT = 1e-5
+
+#: |det| of three unit normals at or below which they are linearly dependent (spec 3.1 §8.8).
+DEPENDENT = 1e-12
 
 #: Tokens of spec §8.4.
 BSP_IN, BSP_OUT = 0xFFFFFFFE, 0xFFFFFFFF
@@ -189,18 +193,41 @@ def _solid_union(cells: list[list[Face]], size: float) -> tuple[float, np.ndarra
     return area, vector
 
 
-def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None,
-            tree=None) -> tuple[dict, np.ndarray]:
+def sealed_vertices(omega: np.ndarray, h: np.ndarray, vertex_planes) -> np.ndarray:
+    """Where each triple of local planes meets (spec 3.1 §8.8); raises ``Defect`` (``BAD_VERTEX``)
+    where the normals are linearly dependent or the point is not finite."""
+    out = []
+    for k, (a, b, c) in enumerate(vertex_planes):
+        bc, ca, ab = np.cross(omega[b], omega[c]), np.cross(omega[c], omega[a]), np.cross(omega[a], omega[b])
+        det = float(omega[a] @ bc)
+        x = (h[a] * bc + h[b] * ca + h[c] * ab) / det if abs(det) > DEPENDENT else np.full(3, np.nan)
+        if not np.isfinite(x).all():
+            raise Defect("BAD_VERTEX", f"vertex {k}: planes {a}, {b}, {c} do not meet in one point (det {det:g})")
+        out.append(x)
+    return np.array(out)
+
+
+def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, tree=None, vertex_planes=None,
+            facets=None) -> tuple[dict, np.ndarray]:
     """The geometry summary of the conformance contract for one group (see README.md).
 
     ``triplets`` (m, 3) are the planes of the group's references in order;
-    ``bounding`` (m,) its role bits. Returns the summary and the vertices of
-    the decoded surface (local coordinates, with repeats); raises ``Defect``
-    for invalid geometry.
+    ``bounding`` (m,) its role bits; ``cells``, ``tree``, ``vertex_planes``
+    and ``facets`` (face, i0, i1, i2) as the kind has them, in local
+    references. Returns the summary and the vertices of the decoded surface
+    (local coordinates, with repeats); raises ``Defect`` for invalid geometry.
     """
     omega, h = planes_of(triplets)
     volume = None
-    if kind in (0, 3, 4):
+    if kind == 5:
+        points = sealed_vertices(omega, h, vertex_planes)
+        a, b, c = (points[[f[k] for f in facets]] for k in (1, 2, 3))
+        cross = np.cross(b - a, c - a)
+        area = float(np.linalg.norm(cross, axis=1).sum()) / 2
+        vector = cross.sum(axis=0) / 2
+        volume = float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6  # divergence theorem
+        counts = (len(points), len(facets))  # vertex identity as stored: readers must not weld (§8.8)
+    elif kind in (0, 3, 4):
         faces = convex_faces(omega, h)
         if kind == 0:
             if len(faces) < len(h):

@@ -12,7 +12,8 @@ A *body* is an edge-connected set of triangles. Each is encoded on its own
   vertex within the target distance; otherwise it tries two more splitter
   seeds, then the same planes with the faces' exact ones where the decoded
   surface strayed (:func:`_mixed_solid`), then exact planes throughout, then
-  falls back to patches;
+  a ``SEALED`` group (:mod:`planefmt.sealed`: the source's connectivity,
+  each vertex where three planes meet), then falls back to patches;
 * anything else (open, non-manifold, inside-out, soup): pseudo-convex and
   pseudo-concave patches (:mod:`planefmt.patches`), each verified.
 
@@ -24,7 +25,7 @@ where ``omega . x <= h``.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -39,6 +40,7 @@ from .patches import Patch, PatchReport, PlaneTable, decode_patch_faces, encode_
 from .planes import from_triplets, to_triplets
 from .polygonize import COPLANAR_TOLERANCE, edge_adjacency, polygonize
 from .repair import merge_close_vertices
+from .sealed import decode_sealed, encode_sealed
 from .solids import TreeSurface, decode_tree, partition
 from .trianglegeom import TriangleIndex
 
@@ -58,13 +60,16 @@ VOLUME_TOLERANCE = 1e-6
 
 @dataclass(frozen=True)
 class Group:
-    """A part group over a :class:`PlaneTable`: ``refs`` indices, ``bounding`` roles, ``tree`` tokens."""
+    """A part group over a :class:`PlaneTable`: ``refs`` indices, ``bounding`` roles, ``tree`` tokens,
+    a sealed group's ``vertex_planes`` and ``facets`` (local references, spec 3.1 §8.8)."""
 
     kind: GroupKind
     refs: np.ndarray
     bounding: np.ndarray
     tree: np.ndarray | None = None
     triangles: int = 0  # source triangles it covers
+    vertex_planes: np.ndarray | None = None
+    facets: np.ndarray | None = None
 
 
 @dataclass
@@ -375,6 +380,9 @@ def encode_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray,
                                    else "exact planes")
             if solid is not None:
                 report.kind = "solid"
+            else:
+                solid = _sealed_group(vertices, faces, face_plane, table, target, report)
+            if solid is not None:
                 groups = [solid]
         else:
             report.note = "open, non-manifold or inside-out"
@@ -385,6 +393,34 @@ def encode_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray,
     report.groups = len(groups)
     report.seconds = time.perf_counter() - start
     return groups, report
+
+
+def _sealed_group(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray, table: PlaneTable,
+                  target: float, report: BodyReport) -> Group | None:
+    """A closed body no BSP tree decodes faithfully as a ``SEALED`` group (:mod:`planefmt.sealed`),
+    checked as a solid; None (reason appended to ``report.note``) if it fails.
+
+    Its vertices move at most half the ``target`` (model units), which bounds the two-sided
+    Hausdorff distance (corresponding points of corresponding triangles are no farther apart
+    than their corners), and its connectivity is the source's.
+    """
+    sealed = encode_sealed(vertices, faces, face_plane, table, target / 2)
+    refs = np.unique(np.concatenate([sealed.facets[:, 0], sealed.vertex_planes.reshape(-1)]))
+    omega, h = table.arrays()
+    dv, dt = decode_sealed(omega, h, sealed.vertex_planes, sealed.facets)
+    why = _check_solid(vertices, faces, dv, dt, signed_volume(vertices, faces), euler_characteristic(faces),
+                       TriangleIndex(vertices, faces), target)
+    if why is not None:
+        report.note += f"; sealed: {why}"
+        return None
+    report.kind = "sealed"
+    report.note += f"; sealed ({len(sealed.extra)} vertex planes for {len(sealed.vertex_planes)} vertices)"
+    report.error = sealed.error
+    report.details.update(vertices=len(sealed.vertex_planes), **{"vertex planes": len(sealed.extra)})
+    local = np.searchsorted(refs, sealed.facets[:, 0])
+    facets = np.column_stack([local, sealed.facets[:, 1:]])
+    return Group(GroupKind.SEALED, refs, ~np.isin(refs, sealed.facets[:, 0]), triangles=len(faces),
+                 vertex_planes=np.searchsorted(refs, sealed.vertex_planes), facets=facets)
 
 
 def _mixed_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray, exact: np.ndarray,
@@ -465,7 +501,7 @@ def encode_groups(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float =
     order = used[np.sort(first)]
     index = np.full(len(h), -1, dtype=np.int64)
     index[order] = np.arange(len(order))
-    groups = [Group(g.kind, index[g.refs], g.bounding, g.tree, g.triangles) for g in groups]
+    groups = [replace(g, refs=index[g.refs]) for g in groups]
     return MeshGroups(omega[order], h[order], groups, reports, v, f)
 
 
@@ -480,6 +516,10 @@ def decode_groups(omega: np.ndarray, h: np.ndarray, groups: list[Group]) -> tupl
             parts_f.append(p.triangles)
         elif g.kind == GroupKind.BSP:
             dv, dt, _ = decode_tree(omega[g.refs], h[g.refs], g.tree, ~g.bounding)
+            parts_v.append(dv)
+            parts_f.append(dt)
+        elif g.kind == GroupKind.SEALED:
+            dv, dt = decode_sealed(omega[g.refs], h[g.refs], g.vertex_planes, g.facets)
             parts_v.append(dv)
             parts_f.append(dt)
     if patch:

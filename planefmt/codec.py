@@ -19,7 +19,8 @@ Encoding a mesh (:func:`encode_mesh`):
    returns the body's part groups: a closed, outward, convex body (within
    the tolerance) one ``CONVEX`` group; any other body what
    :func:`planefmt.bodies.encode_body` makes of it (a ``BSP`` group for a
-   closed solid, else pseudo-convex / pseudo-concave patches).
+   closed solid, a ``SEALED`` group for a closed body no tree decodes with
+   its topology, else pseudo-convex / pseudo-concave patches).
 4. The triplet coding is chosen and **verified**: each candidate's planes go
    through :func:`quantize.roundtrip` (exactly what a reader gets back), are
    decoded, and the two-sided Hausdorff distance between decoded and source
@@ -66,6 +67,7 @@ from .repair import mend_cracks
 from .reader import Reader
 from .solids import decode_bsp_group
 from .salvage import salvage
+from .sealed import decode_sealed
 from .trianglegeom import TriangleIndex
 from .validate import GROUP_CHECKS, Finding
 from .writer import BLOCK_PLANES, Writer
@@ -125,17 +127,22 @@ class GroupLike(Protocol):
     bounding: np.ndarray
     cells: tuple[np.ndarray, ...] | None
     tree: np.ndarray | None
+    vertex_planes: np.ndarray | None
+    facets: np.ndarray | None
 
 
 @dataclass(frozen=True)
 class GroupSpec:
-    """A part group as the encoder builds it: ``refs`` index the object's plane list."""
+    """A part group as the encoder builds it: ``refs`` index the object's plane list; cells, tree,
+    vertex planes and facets use local references (indices into ``refs``)."""
 
     kind: GroupKind
     refs: np.ndarray  # (m,) int64
     bounding: np.ndarray  # (m,) bool: True for bounding/cut planes
     cells: tuple[np.ndarray, ...] | None = None
     tree: np.ndarray | None = None
+    vertex_planes: np.ndarray | None = None  # (V, 3) SEALED groups
+    facets: np.ndarray | None = None  # (T, 4) SEALED groups
 
 
 @dataclass(frozen=True)
@@ -266,7 +273,8 @@ def encode_general_body(body: Body) -> list[GroupSpec]:
     poly = body.polygons
     groups, _ = encode_body(poly.vertices, poly.faces[body.faces], body.face_plane, poly.distance,
                             body.table, body.tolerance * poly.diagonal)
-    return [GroupSpec(g.kind, g.refs, g.bounding, tree=g.tree) for g in groups]
+    return [GroupSpec(g.kind, g.refs, g.bounding, tree=g.tree, vertex_planes=g.vertex_planes, facets=g.facets)
+            for g in groups]
 
 
 #: Strategies tried in order for each body: ``(name, encode)``; ``encode`` returns the body's
@@ -295,6 +303,22 @@ def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: Plane
     v, t, inc_v, inc_r, t_ref = decode_bsp_group(omega, h, np.asarray(group.tree, dtype=np.uint32),
                                                  ~np.asarray(group.bounding, dtype=bool))
     return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64), t_ref)
+
+
+def decode_sealed_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
+    """A ``SEALED`` group: its triangles, each corner where its three planes meet (spec 3.1 §8.8)."""
+    if group.vertex_planes is None or group.facets is None:
+        raise GeometryError(f"part group {label}: sealed groups are kind 5 only from version 3.1 on",
+                            code="UNKNOWN_GROUP_KIND")
+    omega, h = from_triplets(planes)
+    vertex_planes = np.asarray(group.vertex_planes, dtype=np.int64)
+    facets = np.asarray(group.facets, dtype=np.int64)
+    try:
+        v, t = decode_sealed(omega, h, vertex_planes, facets)
+    except GeometryError as exc:
+        raise GeometryError(f"part group {label}: {exc.reason}", code=exc.code) from None
+    return DecodedGroup(v, t, np.repeat(np.arange(len(v)), 3), vertex_planes.reshape(-1),
+                        np.zeros(0, dtype=np.int64), facets[:, 0])
 
 
 def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
@@ -334,6 +358,7 @@ DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], Deco
     GroupKind.BSP: decode_bsp,
     GroupKind.PSEUDO_CONVEX: decode_patch,
     GroupKind.PSEUDO_CONCAVE: decode_patch,
+    GroupKind.SEALED: decode_sealed_group,
 }
 
 
@@ -579,7 +604,7 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     order = used[np.sort(first)]
     index = np.full(len(h), -1, dtype=np.int64)
     index[order] = np.arange(len(order))
-    groups = [GroupSpec(g.kind, index[g.refs], g.bounding, g.cells, g.tree) for g in groups]
+    groups = [replace(g, refs=index[g.refs]) for g in groups]
     plane_colours = None
     if face_colours is not None:
         # Each plane takes the colour of the first source face on it; bounding planes have none.
@@ -594,13 +619,17 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
                    area=_area(poly.vertices, poly.faces), plane_colours=plane_colours)
 
 
+#: Kinds whose groups are closed surfaces when their source body is.
+SOLID_KINDS = frozenset({GroupKind.CONVEX, GroupKind.CELLS, GroupKind.BSP, GroupKind.SEALED})
+
+
 def _mended_solid(poly: Polygons, groups: Sequence[GroupSpec]) -> bool:
     """Whether a mended mesh came out closed and every body of it a solid: its decoding is then held
     to a closed source's structure (closed, Euler characteristic, volume), whose volume test lets
     a lossy tolerance move the surface, rather than to an open one's area (octagonal_pocket.stl
     fell back to float64 planes at every tolerance: quantized cells changed its area by more than
     1e-6)."""
-    return all(int(g.kind) in (GroupKind.CONVEX, GroupKind.CELLS, GroupKind.BSP) for g in groups) and \
+    return all(int(g.kind) in SOLID_KINDS for g in groups) and \
         is_closed_manifold(poly.faces, len(poly.vertices))
 
 
@@ -1087,7 +1116,10 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     ``compact``: a version 3.0 file (spec/pln-3.md): quantized planes in
     whichever of the bit-packed and the predicted coding takes fewer bytes,
     group references, cells and trees as varints, chunk heads as varints. The
-    planes and the decoded surface are those of the version 1 file.
+    planes and the decoded surface are those of the version 1 file. A scene
+    with sealed groups (closed bodies no BSP tree decodes faithfully) is
+    written as version 3.1 whatever ``compact`` says: version 1.0 has no such
+    kind, and a writer uses the lowest version that covers what it writes.
     """
     worlds = _world_transforms(scene.nodes)
     meshes = [i for i, n in enumerate(scene.nodes) if n.mesh is not None and len(n.mesh.faces)]
@@ -1098,6 +1130,8 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
         raise GeometryError("the scene has no mesh to encode")
     objects = [replace(o, name=scene.nodes[i].name) for i, o in prepared]
     choice = _choose(objects, tolerance, coding, bits, watertight)
+    sealed = any(g.kind == GroupKind.SEALED for o in objects for g in o.groups)
+    compact = compact or sealed
     table = quantize.roundtrip(np.concatenate([o.triplets for o in objects]), choice.coding,
                                choice.quantization)
     # Rows identical after coding are one plane; the plane table is in first-use order, so each
@@ -1119,7 +1153,7 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     if compact and stored.quantized:
         stored = min((Coding.QUANTIZED, Coding.PREDICTED), key=lambda c: _table_bytes(rows, c, choice.quantization,
                                                                                        compress))
-    header = Header(version=(3, 0) if compact else (1, 0), lossy=choice.lossy, coding=stored,
+    header = Header(version=((3, 1) if sealed else (3, 0)) if compact else (1, 0), lossy=choice.lossy, coding=stored,
                     quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
                     tolerance=float(tolerance), error_bound=choice.error_bound,
                     plane_count=len(rows), object_count=len(scene.nodes),
@@ -1138,8 +1172,9 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
                 w.add_planes(rows[w.plane_count:refs.max() + 1])
             for g in o.groups:
                 perm = np.argsort(refs[g.refs], kind="stable") if compact else np.arange(len(g.refs))
-                cells, tree = _permuted(g, perm)
-                k = w.add_group(obj_index, g.kind, refs[g.refs[perm]], g.bounding[perm], cells=cells, tree=tree)
+                p = _permuted(g, perm)
+                k = w.add_group(obj_index, g.kind, refs[g.refs[perm]], g.bounding[perm], cells=p.cells, tree=p.tree,
+                                vertex_planes=p.vertex_planes, facets=p.facets)
                 if o.plane_colours is not None:
                     w.add_colours(k, o.plane_colours[g.refs[perm]])
     return header
@@ -1152,9 +1187,10 @@ def _table_bytes(rows: np.ndarray, coding: Coding, q: Quantization, compress: bo
                for s in range(0, len(rows), BLOCK_PLANES))
 
 
-def _permuted(g: GroupSpec, perm: np.ndarray) -> tuple[tuple[np.ndarray, ...] | None, np.ndarray | None]:
-    """Cells and tree of ``g`` once its references are reordered as ``refs[perm]`` (version 2 groups
-    list them in increasing order)."""
+def _permuted(g: GroupSpec, perm: np.ndarray) -> GroupSpec:
+    """``g`` once its references are reordered as ``refs[perm]`` (version 2 groups list them in
+    increasing order): its local references renumbered, a sealed group's triangles re-sorted by
+    face."""
     local = np.empty(len(perm), dtype=np.int64)
     local[perm] = np.arange(len(perm))
     cells = None if g.cells is None else tuple(
@@ -1165,7 +1201,13 @@ def _permuted(g: GroupSpec, perm: np.ndarray) -> tuple[tuple[np.ndarray, ...] | 
         t = np.asarray(g.tree, dtype=np.int64)
         split = t <= BSP_MAX_SPLIT
         tree = np.where(split, local[np.where(split, t, 0)], t).astype(np.uint32)
-    return cells, tree
+    vertex_planes = facets = None
+    if g.vertex_planes is not None and g.facets is not None:
+        vertex_planes = local[np.asarray(g.vertex_planes, dtype=np.int64)]
+        facets = np.asarray(g.facets, dtype=np.int64).copy()
+        facets[:, 0] = local[facets[:, 0]]
+        facets = facets[np.argsort(facets[:, 0], kind="stable")]
+    return GroupSpec(g.kind, g.refs[perm], g.bounding[perm], cells, tree, vertex_planes, facets)
 
 
 def _scene_diagonal(scene: Scene, worlds: list[np.ndarray], meshes: list[int]) -> float | None:
@@ -1283,9 +1325,9 @@ def check_group(group: PartGroup, reader: Reader) -> list[Finding]:
     if group.planes is None:
         return []
     where = dict(file=reader.name, chunk="GRUP", group=group.index)
+    if int(group.kind) not in records.kinds_of(*reader.header.version):
+        return []  # a newer minor version's kind: SKIPPED_GROUP_KIND already says so
     if int(group.kind) not in DECODERS:
-        if int(group.kind) not in GroupKind._value2member_map_:
-            return []  # a newer minor version's kind: SKIPPED_GROUP_KIND already says so
         return [Finding("GEOMETRY_NOT_CHECKED", CODES["GEOMETRY_NOT_CHECKED"].severity,
                         f"part group {group.index}: kind {GroupKind(group.kind).name} is not decoded by this "
                         f"version of planefmt", **where)]

@@ -50,13 +50,14 @@ class Units(IntEnum):
 
 
 class GroupKind(IntEnum):
-    """Part group kinds of version 1.0 (spec §8.2)."""
+    """Part group kinds: 0-4 of version 1.0 (spec §8.2), 5 of version 3.1 (spec 3.1 §8.8)."""
 
     CONVEX = 0
     CELLS = 1
     BSP = 2
     PSEUDO_CONVEX = 3
     PSEUDO_CONCAVE = 4
+    SEALED = 5
 
 
 #: BSP tree leaf tokens (spec §8.4); every smaller token is a split plane.
@@ -142,8 +143,11 @@ class PartGroup:
     For CELLS groups, ``cells`` holds one uint32 array per convex cell whose
     entries are ``2 * local + complement`` (``local`` indexes ``refs``;
     ``complement`` 1 means the half-space ``omega . x >= h``). For BSP groups,
-    ``tree`` holds the preorder token stream of spec §8.4. ``planes`` holds the
-    referenced triplets when the reader resolved them.
+    ``tree`` holds the preorder token stream of spec §8.4. For SEALED groups,
+    ``vertex_planes`` (V, 3) holds each vertex's three local references and
+    ``facets`` (T, 4) each triangle's face local reference and three vertices
+    (spec 3.1 §8.8). ``planes`` holds the referenced triplets when the reader
+    resolved them.
     """
 
     index: int
@@ -154,6 +158,8 @@ class PartGroup:
     cells: tuple[np.ndarray, ...] | None = None
     tree: np.ndarray | None = None
     extra: bytes = b""  # kind-specific bytes of a kind this reader does not know
+    vertex_planes: np.ndarray | None = None  # (V, 3) uint32, SEALED groups
+    facets: np.ndarray | None = None  # (T, 4) uint32, SEALED groups
     planes: np.ndarray | None = field(default=None, compare=False)
 
 

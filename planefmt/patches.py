@@ -94,6 +94,10 @@ class PlaneTable:
             self._count += 1
         return idx
 
+    def extend(self, omega: np.ndarray, h: np.ndarray) -> np.ndarray:
+        """:meth:`add` of each row of ``omega`` (k, 3), ``h`` (k,): their indices."""
+        return np.array([self.add(w, float(c)) for w, c in zip(omega, h)], dtype=np.int64)
+
     def inverted(self, j: int) -> int:
         """The index of plane ``j`` turned over, ``(-omega, -h)``."""
         return self.add(-self._omega[j], -float(self._h[j]))

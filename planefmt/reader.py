@@ -10,6 +10,7 @@ seekable files the trailing index gives random access to part groups.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import os
 import sys
 from collections import Counter
@@ -299,9 +300,7 @@ def open(source: str | os.PathLike | BinaryIO, *, retain_planes: bool = True,  #
 
 
 def _with_planes(group: PartGroup, planes: np.ndarray) -> PartGroup:
-    return PartGroup(index=group.index, object=group.object, kind=group.kind, refs=group.refs,
-                     bounding=group.bounding, cells=group.cells, tree=group.tree, extra=group.extra,
-                     planes=planes)
+    return dataclasses.replace(group, planes=planes)
 
 
 def _tell(fp: BinaryIO) -> int | None:

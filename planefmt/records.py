@@ -20,10 +20,18 @@ from .model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, Coding, Colours, 
                     ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 0}
+VERSIONS = {1: 0, 2: 0, 3: 1}
 #: Triplet codings each major version allows (spec §5; 2.0 §7.4; 3.0 §5).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
+#: The kind each version added after 1.0: ``(major, minor)`` it needs.
+KIND_VERSION = {int(GroupKind.SEALED): (3, 1)}
+
+
+def kinds_of(major: int, minor: int) -> frozenset[int]:
+    """The part-group kinds a file of version ``major.minor`` may hold (as far as this reader knows)."""
+    return frozenset(k for k in KNOWN_KINDS
+                     if k not in KIND_VERSION or (major, minor) >= KIND_VERSION[k])
 
 
 def _parse(struct: cs.Construct, payload: bytes, what: str):
@@ -273,6 +281,8 @@ def decode_object(payload: bytes, expected_index: int, major: int = 1) -> Object
 def encode_group(g: PartGroup, compress: bool, major: int = 1) -> bytes:
     """The GRUP payload; ``major`` 2 and 3 write the varint body of spec 2.0 §8.7, 3 with the varint
     head of 3.0 §8.2."""
+    if g.facets is not None and major != 3:
+        raise PlnError("sealed groups need version 3.1", code="UNKNOWN_GROUP_KIND")
     body = _compact_body(g) if major >= 2 else _body(g)
     method, stored = pack(body, compress)
     if major == 3:
@@ -301,6 +311,15 @@ def _compact_body(g: PartGroup) -> bytes:
         coded = np.where(tokens == BSP_IN, schema.COMPACT_IN,
                          np.where(tokens == BSP_OUT, schema.COMPACT_OUT, tokens + np.uint64(schema.COMPACT_SPLIT)))
         out += [varint.encode([len(tokens)]), varint.encode(coded)]
+    elif g.kind == GroupKind.SEALED and g.facets is not None:
+        facets = np.asarray(g.facets, dtype=np.int64)
+        gaps = np.diff(facets[:, 0], prepend=0)
+        if gaps.min(initial=0) < 0:
+            raise PlnError("a sealed group's triangles must be in order of their face references",
+                           code="BAD_GROUP_STRUCTURE")
+        out += [varint.encode([len(g.vertex_planes)]), varint.encode(np.asarray(g.vertex_planes, dtype=np.uint64)),
+                varint.encode([len(facets)]),
+                varint.encode(np.column_stack([gaps, facets[:, 1:]]).astype(np.uint64))]
     else:
         out.append(g.extra)
     return b"".join(out)
@@ -338,14 +357,15 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
         raise FormatError(f"group {head.index} names object {head.object}, only {objects} defined",
                           code="BAD_OBJECT_REFERENCE")
     findings = []
-    if head.kind not in KNOWN_KINDS:
+    kinds = kinds_of(major, minor)
+    if head.kind not in kinds:
         if minor <= VERSIONS.get(major, 0):
             raise FormatError(f"unknown part group kind {head.kind} in a version {major}.{minor} file",
                               code="UNKNOWN_GROUP_KIND")
         findings.append(("SKIPPED_GROUP_KIND", f"group {head.index} has kind {head.kind} of a newer minor version"))
     body = unpack(head.compression, bytes(head.body), head.raw_size, limits)
     if major >= 2:
-        group = _decode_compact(head, body, planes, limits)
+        group = _decode_compact(head, body, planes, limits, kinds)
         return group, findings
     if len(body) < 4:
         raise FormatError("group body is shorter than its reference count", code="BAD_PAYLOAD")
@@ -371,14 +391,14 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
     elif head.kind == GroupKind.BSP:
         tree = _decode_tree(extra, count)
         extra = b""
-    elif head.kind in KNOWN_KINDS and extra:
+    elif head.kind in kinds and extra:
         raise FormatError(f"{len(extra)} unexpected bytes after the role bits", code="BAD_PAYLOAD")
     group = PartGroup(index=head.index, object=head.object, kind=head.kind, refs=refs, bounding=bounding,
                       cells=cells, tree=tree, extra=extra)
     return group, findings
 
 
-def _decode_compact(head, body: bytes, planes: int, limits: Limits) -> PartGroup:
+def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: frozenset[int]) -> PartGroup:
     """A version 2 or 3 group body (spec 2.0 §8.7)."""
     raw = np.frombuffer(body, dtype=np.uint8)
     (count,), pos = varint.decode(raw, 1, "group reference count")
@@ -404,19 +424,22 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits) -> PartGroup
     if role_bits[count:].any():
         raise FormatError("non-zero padding bits after the role bits", code="BAD_PAYLOAD")
     rest = raw[pos:]
-    cells = tree = None
+    bounding = role_bits[:count].astype(bool)
+    cells = tree = vertex_planes = facets = None
     extra = b""
-    if head.kind == GroupKind.CELLS:
+    if head.kind not in kinds:
+        extra = rest.tobytes()
+    elif head.kind == GroupKind.CELLS:
         cells = _decode_compact_cells(rest, count, limits)
     elif head.kind == GroupKind.BSP:
         tree = _decode_compact_tree(rest, count)
-    elif head.kind in KNOWN_KINDS:
-        if len(rest):
-            raise FormatError(f"{len(rest)} unexpected bytes after the role bits", code="BAD_PAYLOAD")
-    else:
-        extra = rest.tobytes()
+    elif head.kind == GroupKind.SEALED:
+        vertex_planes, facets = _decode_sealed(rest, bounding)
+    elif len(rest):
+        raise FormatError(f"{len(rest)} unexpected bytes after the role bits", code="BAD_PAYLOAD")
     return PartGroup(index=head.index, object=head.object, kind=head.kind, refs=refs.astype(np.uint32),
-                     bounding=role_bits[:count].astype(bool), cells=cells, tree=tree, extra=extra)
+                     bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
+                     facets=facets)
 
 
 def _decode_counted(raw: np.ndarray, what: str, limit: int) -> tuple[np.ndarray, int]:
@@ -453,6 +476,62 @@ def _decode_compact_tree(raw: np.ndarray, count: int) -> np.ndarray:
         coded == schema.COMPACT_OUT, BSP_OUT, coded - np.uint64(schema.COMPACT_SPLIT))).astype(np.uint32)
     check_tree(tokens, count)
     return tokens
+
+
+def _decode_sealed(raw: np.ndarray, bounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex triples (V, 3) and facets (T, 4: face reference, three vertices) of a SEALED body
+    (spec 3.1 §8.8), checked."""
+    (v,), pos = varint.decode(raw, 1, "sealed vertex count")
+    if not 3 <= int(v) <= (len(raw) - pos) // 3:
+        raise FormatError(f"sealed group: {int(v)} vertices declared, fewer than 3 or more than the body holds",
+                          code="BAD_GROUP_STRUCTURE")
+    triples, used = varint.decode(raw[pos:], 3 * int(v), "sealed vertex planes")
+    pos += used
+    (t,), used = varint.decode(raw[pos:], 1, "sealed triangle count")
+    pos += used
+    if not 1 <= int(t) <= (len(raw) - pos) // 4:
+        raise FormatError(f"sealed group: {int(t)} triangles declared, none or more than the body holds",
+                          code="BAD_GROUP_STRUCTURE")
+    facets, used = varint.decode(raw[pos:], 4 * int(t), "sealed triangles")
+    if pos + used != len(raw):
+        raise FormatError("sealed triangles do not fill the body", code="BAD_GROUP_STRUCTURE")
+    facets = facets.reshape(-1, 4)
+    if facets[:, 0].max() >= len(bounding):
+        raise FormatError("a sealed triangle's face reference is past the group's references",
+                          code="BAD_GROUP_STRUCTURE")
+    facets[:, 0] = np.cumsum(facets[:, 0])
+    return check_sealed(triples.reshape(-1, 3), facets, bounding)
+
+
+def check_sealed(vertex_planes: np.ndarray | None, facets: np.ndarray | None,
+                 bounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``vertex_planes`` (V, 3) and ``facets`` (T, 4) of a SEALED group as uint32, or
+    ``FormatError`` (``BAD_GROUP_STRUCTURE``) naming the first rule of spec 3.1 §8.8 they break."""
+    def bad(reason: str) -> FormatError:
+        return FormatError(f"sealed group: {reason}", code="BAD_GROUP_STRUCTURE")
+    if vertex_planes is None or facets is None:
+        raise bad("vertex planes and triangles are both required")
+    vp = np.asarray(vertex_planes, dtype=np.int64)
+    fc = np.asarray(facets, dtype=np.int64)
+    if vp.ndim != 2 or vp.shape[1] != 3 or len(vp) < 3 or fc.ndim != 2 or fc.shape[1] != 4 or not len(fc):
+        raise bad("needs at least 3 vertices of 3 planes and 1 triangle of a face and 3 vertices")
+    count = len(bounding)
+    if vp.min() < 0 or vp.max() >= count:
+        raise bad("a vertex refers past the group's references")
+    if ((vp[:, 0] == vp[:, 1]) | (vp[:, 1] == vp[:, 2]) | (vp[:, 0] == vp[:, 2])).any():
+        raise bad("a vertex names one plane twice")
+    face, corner = fc[:, 0], fc[:, 1:]
+    if face.min() < 0 or face.max() >= count or bounding[face].any():
+        raise bad("a triangle lies on a reference that is not a face plane")
+    if (np.diff(face) < 0).any():
+        raise bad("triangles are not in order of their face references")
+    if corner.min() < 0 or corner.max() >= len(vp):
+        raise bad("a triangle refers past the group's vertices")
+    if ((corner[:, 0] == corner[:, 1]) | (corner[:, 1] == corner[:, 2]) | (corner[:, 0] == corner[:, 2])).any():
+        raise bad("a triangle names one vertex twice")
+    if len(np.unique(corner)) != len(vp):
+        raise bad("a vertex is on no triangle")
+    return vp.astype(np.uint32), fc.astype(np.uint32)
 
 
 def _decode_cells(extra: bytes, count: int) -> tuple[np.ndarray, ...]:

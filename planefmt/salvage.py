@@ -11,6 +11,7 @@ intact is recovered; everything else is listed in ``losses``.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from dataclasses import dataclass, field
 from typing import BinaryIO
@@ -219,9 +220,7 @@ class _Salvager:
         if self.lost_planes[group.refs].any():
             raise FormatError(f"part group {index} references lost planes", code="BAD_PLANE_REFERENCE")
         self.group_refs[index] = len(group.refs)
-        self.out.records.append(PartGroup(
-            index=group.index, object=group.object, kind=group.kind, refs=group.refs, bounding=group.bounding,
-            cells=group.cells, tree=group.tree, extra=group.extra, planes=self.table[group.refs]))
+        self.out.records.append(dataclasses.replace(group, planes=self.table[group.refs]))
 
 
 def _find_all(data: bytes, tag: bytes, start: int):

@@ -71,6 +71,7 @@ class Writer:
         else:
             self._fp = target
         self._major = header.version[0]
+        self._version = tuple(header.version)
         declared = (header.plane_count, header.object_count, header.group_count)
         # Version 3 counts are varints: written up front if the caller declares them, never patched.
         self._declared = declared if self._major == 3 and None not in declared else None
@@ -139,10 +140,13 @@ class Writer:
 
     def add_group(self, obj: int, kind: int, refs: np.ndarray, bounding: np.ndarray | None = None, *,
                   cells: tuple[np.ndarray, ...] | None = None, tree: np.ndarray | None = None,
-                  extra: bytes = b"") -> int:
+                  extra: bytes = b"", vertex_planes: np.ndarray | None = None,
+                  facets: np.ndarray | None = None) -> int:
         """Write a part group of object ``obj`` over plane-table indices ``refs``; returns its index.
 
-        ``bounding[i]`` marks ``refs[i]`` as a bounding/cut plane (default: all faces).
+        ``bounding[i]`` marks ``refs[i]`` as a bounding/cut plane (default: all faces). A BSP
+        group needs ``tree``, a CELLS group ``cells``, a SEALED group (version 3.1 and later)
+        ``vertex_planes`` and ``facets`` in local references (spec 3.1 §8.8).
         """
         refs = np.asarray(refs, dtype=np.int64).reshape(-1)
         if len(refs) == 0:
@@ -161,9 +165,16 @@ class Writer:
                 len(c) == 0 or (np.asarray(c) >> 1).max() >= len(refs) for c in cells)):
             raise PlnError("cells must be non-empty and refer to the group's references",
                            code="BAD_GROUP_STRUCTURE")
+        if kind == GroupKind.SEALED and int(kind) in records.kinds_of(*self._version):
+            vertex_planes, facets = records.check_sealed(vertex_planes, facets, bounding)
+        elif vertex_planes is not None or facets is not None:
+            # Without the kind in its version, kind 5 is opaque ``extra`` (a skipped group re-written).
+            raise PlnError(f"sealed groups need version 3.1, not {self._version[0]}.{self._version[1]}",
+                           code="UNKNOWN_GROUP_KIND")
         index = len(self._groups)
         group = PartGroup(index=index, object=obj, kind=int(kind), refs=refs.astype(np.uint32),
-                          bounding=bounding, cells=cells, tree=tree, extra=extra)
+                          bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
+                          facets=facets)
         self._emit(schema.GRUP, records.encode_group(group, self._compress, self._major), index)
         self._groups.append(len(refs))
         return index
@@ -190,7 +201,8 @@ class Writer:
             self.add_planes(record.triplets)
         elif isinstance(record, PartGroup):
             self.add_group(record.object, record.kind, record.refs, record.bounding, cells=record.cells,
-                           tree=record.tree, extra=record.extra)
+                           tree=record.tree, extra=record.extra, vertex_planes=record.vertex_planes,
+                           facets=record.facets)
         elif isinstance(record, Colours):
             self.add_colours(record.group, record.rgba)
         elif isinstance(record, UnknownChunk):

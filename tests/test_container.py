@@ -52,13 +52,27 @@ quantizations = st.builds(
     st.integers(1, 32), st.integers(1, 32), st.integers(1, 32))
 
 
-def groups_for(n: int, draw) -> list[dict]:
+def groups_for(n: int, draw, version: tuple[int, int] = (1, 0)) -> list[dict]:
+    kinds = [k for k in GroupKind if k != GroupKind.SEALED or (version >= (3, 1) and n >= 3)]
     out = []
-    for kind in draw(st.lists(st.sampled_from(list(GroupKind)), min_size=1, max_size=4)):
-        m = draw(st.integers(1, min(n, 12)))
+    for kind in draw(st.lists(st.sampled_from(kinds), min_size=1, max_size=4)):
+        m = draw(st.integers(3 if kind == GroupKind.SEALED else 1, min(n, 12)))
         refs = np.array(draw(st.lists(st.integers(0, n - 1), min_size=m, max_size=m)))
         bounding = np.array(draw(st.lists(st.booleans(), min_size=m, max_size=m)))
         g = dict(kind=kind, refs=refs, bounding=bounding)
+        if kind == GroupKind.SEALED:
+            # Vertices on any three distinct local references; triangles on the face planes.
+            bounding[0] = False
+            faces = np.flatnonzero(~bounding)
+            g["vertex_planes"] = np.array(draw(st.lists(st.permutations(range(m)).map(lambda p: p[:3]),
+                                                        min_size=3, max_size=8)))
+            v = len(g["vertex_planes"])
+            # Every vertex on a triangle: the first ones run through them all, the rest are any.
+            cover = (3 * np.arange((v + 2) // 3)[:, None] + np.arange(3)) % v
+            more = draw(st.lists(st.permutations(range(v)).map(lambda p: p[:3]), max_size=4))
+            corners = np.vstack([cover] + [np.array(more).reshape(-1, 3)])
+            g["facets"] = np.column_stack([np.sort(draw(st.lists(st.sampled_from(list(faces)), min_size=len(corners),
+                                                                 max_size=len(corners)))), corners])
         if kind == GroupKind.CELLS:
             g["cells"] = (np.array([0, 3], dtype=np.uint32) % (2 * m), np.array([1], dtype=np.uint32))
         if kind == GroupKind.BSP:
@@ -74,9 +88,9 @@ def files(draw):
     planes = draw(plane_sets)
     coding = draw(st.sampled_from(list(Coding)))
     q = draw(quantizations) if coding.quantized else None
-    versions = [(2, 0), (3, 0)] if coding == Coding.PREDICTED else [(1, 0), (2, 0), (3, 0)]
+    versions = [(2, 0), (3, 0), (3, 1)] if coding == Coding.PREDICTED else [(1, 0), (2, 0), (3, 0), (3, 1)]
     version = draw(st.sampled_from(versions))
-    groups = groups_for(len(planes), draw)
+    groups = groups_for(len(planes), draw, version)
     if version[0] >= 2:
         for g in groups:
             g["refs"] = np.sort(g["refs"])
@@ -93,7 +107,8 @@ def test_write_read_roundtrip_trickled(spec):
         obj = w.add_object("ö-object", transform=np.eye(4))
         w.add_planes(planes)
         for g in groups:
-            w.add_group(obj, g["kind"], g["refs"], g["bounding"], cells=g.get("cells"), tree=g.get("tree"))
+            w.add_group(obj, g["kind"], g["refs"], g["bounding"], cells=g.get("cells"), tree=g.get("tree"),
+                        vertex_planes=g.get("vertex_planes"), facets=g.get("facets"))
     with planefmt.open(TrickleReader(bytes(sink.data))) as r:
         records = list(r)
     assert r.header.plane_count is None  # a non-seekable sink cannot patch counts in
@@ -121,6 +136,9 @@ def test_write_read_roundtrip_trickled(spec):
             assert np.array_equal(g.tree, want["tree"])
         if "cells" in want:
             assert all(np.array_equal(a, b) for a, b in zip(g.cells, want["cells"]))
+        if "facets" in want:
+            assert np.array_equal(g.vertex_planes, want["vertex_planes"])
+            assert np.array_equal(g.facets, want["facets"])
 
 
 @pytest.mark.parametrize("widths", [(8, 8, 8), (16, 16, 16), (32, 32, 32), (8, 16, 32), (7, 9, 13),
@@ -368,5 +386,6 @@ def test_chunk_after_the_index_is_chunk_order():
 def test_every_catalogued_code_is_in_the_spec():
     from pathlib import Path
 
-    spec = (Path(__file__).resolve().parent.parent / "spec" / "pln-1.md").read_text(encoding="utf-8")
+    spec = "".join(p.read_text(encoding="utf-8")
+                   for p in sorted((Path(__file__).resolve().parent.parent / "spec").glob("pln-*.md")))
     assert [c for c in planefmt.CODES if f"`{c}`" not in spec] == []

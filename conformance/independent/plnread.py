@@ -4,9 +4,10 @@ It was written from `spec/pln-1.md`, `spec/pln-2.md` and `spec/pln-3.md`
 alone (plus the output contract of `conformance/README.md`), without looking
 at planefmt or at the suite's generator, to show that the written spec and
 the conformance contract are enough for a second implementation.  It uses
-the Python 3.11 standard library only.  It reads versions 1.0, 2.0 and 3.0
-(pln-3 §11: files of major versions 1, 2 and 3, each as its own document
-says).
+the Python 3.11 standard library only.  It reads versions 1.0, 2.0, 3.0 and
+3.1 (pln-3 §11: files of major versions 1, 2 and 3, each as its own document
+says).  Its version 3.1 part, the sealed groups of pln-3 §8.8, was added
+later by a session that had seen planefmt's version 3.1 code.
 
 It checks everything a reader must check without decoding geometry
 (signature, chunk framing, CRC-32, header, plane table in every coding,
@@ -22,7 +23,10 @@ version 1 numbering (0xFFFFFFFE IN, 0xFFFFFFFF OUT, j a split).  Version
 bounding box, tolerance and error bound are widened to binary64 exactly, an
 h range absent for codings 0 and 1 is [0.0, 0.0], counts absent without
 COUNTS_KNOWN are null, and an OBJT parent stored as index + 1 (0 for a root)
-is given as the parent's index or null.
+is given as the parent's index or null.  A sealed group (kind 5, version
+3.1) adds "vertex_planes", each vertex's three local references, and
+"facets", each triangle as [face local reference, i0, i1, i2] with the face
+references summed from their differences.
 
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
@@ -57,8 +61,8 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0, 2.0 and 3.0; pln-3 §11: a reader of 3.m reads major versions 1, 2 and 3)
-READER_VERSIONS = {1: 0, 2: 0, 3: 0}
+# (1.0, 2.0 and 3.1; pln-3 §11: a reader of 3.m reads major versions 1, 2 and 3)
+READER_VERSIONS = {1: 0, 2: 0, 3: 1}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 
@@ -77,6 +81,9 @@ KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"iNDX", b"PEND"}
 FLAG_LOSSY, FLAG_COUNTS_KNOWN, FLAG_BBOX_KNOWN = 1, 2, 4  # §5
 OBJ_HAS_TRANSFORM = 1  # §8.1
 KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
+# pln-3 §8.2: kind 5, the sealed surface (§8.8), exists in files of version 3.1
+# and later only; in older files it is a kind the file's version does not have
+SEALED_KIND, SEALED_SINCE = 5, (3, 1)
 
 F32_PI = struct.unpack("<f", struct.pack("<I", 0x40490FDB))[0]  # §7.1
 F32_2PI = struct.unpack("<f", struct.pack("<I", 0x40C90FDB))[0]
@@ -760,7 +767,7 @@ class Reader:
         if obj >= len(self.objects):
             raise PlnError("BAD_OBJECT_REFERENCE",
                            "object %d, %d defined" % (obj, len(self.objects)))
-        known = kind in KNOWN_KINDS
+        known = kind in KNOWN_KINDS or (kind == SEALED_KIND and (self.major, self.minor) >= SEALED_SINCE)
         if not known and self.minor <= READER_VERSIONS[self.major]:
             raise PlnError("UNKNOWN_GROUP_KIND",
                            "kind %d in a version %d.%d file" % (kind, self.major, self.minor))
@@ -785,6 +792,8 @@ class Reader:
             g["cells"] = self.read_cells_v2(c, m) if v2 else self.read_cells(c, m)
         elif kind == 2:
             g["tree"] = self.read_tree_v2(c, m) if v2 else self.read_tree(c, m)
+        elif kind == SEALED_KIND:
+            g["vertex_planes"], g["facets"] = self.read_sealed(c, m, set(bounding))
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.chunk_list.append((offset, b"GRUP", index))
@@ -932,6 +941,54 @@ class Reader:
         if c.remaining():
             raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the tokens" % c.remaining())
         return self.check_tree(tokens, m)
+
+    def read_sealed(self, c, m, bounding):
+        """pln-3 §8.8, kind 5: vertex_count, each vertex's three local
+        references, triangle_count, then per triangle a face reference
+        difference and three vertex indices.  In the order §8.8 gives: each
+        count is checked against the bytes left when it is read (pln-2 §8.7);
+        everything else only once all the varints the counts call for are
+        read, so that a body ending inside one is BAD_PAYLOAD even where an
+        earlier value is also wrong."""
+        # 1. the varints, counts checked as they are read
+        v = c.varint("vertex_count")
+        if not 3 <= v <= c.remaining() // 3:
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "vertex_count %d, %d bytes left" % (v, c.remaining()))
+        vertices = [[c.varint("a plane of vertex %d" % k) for _ in range(3)] for k in range(v)]
+        t = c.varint("triangle_count")
+        if not 1 <= t <= c.remaining() // 4:
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "triangle_count %d, %d bytes left" % (t, c.remaining()))
+        stored = [[c.varint("%s of triangle %d" % (what, k))
+                   for what in ("the face difference", "vertex i0", "vertex i1", "vertex i2")]
+                  for k in range(t)]
+        # 2. the values
+        if c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the triangles" % c.remaining())
+        for k, planes in enumerate(vertices):
+            if max(planes) >= m or len(set(planes)) != 3:
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "vertex %d: local references %r, of %d" % (k, planes, m))
+        facets = []
+        used = set()
+        face = 0
+        for k, (d, *corners) in enumerate(stored):
+            if d >= m or face + d >= m:
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "triangle %d: face %d + difference %d, of %d" % (k, face, d, m))
+            face += d
+            if face in bounding:
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "triangle %d: local reference %d is a vertex plane (role bit 1)" % (k, face))
+            if max(corners) >= v or len(set(corners)) != 3:
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "triangle %d: vertices %r, of %d" % (k, corners, v))
+            used.update(corners)
+            facets.append([face] + corners)
+        if len(used) != v:
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d of %d vertices on no triangle" % (v - len(used), v))
+        return vertices, facets
 
     def check_tree(self, tokens, m):
         """§8.4: exactly one complete tree in preorder (tokens numbered as in §8.4)."""

@@ -165,7 +165,7 @@ def render(info: dict) -> str:
         lines.append(f"  {kind:<15} {n:>8} groups {refs:>10} plane refs   planes per group: "
                      f"mean {refs / n:.1f}, max {g['largest_by_kind'][kind]}")
     if g["bounding_refs"]:
-        lines.append(f"  bounding (cut) plane refs: {g['bounding_refs']}")
+        lines.append(f"  bounding, cut or vertex plane refs: {g['bounding_refs']}")
     src = info.get("source")
     if src is not None:
         per = "-" if src["bytes_per_triangle"] is None else f"{src['bytes_per_triangle']:.2f}"
