@@ -25,11 +25,13 @@ TOL = 1e-6
 
 @pytest.fixture
 def no_solid(monkeypatch):
-    def nothing(vertices, faces, face_plane, omega, h, target, report):
+    """No tree and no sealed group: a closed body the encoder cannot keep closed."""
+    def nothing(vertices, faces, face_plane, omega, h, target, report, **_):
         report.note = "stubbed: no tree"
         return None
 
     monkeypatch.setattr(bodies, "encode_solid", nothing)
+    monkeypatch.setattr(bodies, "_sealed_group", lambda *args: None)
 
 
 def test_a_closed_source_decoding_open_fails_by_default(no_solid):
