@@ -482,25 +482,25 @@ def _decode_sealed(raw: np.ndarray, bounding: np.ndarray) -> tuple[np.ndarray, n
     """Vertex triples (V, 3) and facets (T, 4: face reference, three vertices) of a SEALED body
     (spec 3.1 §8.8), checked."""
     (v,), pos = varint.decode(raw, 1, "sealed vertex count")
-    if not 3 <= int(v) <= (len(raw) - pos) // 3:
+    if not 3 <= int(v) <= (len(raw) - pos) // schema.SEALED_VERTEX_FIELDS:
         raise FormatError(f"sealed group: {int(v)} vertices declared, fewer than 3 or more than the body holds",
                           code="BAD_GROUP_STRUCTURE")
-    triples, used = varint.decode(raw[pos:], 3 * int(v), "sealed vertex planes")
+    triples, used = varint.decode(raw[pos:], schema.SEALED_VERTEX_FIELDS * int(v), "sealed vertex planes")
     pos += used
     (t,), used = varint.decode(raw[pos:], 1, "sealed triangle count")
     pos += used
-    if not 1 <= int(t) <= (len(raw) - pos) // 4:
+    if not 1 <= int(t) <= (len(raw) - pos) // schema.SEALED_TRIANGLE_FIELDS:
         raise FormatError(f"sealed group: {int(t)} triangles declared, none or more than the body holds",
                           code="BAD_GROUP_STRUCTURE")
-    facets, used = varint.decode(raw[pos:], 4 * int(t), "sealed triangles")
+    facets, used = varint.decode(raw[pos:], schema.SEALED_TRIANGLE_FIELDS * int(t), "sealed triangles")
     if pos + used != len(raw):
         raise FormatError("sealed triangles do not fill the body", code="BAD_GROUP_STRUCTURE")
-    facets = facets.reshape(-1, 4)
+    facets = facets.reshape(-1, schema.SEALED_TRIANGLE_FIELDS)
     if facets[:, 0].max() >= len(bounding):
         raise FormatError("a sealed triangle's face reference is past the group's references",
                           code="BAD_GROUP_STRUCTURE")
     facets[:, 0] = np.cumsum(facets[:, 0])
-    return check_sealed(triples.reshape(-1, 3), facets, bounding)
+    return check_sealed(triples.reshape(-1, schema.SEALED_VERTEX_FIELDS), facets, bounding)
 
 
 def check_sealed(vertex_planes: np.ndarray | None, facets: np.ndarray | None,

@@ -1,5 +1,5 @@
 """Construct declarations of the .pln container, versions 1, 2 and 3 (read beside spec/pln-1.md,
-spec/pln-2.md and spec/pln-3.md; "2.0 §" and "3.0 §" mark sections of the latter two).
+spec/pln-2.md and spec/pln-3.md; "2.0 §", "3.0 §" and "3.1 §" mark sections of the latter two).
 
 Only structure lives here. Bulk arrays (triplets, plane references, role
 bits, cell entries, tree tokens, colours, index entries) are ``Bytes`` fields
@@ -181,6 +181,10 @@ PREDICTED_BYTES = (3, 15)
 # spec 2.0 §8.7 Group body of version 2: ref_count, reference differences, role bits, kind data,
 # all varints but the role bits; tree tokens 0 IN, 1 OUT, j + 2 split on local reference j
 COMPACT_IN, COMPACT_OUT, COMPACT_SPLIT = 0, 1, 2
+# spec 3.1 §8.8 Sealed group (kind 5) data: vertex count, three local references per vertex,
+# triangle count, then per triangle the face reference's difference from the previous one and its
+# three vertices; all varints (read in bulk by varint.decode)
+SEALED_VERTEX_FIELDS, SEALED_TRIANGLE_FIELDS = 3, 4
 
 # spec §8.5 Face colours (cOLR, ancillary)
 Colours = cs.Struct(
