@@ -364,7 +364,9 @@ def encode_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray,
         groups = [Group(GroupKind.CONVEX, refs, np.zeros(len(refs), dtype=bool), triangles=len(faces))]
     else:
         groups = []
-        if is_closed_manifold(faces, len(vertices)) and signed_volume(vertices, faces) > 0:
+        closed = is_closed_manifold(faces, len(vertices))
+        inside_out = closed and not signed_volume(vertices, faces) > 0
+        if closed and not inside_out:
             solid = encode_solid(vertices, faces, face_plane, omega[:table.base], h[:table.base], target, report)
             if solid is None:
                 # Merged planes pass near, not through, their vertices: where many meet (smooth
@@ -385,11 +387,21 @@ def encode_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray,
             if solid is not None:
                 groups = [solid]
         else:
-            report.note = "open, non-manifold or inside-out"
+            report.note = "inside-out" if inside_out else "open or non-manifold"
         if not groups:
             groups, rep = encode_open(vertices, faces, face_plane, drift, table, target)
             report.error = rep.error
             report.details.update(convex=rep.convex, concave=rep.concave, splits=rep.splits, edges=rep.planes)
+            if inside_out:
+                # Patches of a closed surface facing inwards close only where one polytope holds
+                # them all (a cube); its triangles and connectivity always do.
+                dv, dt = decode_groups(*table.arrays(), groups)
+                why = _check_solid(vertices, faces, dv, dt, signed_volume(vertices, faces),
+                                   euler_characteristic(faces), TriangleIndex(vertices, faces), target)
+                if why is not None:
+                    report.note += f"; patches: {why}"
+                    sealed = _sealed_group(vertices, faces, face_plane, table, target, report)
+                    groups = groups if sealed is None else [sealed]
     report.groups = len(groups)
     report.seconds = time.perf_counter() - start
     return groups, report

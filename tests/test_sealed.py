@@ -166,3 +166,17 @@ def test_kind_5_of_an_older_version_is_opaque_and_skipped() -> None:
             assert finding in [code for code, _ in r.findings]
         codes = [f.code for f in planefmt.validate.validate(io.BytesIO(buf.getvalue()))]
         assert sorted(codes) == ["NEWER_MINOR_VERSION", finding]
+
+
+def test_a_closed_surface_facing_inwards_decodes_closed() -> None:
+    """Not a solid (negative volume), so no tree; patches close only where one polytope holds them
+    all (an inverted cube), otherwise its triangles go into a sealed group (an inverted ring)."""
+    for (v, f), kind in [(shapes.cube(), "patches"), (shapes.ring(12), "sealed")]:
+        f = f[:, ::-1]
+        enc = encode_groups(v, f, tolerance=TOL)
+        assert [r.kind for r in enc.reports] == [kind], [r.note for r in enc.reports]
+        mesh = codec.decode_mesh(codec.encode_mesh(v, f, tolerance=TOL))
+        assert is_closed_manifold(mesh.faces, len(mesh.vertices))
+        assert euler_characteristic(mesh.faces) == euler_characteristic(f)
+        assert signed_volume(mesh.vertices, mesh.faces) == pytest.approx(signed_volume(v, f), rel=1e-6)
+        assert signed_volume(v, f) < 0
