@@ -71,12 +71,19 @@ class _Salvager:
         self.table = np.empty((0, 3))
         self.lost_planes = np.zeros(0, dtype=bool)
         self.objects = 0
-        self.object_ok: list[bool] = []
+        self.object_ok: set[int] = set()  # indices of the objects recovered
         self.groups = 0
         self.group_refs: dict[int, int] = {}
 
     def lose(self, code: str, message: str, offset: int | None) -> None:
         self.out.losses.append(Loss(code, message, offset))
+
+    def _lose_run(self, code: str, what: str, first: int, end: int, offset: int) -> None:
+        """One loss for records ``first``..``end - 1`` missing: a damaged index can claim billions."""
+        if end - first == 1:
+            self.lose(code, f"{what} {first} lost", offset)
+        elif end > first:
+            self.lose(code, f"{what}s {first}..{end - 1} lost", offset)
 
     def run(self) -> Salvaged:
         sig = self.data[: len(schema.SIGNATURE)]
@@ -176,12 +183,11 @@ class _Salvager:
         index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
         if index < self.objects or index > self.limits.max_objects:
             raise FormatError(f"object index {index} out of sequence", code="BAD_OBJECT")
-        for missing in range(self.objects, index):
-            self.lose("BAD_OBJECT", f"object {missing} lost", chunk.offset)
-        self.object_ok += [False] * (index - self.objects) + [True]
+        self._lose_run("BAD_OBJECT", "object", self.objects, index, chunk.offset)
+        self.object_ok.add(index)
         self.objects = index + 1
         obj = records.decode_object(chunk.payload, index, self.out.header.version[0])
-        if obj.parent is not None and not self.object_ok[obj.parent]:
+        if obj.parent is not None and obj.parent not in self.object_ok:
             obj = ObjectRecord(obj.index, obj.name, None, obj.transform)
             self.lose("BAD_OBJECT", f"object {index} ({obj.name!r}) lost its parent; kept as a root", chunk.offset)
         self.out.records.append(obj)
@@ -208,13 +214,12 @@ class _Salvager:
         index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
         if index < self.groups:
             raise FormatError(f"group index {index} out of sequence", code="GROUP_INDEX_MISMATCH")
-        for missing in range(self.groups, index):
-            self.lose("GROUP_INDEX_MISMATCH", f"part group {missing} lost", chunk.offset)
+        self._lose_run("GROUP_INDEX_MISMATCH", "part group", self.groups, index, chunk.offset)
         self.groups = index + 1
         group, _ = records.decode_group(chunk.payload, expected_index=index, objects=self.objects,
                                         planes=len(self.lost_planes), minor=self.out.header.version[1],
                                         limits=self.limits, major=self.out.header.version[0])
-        if not self.object_ok[group.object]:
+        if group.object not in self.object_ok:
             raise FormatError(f"part group {index} belongs to lost object {group.object}",
                               code="BAD_OBJECT_REFERENCE")
         if self.lost_planes[group.refs].any():

@@ -121,3 +121,20 @@ def test_cli_convert_salvage_writes_the_intact_objects_and_lists_the_lost(tmp_pa
     not_pln.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
     p = subprocess.run([*cmd, str(not_pln), str(tmp_path / "x.pln"), "--salvage"], capture_output=True, text=True)
     assert p.returncode == 2 and "--salvage reads damaged .pln files" in p.stderr
+
+
+def test_a_group_index_claiming_billions_is_one_loss():
+    """A damaged GRUP index says group 4,294,967,040 follows group 3: the groups in between are
+    reported as one run, not one loss each (which took 1.8 s and 590k records for a fuzzer input
+    claiming 589,824, and would not end for this one)."""
+    from planefmt.chunks import chunk_bytes
+
+    data = ten_groups()
+    pos = grup_offsets(data)[4]
+    length = int.from_bytes(data[pos + 4:pos + 8], "little")
+    payload = (0xFFFFFF00).to_bytes(4, "little") + data[pos + 12:pos + 8 + length]
+    data = data[:pos] + chunk_bytes(b"GRUP", payload) + data[pos + 12 + length:]
+    got = salvage(io.BytesIO(data))
+    runs = [loss.message for loss in got.losses if loss.code == "GROUP_INDEX_MISMATCH"]
+    assert runs[0] == "part groups 4..4294967039 lost"
+    assert [g.index for g in got.part_groups][:5] == [0, 1, 2, 3, 0xFFFFFF00]
