@@ -426,9 +426,9 @@ def _sealed_group(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarra
         report.note += f"; sealed: {why}"
         return None
     report.kind = "sealed"
-    report.note += f"; sealed ({len(sealed.extra)} vertex planes for {len(sealed.vertex_planes)} vertices)"
+    report.note += f"; sealed ({len(sealed.added)} vertex planes for {len(sealed.vertex_planes)} vertices)"
     report.error = sealed.error
-    report.details.update(vertices=len(sealed.vertex_planes), **{"vertex planes": len(sealed.extra)})
+    report.details.update(vertices=len(sealed.vertex_planes), **{"vertex planes": len(sealed.added)})
     local = np.searchsorted(refs, sealed.facets[:, 0])
     facets = np.column_stack([local, sealed.facets[:, 1:]])
     return Group(GroupKind.SEALED, refs, ~np.isin(refs, sealed.facets[:, 0]), triangles=len(faces),

@@ -43,13 +43,13 @@ DEPENDENT = 1e-12
 class Sealed:
     """A sealed group over a :class:`PlaneTable`: ``vertex_planes`` (V, 3) table indices of each
     vertex's planes, ``facets`` (T, 4): each triangle's face plane (a table index) and its three
-    vertices (indices into ``vertex_planes``), counter-clockwise seen from outside; ``extra`` the
+    vertices (indices into ``vertex_planes``), counter-clockwise seen from outside; ``added`` the
     table indices of the vertex planes added for it; ``error`` the largest vertex displacement
     (model units)."""
 
     vertex_planes: np.ndarray
     facets: np.ndarray
-    extra: np.ndarray
+    added: np.ndarray
     error: float
 
 
@@ -142,7 +142,7 @@ def encode_sealed(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarra
         triple[k[good]] = t[good]
         added.append(t[good][:, list(slots)].reshape(-1))
         todo[k[good]] = False
-    extra = np.unique(np.concatenate(added)) if added else np.zeros(0, dtype=np.int64)
+    planes_added = np.unique(np.concatenate(added)) if added else np.zeros(0, dtype=np.int64)
     omega, h = table.arrays()
     error = float(np.linalg.norm(corners(omega, h, triple) - p, axis=1).max(initial=0.0))
     if not live.any():
@@ -151,7 +151,7 @@ def encode_sealed(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarra
     fp = np.where(live, face_plane, np.where(has[local[:, 0]], a[local[:, 0]], face_plane[live][0]))
     order = np.argsort(fp, kind="stable")
     facets = np.column_stack([fp, local])[order]
-    return Sealed(triple, facets, extra, error)
+    return Sealed(triple, facets, planes_added, error)
 
 
 def decode_sealed(omega: np.ndarray, h: np.ndarray, vertex_planes: np.ndarray,

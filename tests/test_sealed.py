@@ -86,7 +86,7 @@ def test_every_vertex_level_meets_the_budget() -> None:
     s = encode_sealed(v, f, face_plane.reshape(-1), table, 1e-9)
     used = np.unique(f)
     inner = ((v[used] > 0) & (v[used] < 1)).sum(axis=1)  # coordinates strictly inside: 2 = face, 1 = edge
-    assert np.array_equal(np.isin(s.vertex_planes, s.extra).sum(axis=1), inner)
+    assert np.array_equal(np.isin(s.vertex_planes, s.added).sum(axis=1), inner)
     assert (inner == 2).any() and (inner == 1).any() and (inner == 0).sum() == 8
     omega, h = table.arrays()
     assert np.abs(corners(omega, h, s.vertex_planes) - v[used]).max() <= 1e-12
