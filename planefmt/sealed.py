@@ -100,6 +100,8 @@ def encode_sealed(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarra
     p = vertices[used]
     omega, h = table.arrays()
     live = face_plane >= 0
+    if not live.any():
+        raise GeometryError(f"a body of {len(faces)} triangles, none with an area", code="DEGENERATE_GEOMETRY")
     inc = np.unique(np.column_stack([local[live].reshape(-1), np.repeat(face_plane[live], 3)]), axis=0)
     iv, ip = inc[:, 0], inc[:, 1]
     # A: the plane its vertex lies closest to; B: the most different from A; C: the best triple.
@@ -145,8 +147,6 @@ def encode_sealed(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarra
     planes_added = np.unique(np.concatenate(added)) if added else np.zeros(0, dtype=np.int64)
     omega, h = table.arrays()
     error = float(np.linalg.norm(corners(omega, h, triple) - p, axis=1).max(initial=0.0))
-    if not live.any():
-        raise GeometryError(f"a body of {len(faces)} triangles, none with an area", code="DEGENERATE_GEOMETRY")
     # A triangle of no area lies on every plane through its vertices; any face plane serves.
     fp = np.where(live, face_plane, np.where(has[local[:, 0]], a[local[:, 0]], face_plane[live][0]))
     order = np.argsort(fp, kind="stable")
