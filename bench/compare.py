@@ -28,7 +28,9 @@ peak memory, the rise of the resident set above its level when the
 measurement started (``VmHWM`` reset through ``/proc/self/clear_refs``), of
 encode and decode. Each measurement runs in a forked child, so one codec's
 memory is not another's and a timeout (``--timeout``) can stop it; a codec
-that fails or times out is reported as such, never dropped.
+that fails or times out is reported as such, never dropped. For ``pln@d14``
+the report also splits the file's bytes into plane table, part groups and
+the rest (``pln_parts``), with the coding the encoder chose.
 
 The summary gives, per corpus category, the median of ``pln@T`` bytes over
 ``draco-14`` bytes (over the meshes both encoded), how often pln is the
@@ -193,12 +195,33 @@ def _measure(path: str, name: str, tolerances: tuple[float, ...], matched: float
         peak = _status("VmHWM") - base
         r = relative_hausdorff((v, f), (dv, df), tolerance=MEASURE_GAP, max_pieces=MEASURE_PIECES)
         conn.send({"bytes": len(data), "encode": t1 - t0, "decode": t2 - t1, "peak": peak,
-                   "error": r.upper, "certified": r.certified, "triangles": len(f)})
+                   "error": r.upper, "certified": r.certified, "triangles": len(f),
+                   **({"parts": pln_parts(data)} if name.startswith("pln") else {})})
     except Exception as exc:  # noqa: BLE001 - a codec's failure is a result of the bench, reported in its row
         conn.send({"failed": f"{type(exc).__name__}: {str(exc).splitlines()[0][:120] if str(exc) else ''}",
                    "trace": traceback.format_exc(limit=3)})
     finally:
         conn.close()
+
+
+def pln_parts(data: bytes) -> dict:
+    """Where a .pln file's bytes go: plane table, part groups and the rest, each with its chunk framing."""
+    from planefmt import reader
+
+    sizes = {"PLNS": 0, "GRUP": 0}
+    off = 8
+    while off + 8 <= len(data):
+        length = int.from_bytes(data[off + 4:off + 8], "little")
+        kind = data[off:off + 4].decode("latin-1")
+        if kind in sizes:
+            sizes[kind] += 12 + length
+        off += 12 + length
+    with reader.Reader(io.BytesIO(data)) as r:
+        groups = list(r.part_groups())
+        q, coding = r.header.quantization, r.header.coding
+    widths = f" {q.bits_nu}/{q.bits_phi}/{q.bits_h}" if coding.quantized else ""
+    return {"planes": sizes["PLNS"], "groups": sizes["GRUP"], "rest": len(data) - sizes["PLNS"] - sizes["GRUP"],
+            "plane_count": r.plane_count, "group_count": len(groups), "coding": coding.name.lower() + widths}
 
 
 def measure(path: str, name: str, tolerances: tuple[float, ...], timeout: float,
@@ -295,6 +318,20 @@ def report(rows: list[dict], names: list[str], tolerances: tuple[float, ...], ar
             cells.append(f"{c['failed'][:60]}" if "failed" in c else
                          f"{c['bytes']:,} ({8 * c['bytes'] / max(r['triangles'], 1):.1f}) {_fmt_err(c)}")
         lines.append("| " + " | ".join(cells) + " |")
+    lines += ["", f"## Where {MATCHED}'s bytes go", "",
+              "Bytes of the plane table (`PLNS` chunks), of the part groups (`GRUP` chunks: references, roles, "
+              "trees or cells) and of the rest (signature, header, objects, index, end), each with its chunk "
+              "framing; bits per plane of the plane table; the coding (widths of ν, φ, h) the encoder chose.", "",
+              "| mesh | bytes | planes | plane table | bits per plane | coding | part groups | rest |",
+              "|---|---|---|---|---|---|---|---|"]
+    for r in rows:
+        c = r[MATCHED]
+        if "parts" not in c:
+            continue
+        p = c["parts"]
+        lines.append(f"| {r['category']}/{r['file']} | {c['bytes']:,} | {p['plane_count']:,} | {p['planes']:,} | "
+                     f"{8 * p['planes'] / max(p['plane_count'], 1):.1f} | {p['coding']} | "
+                     f"{p['groups']:,} ({p['group_count']}) | {p['rest']:,} |")
     lines += ["", "## Speed and memory per mesh", "",
               "Encode / decode wall time in ms, and peak memory (MB above the start of the measurement).", ""]
     lines += ["| mesh | " + " | ".join(names) + " |", "|" + "---|" * (1 + len(names))]
