@@ -207,21 +207,23 @@ def _measure(path: str, name: str, tolerances: tuple[float, ...], matched: float
 def pln_parts(data: bytes) -> dict:
     """Where a .pln file's bytes go: plane table, part groups and the rest, each with its chunk framing."""
     from planefmt import reader
+    from planefmt.chunks import ChunkStream, Limits
 
-    sizes = {"PLNS": 0, "GRUP": 0}
-    off = 8
-    while off + 8 <= len(data):
-        length = int.from_bytes(data[off + 4:off + 8], "little")
-        kind = data[off:off + 4].decode("latin-1")
-        if kind in sizes:
-            sizes[kind] += 12 + length
-        off += 12 + length
+    stream = ChunkStream(io.BytesIO(data), file=None, limits=Limits())
+    stream.read_signature()
+    sizes = {b"PLNS": 0, b"GRUP": 0}
+    while stream.offset < len(data):
+        chunk = stream.next_chunk()
+        if chunk.type in sizes:
+            sizes[chunk.type] += stream.offset - chunk.offset
     with reader.Reader(io.BytesIO(data)) as r:
-        groups = list(r.part_groups())
+        for _ in r:
+            pass
         q, coding = r.header.quantization, r.header.coding
     widths = f" {q.bits_nu}/{q.bits_phi}/{q.bits_h}" if coding.quantized else ""
-    return {"planes": sizes["PLNS"], "groups": sizes["GRUP"], "rest": len(data) - sizes["PLNS"] - sizes["GRUP"],
-            "plane_count": r.plane_count, "group_count": len(groups), "coding": coding.name.lower() + widths}
+    planes, groups = sizes[b"PLNS"], sizes[b"GRUP"]
+    return {"planes": planes, "groups": groups, "rest": len(data) - planes - groups,
+            "plane_count": r.plane_count, "group_count": r.group_count, "coding": coding.name.lower() + widths}
 
 
 def measure(path: str, name: str, tolerances: tuple[float, ...], timeout: float,

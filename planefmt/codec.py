@@ -952,19 +952,22 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
     # The narrowest widths that pass, by bisection: finer planes decode closer to the source (the
     # search assumes so; whatever it picks is verified like any other).
     lo, hi, best = 0, len(quantized) - 1, None
+    failed: set[Quantization] = set()
     while lo <= hi:
         mid = (lo + hi) // 2
         found = attempt(Coding.QUANTIZED, quantized[mid], key=mid)
         if found is None:
+            failed.add(quantized[mid])
             lo = mid + 1
         else:
             best, hi = found, mid - 1
     if best is not None:
         # The screen's margin and the bisection are conservative: narrower widths than the best
         # found often verify as well (plate_holes.STL at 3.7e-5: 17 bits where the bisection stops at
-        # 19, 3,053 -> 2,706 bytes). Each is tried in turn down to the first that fails.
+        # 19, 3,053 -> 2,706 bytes). Each is tried in turn down to the first that fails; one the
+        # bisection saw fail is not tried again.
         i = widths.index(best.quantization)
-        while i > 0:
+        while i > 0 and widths[i - 1] not in failed:
             found = attempt(Coding.QUANTIZED, widths[i - 1])
             if found is None:
                 break
