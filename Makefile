@@ -21,8 +21,9 @@ demo: $(STAMP)
 	mkdir -p $(OUT)
 	$(BIN)/python -m planefmt_converters.demo $(OUT)
 
+# -n auto: pytest-xdist, one worker per core (the suite takes about 12 minutes on one core)
 test: $(STAMP)
-	$(BIN)/python -m pytest
+	$(BIN)/python -m pytest -n auto --dist worksteal
 	$(BIN)/python -m conformance
 
 bench: $(STAMP)

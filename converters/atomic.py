@@ -3,7 +3,8 @@
 Writers produce their output under temporary names in the target's directory
 (same file system, so the final ``os.replace`` is an atomic rename) and
 rename them over the targets only once everything was written. On any
-exception the temporaries are removed and the targets are left as they were.
+exception, or after a SIGINT or SIGTERM
+(:mod:`.interrupts`), the temporaries are removed and the targets are left as they were.
 
 Temporary names keep the target's suffix because some libraries (usd-core)
 choose the file format from the extension.
@@ -16,6 +17,8 @@ import os
 import tempfile
 from collections.abc import Iterator, Sequence
 from pathlib import Path
+
+from . import interrupts
 
 
 def _current_umask() -> int:
@@ -54,6 +57,8 @@ def atomic_paths(targets: Sequence[str | os.PathLike[str]]) -> Iterator[list[Pat
                 mode = _NEW_FILE_MODE
             os.chmod(name, mode)
         yield temps
+        # A signal whose exception the writer swallowed must still keep the output out.
+        interrupts.check()
         for temp, target in zip(temps, targets):
             os.replace(temp, target)
     finally:

@@ -15,13 +15,13 @@ import argparse
 import contextlib
 import os
 import shutil
-import signal
 import sys
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from planefmt.errors import PlnError
+from planefmt_converters import interrupts
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -116,21 +116,21 @@ def _batch_job(job: tuple) -> tuple[str, list[str] | None, bool, str | None]:
 
 
 def run(args: argparse.Namespace) -> int:
-    previous = signal.signal(signal.SIGTERM, _terminate)
-    try:
-        opts = _pln_options(args)
-        if args.outdir:
-            return _run_batch(args, opts)
-        if len(args.paths) != 2:
-            raise _Usage("give IN OUT, or several inputs with -d OUTDIR --to FORMAT", code="CONVERSION_FAILED")
-        return _run_single(args.paths[0], args.paths[1], args, opts)
-    finally:
-        signal.signal(signal.SIGTERM, previous)
-
-
-def _terminate(signum, frame) -> None:
-    # Turn SIGTERM into an exception so every atomic writer on the stack discards its temporary file.
-    raise KeyboardInterrupt
+    with interrupts.handled():
+        try:
+            opts = _pln_options(args)
+            if args.outdir:
+                code = _run_batch(args, opts)
+            elif len(args.paths) != 2:
+                raise _Usage("give IN OUT, or several inputs with -d OUTDIR --to FORMAT", code="CONVERSION_FAILED")
+            else:
+                code = _run_single(args.paths[0], args.paths[1], args, opts)
+        except PlnError:
+            # The error may be what a swallowed KeyboardInterrupt turned into: report the signal.
+            interrupts.check()
+            raise
+        interrupts.check()
+        return code
 
 
 def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int:
