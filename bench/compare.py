@@ -30,7 +30,10 @@ encode and decode. Each measurement runs in a forked child, so one codec's
 memory is not another's and a timeout (``--timeout``) can stop it; a codec
 that fails or times out is reported as such, never dropped. For ``pln@d14``
 the report also splits the file's bytes into plane table, part groups and
-the rest (``pln_parts``), with the coding the encoder chose.
+the rest (``pln_parts``), with the coding the encoder chose, beside what
+Draco spends on the mesh's connectivity (``draco_connectivity``: its file at
+1-bit quantization) and the *floor* that gives: the pln@d14 file with its
+part groups no dearer than that.
 
 The summary gives, per corpus category, the median of ``pln@T`` bytes over
 ``draco-14`` bytes (over the meshes both encoded), how often pln is the
@@ -196,12 +199,21 @@ def _measure(path: str, name: str, tolerances: tuple[float, ...], matched: float
         r = relative_hausdorff((v, f), (dv, df), tolerance=MEASURE_GAP, max_pieces=MEASURE_PIECES)
         conn.send({"bytes": len(data), "encode": t1 - t0, "decode": t2 - t1, "peak": peak,
                    "error": r.upper, "certified": r.certified, "triangles": len(f),
-                   **({"parts": pln_parts(data)} if name.startswith("pln") else {})})
+                   **({"parts": pln_parts(data)} if name.startswith("pln") else {}),
+                   **({"connectivity": draco_connectivity(v, f)} if name == "draco-14" else {})})
     except Exception as exc:  # noqa: BLE001 - a codec's failure is a result of the bench, reported in its row
         conn.send({"failed": f"{type(exc).__name__}: {str(exc).splitlines()[0][:120] if str(exc) else ''}",
                    "trace": traceback.format_exc(limit=3)})
     finally:
         conn.close()
+
+
+def draco_connectivity(v: np.ndarray, f: np.ndarray) -> int:
+    """Bytes of Draco's file for the mesh at 1-bit quantization: its connectivity coding and about
+    nothing of the positions, an estimate of what Draco spends on connectivity alone."""
+    import DracoPy
+
+    return len(DracoPy.encode(v, f, quantization_bits=1, compression_level=10))
 
 
 def pln_parts(data: bytes) -> dict:
@@ -323,17 +335,33 @@ def report(rows: list[dict], names: list[str], tolerances: tuple[float, ...], ar
     lines += ["", f"## Where {MATCHED}'s bytes go", "",
               "Bytes of the plane table (`PLNS` chunks), of the part groups (`GRUP` chunks: references, roles, "
               "trees or cells) and of the rest (signature, header, objects, index, end), each with its chunk "
-              "framing; bits per plane of the plane table; the coding (widths of ν, φ, h) the encoder chose.", "",
-              "| mesh | bytes | planes | plane table | bits per plane | coding | part groups | rest |",
-              "|---|---|---|---|---|---|---|---|"]
+              "framing; bits per plane of the plane table; the coding (widths of ν, φ, h) the encoder chose. "
+              "*Draco connectivity*: Draco's file at 1-bit quantization (`draco_connectivity`), about what Draco "
+              "spends on connectivity alone; *floor*: plane table + rest + the smaller of part groups and Draco "
+              f"connectivity, over draco-14 bytes: what {MATCHED} would weigh with its planes coded as they are and "
+              "its part groups no dearer than Draco's connectivity (an estimate, not a measurement of a pln file).",
+              "",
+              "| mesh | bytes | planes | plane table | bits per plane | coding | part groups | rest | "
+              "Draco connectivity | floor |",
+              "|---|---|---|---|---|---|---|---|---|---|"]
+    floors: dict[str, list[float]] = {}
     for r in rows:
-        c = r[MATCHED]
+        c, d = r[MATCHED], r["draco-14"]
         if "parts" not in c:
             continue
         p = c["parts"]
+        conn, floor = "–", "–"
+        if "connectivity" in d:
+            ratio = (p["planes"] + p["rest"] + min(p["groups"], d["connectivity"])) / d["bytes"]
+            floors.setdefault(r["category"], []).append(ratio if no_larger(c["error"], d["error"]) else math.inf)
+            conn, floor = f"{d['connectivity']:,}", f"{ratio:.2f}"
         lines.append(f"| {r['category']}/{r['file']} | {c['bytes']:,} | {p['plane_count']:,} | {p['planes']:,} | "
                      f"{8 * p['planes'] / max(p['plane_count'], 1):.1f} | {p['coding']} | "
-                     f"{p['groups']:,} ({p['group_count']}) | {p['rest']:,} |")
+                     f"{p['groups']:,} ({p['group_count']}) | {p['rest']:,} | {conn} | {floor} |")
+    if floors:
+        lines += ["", "Median floor per category (a mesh whose pln@d14 error is larger than draco-14's counts as "
+                  "infinite, as in the target): " + "; ".join(f"{cat} {statistics.median(v):.2f}"
+                                                            for cat, v in floors.items()) + "."]
     lines += ["", "## Speed and memory per mesh", "",
               "Encode / decode wall time in ms, and peak memory (MB above the start of the measurement).", ""]
     lines += ["| mesh | " + " | ".join(names) + " |", "|" + "---|" * (1 + len(names))]
