@@ -5,7 +5,7 @@ from __future__ import annotations
 import os
 import warnings
 
-from planefmt.errors import PlnWarning
+from planefmt.errors import PlnWarning, SkippedGroupsWarning
 from planefmt.model import Scene
 
 SIGNATURE_TAIL = b"PLN"
@@ -20,7 +20,11 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     # The codec (scipy) loads only when a .pln is decoded or encoded, not for `pln info`.
     from planefmt import codec
 
-    return codec.decode_scene(path), []
+    # Decoding warns of what it skipped (groups of a newer minor version's kinds): that was dropped.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", PlnWarning)
+        scene = codec.decode_scene(path)
+    return scene, [w.what if isinstance(w, SkippedGroupsWarning) else str(w) for w in _pln_warnings(caught)]
 
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
@@ -37,7 +41,12 @@ def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6
         warnings.simplefilter("always", PlnWarning)
         codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta, tau=tau,
                            compress=compress, compact=compact, watertight=watertight)
+    return [str(w) for w in _pln_warnings(caught)]
+
+
+def _pln_warnings(caught: list[warnings.WarningMessage]) -> list[PlnWarning]:
+    """The :class:`PlnWarning` instances among ``caught``; other warnings are issued again."""
     for w in caught:
         if not issubclass(w.category, PlnWarning):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return [str(w.message) for w in caught if issubclass(w.category, PlnWarning)]
+    return [w.message for w in caught if issubclass(w.category, PlnWarning)]

@@ -54,7 +54,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError
 
 from . import quantize, records
-from .errors import CODES, FormatError, GeometryError, PlnError, PlnWarning
+from .errors import CODES, FormatError, GeometryError, PlnError, PlnWarning, SkippedGroupsWarning
 from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
 from .model import (BSP_MAX_SPLIT, Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup,
@@ -1253,10 +1253,13 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
     """Read a .pln file into a :class:`Scene`: one node per object, its groups decoded and joined.
 
     Streams: part groups are decoded in batches of up to 4096 as they are read.
+    Groups of a kind from a newer minor version are skipped, as spec §11 asks
+    of a reader, with one :class:`PlnWarning` naming them.
     """
     parts: dict[int, list[tuple[int, DecodedGroup]]] = {}
     colours: dict[int, np.ndarray] = {}
     pending: list[PartGroup] = []
+    skipped: list[PartGroup] = []
 
     def flush() -> None:
         for rec, d in zip(pending, decode_groups([(g.planes, g, g.index) for g in pending], error)):
@@ -1265,8 +1268,12 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
 
     with Reader(source) as r:
         error = header_plane_error(r.header)
+        known = records.kinds_of(*r.header.version)
         for rec in r:
             if isinstance(rec, PartGroup):
+                if int(rec.kind) not in known:
+                    skipped.append(rec)
+                    continue
                 # Decoded in batches of groups read (patches together), bounding what is held.
                 pending.append(rec)
                 if len(pending) >= _DECODE_BATCH:
@@ -1274,7 +1281,15 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
             elif isinstance(rec, Colours):
                 colours[rec.group] = rec.rgba
         flush()
+        if skipped:
+            warnings.warn(SkippedGroupsWarning(skipped_groups(skipped), r.name), stacklevel=2)
         return _assemble(r.objects, parts, r.header.units, colours)
+
+
+def skipped_groups(groups: Sequence[GroupLike]) -> str:
+    """The part groups of newer minor versions' kinds a reader skipped (spec §11), named."""
+    which = ", ".join(f"{g.index} (kind {int(g.kind)})" for g in groups)
+    return f"part group{'s' if len(groups) > 1 else ''} {which} of a newer minor version than this reader knows"
 
 
 def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str]]:
@@ -1294,7 +1309,13 @@ def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str
     error = header_plane_error(got.header)
     objects = [r for r in got.records if isinstance(r, ObjectRecord)]
     parts: dict[int, list[tuple[int, DecodedGroup]]] = {}
+    known = records.kinds_of(*got.header.version)
+    skipped = [g for g in got.part_groups if int(g.kind) not in known]
+    if skipped:
+        lost.append(f"{skipped_groups(skipped)} skipped")
     for g in got.part_groups:
+        if int(g.kind) not in known:
+            continue
         try:
             parts.setdefault(g.object, []).append((g.index, decode_group(g.planes, g, g.index, error)))
         except GeometryError as exc:

@@ -164,3 +164,12 @@ class ConversionError(PlnError):
 
 class PlnWarning(UserWarning):
     """Something the encoder did that the caller allowed but may not expect (the call succeeded)."""
+
+
+class SkippedGroupsWarning(PlnWarning):
+    """Part groups of kinds from a newer minor version that decoding skipped, as spec §11 asks of a
+    reader; ``what`` names them."""
+
+    def __init__(self, what: str, file: str | None = None) -> None:
+        super().__init__(f"{file}: {what} skipped" if file else f"{what} skipped")
+        self.what = what

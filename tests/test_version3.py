@@ -133,3 +133,37 @@ def test_version3_end_payloads(payload, code):
         with pytest.raises(PlnError) as e:
             records.decode_end(payload, 3)
     assert e.value.code == code
+
+
+@pytest.mark.parametrize("case", ["minor_3_2", "minor_1_1", "sealed_in_1_1"])
+def test_decoding_skips_the_groups_of_a_newer_minor_versions_kind_and_says_which(case: str, tmp_path) -> None:
+    """Spec §11: a reader skips a group of a kind its version does not know and reads the rest;
+    decode_scene, pln convert and salvage_scene do so and name the group skipped."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    from planefmt import codec
+    from planefmt.errors import SkippedGroupsWarning
+
+    path = Path(__file__).resolve().parents[1] / "conformance" / "valid" / f"{case}.pln"
+    with planefmt.open(path) as r:
+        groups = [g for g in r if isinstance(g, planefmt.PartGroup)]
+        known = records.kinds_of(*r.header.version)
+        error = codec.header_plane_error(r.header)
+    skipped = [g for g in groups if int(g.kind) not in known]
+    assert [g.index for g in skipped] == [1]
+    expected = sum(len(codec.decode_group(g.planes, g, g.index, error).triangles)
+                   for g in groups if int(g.kind) in known)
+    with pytest.warns(SkippedGroupsWarning, match=rf"part group 1 \(kind {int(skipped[0].kind)}\)"):
+        scene = codec.decode_scene(path)
+    assert sum(len(n.mesh.faces) for n in scene.nodes if n.mesh is not None) == expected > 0
+
+    out = tmp_path / "out.obj"
+    p = subprocess.run([sys.executable, "-m", "planefmt_converters.cli", "convert", str(path), str(out)],
+                       capture_output=True, text=True)
+    assert p.returncode == 0 and out.exists(), p.stderr
+    assert f"dropped part group 1 (kind {int(skipped[0].kind)})" in p.stderr
+
+    _, lost = codec.salvage_scene(path)
+    assert any("part group 1" in line and "skipped" in line for line in lost)

@@ -100,7 +100,7 @@ def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts:
     notes = registry.write(scene, dst, fmt.name, **(pln_opts if fmt.name == "pln" else {}))
     warnings = []
     if dropped:
-        warnings.append(f"{src}: dropped {', '.join(dropped)} (planes cannot carry them)")
+        warnings.append(f"{src}: dropped {'; '.join(dropped)} (not carried into {Path(dst).name})")
     if notes:
         warnings.append(f"{dst}: not kept by {fmt.name}: {', '.join(notes)}")
     return warnings, [f"{src}: {line}" for line in lost]
