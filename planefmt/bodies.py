@@ -180,7 +180,7 @@ def exact_planes(vertices: np.ndarray, faces: np.ndarray, table: PlaneTable) -> 
     """Each face's plane in a polygonization that merges only coplanar faces (within
     :data:`EXACT_COPLANAR` of the diagonal), added to ``table``; -1 for faces of no area."""
     poly = polygonize(vertices, faces, tolerance=EXACT_COPLANAR)
-    index = np.array([table.add(w, float(c)) for w, c in zip(poly.omega, poly.h)], dtype=np.int64)
+    index = table.extend(poly.omega, poly.h)
     return np.where(poly.face_plane >= 0, index[np.maximum(poly.face_plane, 0)], -1)
 
 

@@ -95,8 +95,30 @@ class PlaneTable:
         return idx
 
     def extend(self, omega: np.ndarray, h: np.ndarray) -> np.ndarray:
-        """:meth:`add` of each row of ``omega`` (k, 3), ``h`` (k,): their indices."""
-        return np.array([self.add(w, float(c)) for w, c in zip(omega, h)], dtype=np.int64)
+        """:meth:`add` of each row of ``omega`` (k, 3), ``h`` (k,), in one pass: their indices."""
+        rows = np.column_stack([np.asarray(omega, dtype=np.float64).reshape(-1, 3),
+                                np.asarray(h, dtype=np.float64).reshape(-1)])
+        old = np.column_stack([self._omega[self.base:self._count], self._h[self.base:self._count]])
+        # "+ 0.0" turns -0.0 into 0.0: np.unique compares rows by their bytes, add()'s dictionary by value.
+        _, first, inverse = np.unique(np.vstack([old, rows]) + 0.0, axis=0, return_index=True,
+                                      return_inverse=True)
+        index = np.empty(len(first), dtype=np.int64)
+        known = first < len(old)
+        index[known] = self.base + first[known]
+        new = np.flatnonzero(~known)
+        new = new[np.argsort(first[new])]
+        index[new] = self._count + np.arange(len(new))
+        added = rows[first[new] - len(old)]
+        need = self._count + len(added)
+        if need > len(self._h):
+            grow = max(16, len(self._h), need - len(self._h))
+            self._omega = np.concatenate([self._omega, np.zeros((grow, 3))])
+            self._h = np.concatenate([self._h, np.zeros(grow)])
+        self._omega[self._count:need] = added[:, :3]
+        self._h[self._count:need] = added[:, 3]
+        self._new.update(zip(map(tuple, added.tolist()), index[new].tolist()))
+        self._count = need
+        return index[inverse.reshape(-1)[len(old):]]
 
     def inverted(self, j: int) -> int:
         """The index of plane ``j`` turned over, ``(-omega, -h)``."""

@@ -180,3 +180,28 @@ def test_a_closed_surface_facing_inwards_decodes_closed() -> None:
         assert euler_characteristic(mesh.faces) == euler_characteristic(f)
         assert signed_volume(mesh.vertices, mesh.faces) == pytest.approx(signed_volume(v, f), rel=1e-6)
         assert signed_volume(v, f) < 0
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_plane_table_extend_gives_what_add_gives_row_by_row(seed: int) -> None:
+    """``PlaneTable.extend`` (one numpy pass) against ``add`` called per row: the same indices, planes
+    and signs, with rows repeated within a batch, across batches, equal to input planes (which are
+    not reused, as ``add`` does not reuse them) and -0.0 beside 0.0."""
+    rng = np.random.default_rng(seed)
+    values = np.array([-1.0, -0.0, 0.0, 0.5, 1.0])
+    for _ in range(50):
+        base = int(rng.integers(0, 5))
+        w0, h0 = rng.choice(values, size=(base, 3)), rng.choice(values, size=base)
+        by_row, batched = PlaneTable(w0, h0), PlaneTable(w0, h0)
+        for _ in range(int(rng.integers(1, 6))):
+            k = int(rng.integers(0, 40))
+            w, h = rng.choice(values, size=(k, 3)), rng.choice(values, size=k)
+            if base and k and rng.random() < 0.3:
+                w[0], h[0] = w0[0], h0[0]
+            expected = [by_row.add(x, float(c)) for x, c in zip(w, h)]
+            assert batched.extend(w, h).tolist() == expected
+            x, c = rng.choice(values, size=3), float(rng.choice(values))
+            assert batched.add(x, c) == by_row.add(x, c)
+        (oa, ha), (ob, hb) = by_row.arrays(), batched.arrays()
+        assert np.array_equal(oa, ob) and np.array_equal(ha, hb)
+        assert np.array_equal(np.signbit(oa), np.signbit(ob)) and np.array_equal(np.signbit(ha), np.signbit(hb))
