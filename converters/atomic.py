@@ -3,8 +3,8 @@
 Writers produce their output under temporary names in the target's directory
 (same file system, so the final ``os.replace`` is an atomic rename) and
 rename them over the targets only once everything was written. On any
-exception, or after a SIGINT or SIGTERM
-(:mod:`.interrupts`), the temporaries are removed and the targets are left as they were.
+exception, or after a SIGINT or SIGTERM (:mod:`.interrupts`), the
+temporaries are removed and the targets are left as they were.
 
 Temporary names keep the target's suffix because some libraries (usd-core)
 choose the file format from the extension.

@@ -6,9 +6,8 @@ signal and the command line may swallow that exception: trimesh wraps an
 optional import that fails, ``KeyboardInterrupt`` included, in a placeholder
 module and carries on, so the conversion would finish (exit 0, a signal
 lost) or fail later with an unrelated error. The handler therefore also
-records the signal: :func:`check` raises again before an output is renamed
-into place, and :func:`received` lets the command line report the
-interruption instead of what the swallowed exception turned into.
+records the signal: :func:`check` raises again, before an output is renamed
+into place and where the command line would report that error instead.
 """
 
 from __future__ import annotations
@@ -29,7 +28,8 @@ def _handler(signum: int, frame: object) -> None:
 
 @contextlib.contextmanager
 def handled() -> Iterator[None]:
-    """Within the block, SIGINT and SIGTERM raise ``KeyboardInterrupt`` and are recorded (main thread only)."""
+    """Within the block, SIGINT and SIGTERM raise ``KeyboardInterrupt`` and are recorded for
+    :func:`check` (main thread only); on leaving it, the handlers and the record are as before."""
     global _received
     _received = None
     previous = {s: signal.signal(s, _handler) for s in _SIGNALS}
@@ -38,11 +38,7 @@ def handled() -> Iterator[None]:
     finally:
         for s, handler in previous.items():
             signal.signal(s, handler)
-
-
-def received() -> int | None:
-    """The signal that arrived within :func:`handled`'s block, or None."""
-    return _received
+        _received = None
 
 
 def check() -> None:

@@ -106,3 +106,6 @@ def test_a_signal_whose_exception_the_reader_swallowed_still_stops_the_conversio
     assert list(tmp_path.iterdir()) == []
     assert _digest(source) == before
     assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    # Once the conversion is over, the signal no longer holds back other writes.
+    registry.write(real_read(source)[0], tmp_path / "after.obj")
+    assert (tmp_path / "after.obj").exists()
