@@ -1313,9 +1313,7 @@ def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str
     skipped = [g for g in got.part_groups if int(g.kind) not in known]
     if skipped:
         lost.append(f"{skipped_groups(skipped)} skipped")
-    for g in got.part_groups:
-        if int(g.kind) not in known:
-            continue
+    for g in (g for g in got.part_groups if int(g.kind) in known):
         try:
             parts.setdefault(g.object, []).append((g.index, decode_group(g.planes, g, g.index, error)))
         except GeometryError as exc:

@@ -85,14 +85,18 @@ class PlaneTable:
         idx = self._new.get(key)
         if idx is None:
             idx = self._new[key] = self._count
-            if self._count == len(self._h):
-                grow = max(16, len(self._h))
-                self._omega = np.concatenate([self._omega, np.zeros((grow, 3))])
-                self._h = np.concatenate([self._h, np.zeros(grow)])
+            self._reserve(self._count + 1)
             self._omega[idx] = omega
             self._h[idx] = h
             self._count += 1
         return idx
+
+    def _reserve(self, need: int) -> None:
+        """Room for ``need`` planes, growing the storage geometrically."""
+        if need > len(self._h):
+            grow = max(16, len(self._h), need - len(self._h))
+            self._omega = np.concatenate([self._omega, np.zeros((grow, 3))])
+            self._h = np.concatenate([self._h, np.zeros(grow)])
 
     def extend(self, omega: np.ndarray, h: np.ndarray) -> np.ndarray:
         """:meth:`add` of each row of ``omega`` (k, 3), ``h`` (k,), in one pass: their indices."""
@@ -110,10 +114,7 @@ class PlaneTable:
         index[new] = self._count + np.arange(len(new))
         added = rows[first[new] - len(old)]
         need = self._count + len(added)
-        if need > len(self._h):
-            grow = max(16, len(self._h), need - len(self._h))
-            self._omega = np.concatenate([self._omega, np.zeros((grow, 3))])
-            self._h = np.concatenate([self._h, np.zeros(grow)])
+        self._reserve(need)
         self._omega[self._count:need] = added[:, :3]
         self._h[self._count:need] = added[:, 3]
         self._new.update(zip(map(tuple, added.tolist()), index[new].tolist()))
