@@ -14,6 +14,25 @@ the external validators (Khronos glTF-Validator, USD validation) in
 :mod:`planefmt_converters.validators`.
 """
 
-from .registry import Format, detect, formats, get, read, register, write
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .registry import Format, detect, formats, get, read, register, write
 
 __all__ = ["Format", "detect", "formats", "get", "read", "register", "write"]
+
+
+def __getattr__(name: str) -> object:
+    # Lazy (PEP 562): importing the package, as the ``pln`` script does before it can install its
+    # signal handlers, must not import numpy, trimesh and planefmt (a third of a second).
+    if name in __all__:
+        from . import registry
+
+        return getattr(registry, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

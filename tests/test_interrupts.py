@@ -112,3 +112,34 @@ def test_a_signal_whose_exception_the_reader_swallowed_still_stops_the_conversio
     # Once the conversion is over, the signal no longer holds back other writes.
     registry.write(real_read(source)[0], tmp_path / "after.obj")
     assert (tmp_path / "after.obj").exists()
+
+
+# Sends the signal while planefmt is being imported: the moment is exact, not a guess at timings.
+_DURING_IMPORT = """
+import importlib.abc, os, signal, sys
+
+class Signal(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name == "planefmt":
+            sys.meta_path.remove(self)
+            os.kill(os.getpid(), signal.{sig})
+        return None
+
+import planefmt_converters.cli
+assert "planefmt" not in sys.modules and "numpy" not in sys.modules, sorted(sys.modules)
+sys.meta_path.insert(0, Signal())
+sys.exit(planefmt_converters.cli.main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_a_signal_during_start_up_ends_the_command_without_a_traceback(sig: str, tmp_path: Path) -> None:
+    # Importing the command line's package imports neither planefmt nor numpy, so the signal lands
+    # in main(), under its handlers, and is reported as one during a conversion is.
+    target = tmp_path / "out.glb"
+    source = Path(__file__).resolve().parents[1] / "samples" / "cylinder.stl"
+    run = subprocess.run([sys.executable, "-c", _DURING_IMPORT.format(sig=sig), "convert", str(source),
+                          str(target)], capture_output=True, text=True, timeout=120)
+    assert run.returncode == 130, run.stderr
+    assert run.stderr.strip() == "pln: interrupted"
+    assert not target.exists() and list(tmp_path.iterdir()) == []
