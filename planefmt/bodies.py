@@ -25,6 +25,7 @@ where ``omega . x <= h``.
 from __future__ import annotations
 
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -41,7 +42,7 @@ from .planes import from_triplets, to_triplets
 from .polygonize import COPLANAR_TOLERANCE, edge_adjacency, polygonize
 from .repair import merge_close_vertices
 from .sealed import decode_sealed, encode_sealed
-from .solids import TreeSurface, decode_tree, partition
+from .solids import STRATEGIES, Partition, TreeSurface, decode_tree, partition
 from .trianglegeom import TriangleIndex
 
 #: Splitter seeds tried before a closed body falls back to patches.
@@ -206,9 +207,10 @@ def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
     source = TriangleIndex(vertices, faces)
     reasons = []
     report.stray = np.zeros(0, dtype=np.int64)
-    for seed in seeds:
+    for seed, part in _trees(omega, h, x[f], fp, eps, reflex, seeds, reasons):
+        base = part.strategy == STRATEGIES[0]
+        label = f"seed {seed}" if base else f"seed {seed}, strategy {part.strategy}"
         try:
-            part = partition(omega, h, x[f], fp, eps, reflex, seed=seed)
             used, local = np.unique(part.tokens[part.tokens <= np.uint32(0xFFFFFFEF)], return_inverse=True)
             tokens = part.tokens.copy()
             tokens[part.tokens <= np.uint32(0xFFFFFFEF)] = local.astype(np.uint32)
@@ -217,34 +219,61 @@ def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
             surface = TreeSurface(w, c, tokens, np.ones(len(used), dtype=bool))
             dv, dt, dplane = surface.rounded
             # The decoder's exact last resort doubles the time a failing tree takes: tried for the
-            # first seed of each plane set only (a tree it would close may then be refused, never
-            # one accepted that a reader decodes otherwise).
-            exact = seed == seeds[0] and not surface.closed
+            # first seed's tree of each plane set only (a tree it would close may then be refused,
+            # never one accepted that a reader decodes otherwise).
+            exact = base and seed == seeds[0] and not surface.closed
             if exact:
                 dv, dt, dplane = surface.exact() or surface.rounded
         except GeometryError as err:
-            reasons.append(f"seed {seed}: {err.reason}")
+            reasons.append(f"{label}: {err.reason}")
             continue
         except (ArithmeticError, ValueError, np.linalg.LinAlgError, QhullError) as err:
             # What a file's decoder would report as DEGENERATE_GEOMETRY (codec.decode_group): not
             # this tree.
-            reasons.append(f"seed {seed}: the tree does not decode ({type(err).__name__}: {err})")
+            reasons.append(f"{label}: the tree does not decode ({type(err).__name__}: {err})")
             continue
         why = _check_solid(vertices, faces, dv, dt, volume, chi, source, target)
-        if why is not None and not len(report.stray) and is_closed_manifold(dt, len(dv)):
+        if why is not None and base and not len(report.stray) and is_closed_manifold(dt, len(dv)):
             report.stray = _stray_planes(vertices, faces, face_plane, dv, dt, used[dplane], source, target)
         if why is None and exact:
             why = _certify(vertices, faces, dv, dt, target)
-        report.details[f"seed{seed}"] = {"splits": part.splits, "pieces": part.pieces, "tokens": len(tokens),
-                                         "check": why or "ok"}
+        report.details[label.replace(" ", "")] = {"splits": part.splits, "pieces": part.pieces,
+                                                   "tokens": len(tokens), "check": why or "ok"}
         if why is None:
             report.error = _vertex_screen(vertices, faces, dv, dt, source)
             report.details["tokens"] = len(tokens)
             return Group(GroupKind.BSP, used.astype(np.int64), np.zeros(len(used), dtype=bool), tokens,
                          triangles=len(faces))
-        reasons.append(f"seed {seed}: {why}")
+        reasons.append(f"{label}: {why}")
     report.note = "; ".join(reasons)
     return None
+
+
+def _trees(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.ndarray, eps: float,
+           reflex: np.ndarray, seeds: tuple[int, ...], reasons: list[str]) -> Iterator[tuple[int, Partition]]:
+    """(seed, tree) in the order :func:`encode_solid` tries them: first the smallest tree of the
+    first seed's other :data:`~planefmt.solids.STRATEGIES` where it is smaller than that seed's
+    tree of the first strategy, then each seed's tree of the first strategy. A tree that fails
+    only costs one more check, and the fallbacks (other seeds, the mixed and exact plane sets,
+    which follow the planes the first strategy's tree strayed on) are those of that strategy alone.
+    A partition that fails is skipped, its reason appended to ``reasons``."""
+    for seed in seeds:
+        try:
+            base = partition(omega, h, tri, tri_plane, eps, reflex, seed=seed, strategy=STRATEGIES[0])
+        except GeometryError as err:
+            reasons.append(f"seed {seed}: {err.reason}")
+            continue
+        if seed == seeds[0] and len(STRATEGIES) > 1:
+            others = []
+            for strategy in STRATEGIES[1:]:
+                try:
+                    others.append(partition(omega, h, tri, tri_plane, eps, reflex, seed=seed, strategy=strategy))
+                except GeometryError as err:
+                    reasons.append(f"seed {seed}, strategy {strategy}: {err.reason}")
+            smaller = [p for p in others if len(p.tokens) < len(base.tokens)]
+            if smaller:
+                yield seed, min(smaller, key=lambda p: len(p.tokens))
+        yield seed, base
 
 
 def _check_solid(vertices: np.ndarray, faces: np.ndarray, dv: np.ndarray, dt: np.ndarray, volume: float,

@@ -16,7 +16,10 @@ splitting plane, so they still tile the solid.
   faces of one convex piece: it becomes one cell at once, instead of a chain
   of nodes each peeling off an empty outer side (the chain trees that made a
   naive boundary extraction quadratic). Otherwise the splitter is the best of
-  a few random non-supporting ("reflex") planes by ``3 * splits + imbalance``.
+  a few random non-supporting ("reflex") planes by ``w * splits + imbalance``.
+  The tree's size is what the file pays for; which strategy (candidates,
+  ``w``) makes the smallest tree depends on the body, so the encoder builds
+  trees of the strategies of :data:`STRATEGIES` and tries the smallest first.
 * Leaves. A child with no fragment is uniformly inside or outside; it is IN
   when it lies on the side the splitter's fragments face away from, by net
   area (coincident opposite faces, zero-thickness fins, cancel). This holds
@@ -50,8 +53,12 @@ from .model import BSP_IN, BSP_OUT
 from .polygonize import edge_adjacency
 from .seams import Planes, close_cracks, fill_slits, stitch
 
-#: Splitter candidates evaluated per node.
-CANDIDATES = 8
+#: Splitter strategies: (candidates evaluated per node, weight of a split fragment against one of
+#: imbalance). (8, 3) alone made trees of 335, 957, 2139, 3427, 2995, 4205 and 5069 tokens on the
+#: corpus' 20mm cube, angle_block, plate_holes, octagonal_pocket, box, featuretype and tray at
+#: draco-14's error; the smallest of the three, 299, 691, 1945, 3229, 2459, 3061 and 5069: weighing
+#: splits more keeps the convex pieces, whose planes a tree lists again, fewer and larger.
+STRATEGIES = ((8, 3.0), (64, 10.0), (64, 30.0))
 #: Cells with at most this many fragments are tested for convexity exhaustively
 #: (cost: planes x fragment vertices).
 EXHAUSTIVE = 2048
@@ -66,24 +73,27 @@ class Partition:
     chain (each of its planes splits, the outer side is OUT, the innermost
     leaf IN). ``splits`` counts the split nodes chosen by the splitter,
     ``pieces`` the convex pieces and ``chain`` the split nodes of their
-    chains.
+    chains; ``strategy`` is the splitter strategy that made it.
     """
 
     tokens: np.ndarray
     splits: int
     pieces: int
     chain: int
+    strategy: tuple[int, float]
 
 
 def partition(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.ndarray, eps: float,
-              reflex_planes: np.ndarray, *, seed: int = 0) -> Partition:
+              reflex_planes: np.ndarray, *, seed: int = 0, strategy: tuple[int, float] = STRATEGIES[0]
+              ) -> Partition:
     """BSP autopartition of a closed body's triangles ``tri`` (n, 3, 3) on planes ``tri_plane`` (n,).
 
     ``omega`` (k, 3), ``h`` (k,) are the planes; ``eps`` (model units) the
     distance within which a point counts as on a plane; ``reflex_planes``
     (k,) bool marks planes with a concave edge in the mesh, the splitter
-    candidates in cells too large for the exhaustive convexity test.
-    Deterministic for a given ``seed``.
+    candidates in cells too large for the exhaustive convexity test;
+    ``strategy`` one of :data:`STRATEGIES`. Deterministic for a given
+    ``seed`` and ``strategy``.
     """
     rng = np.random.default_rng(seed)
     tokens: list[int] = []
@@ -109,7 +119,7 @@ def partition(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.n
             pieces += 1
             chain += len(planes)
             continue
-        p = _choose_splitter(omega, h, t, planes[reflex], eps, rng)
+        p = _choose_splitter(omega, h, t, planes[reflex], eps, rng, strategy)
         splits += 1
         d = t @ omega[p] - h[p]
         side = vertex_sides(d, eps)
@@ -134,7 +144,8 @@ def partition(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.n
         # without fragments is one leaf, inside or outside as the splitter's fragments say.
         stack.append((tout, np.concatenate(outp)) if len(tout) else (BSP_OUT if inner_in else BSP_IN))
         stack.append((tin, np.concatenate(inp)) if len(tin) else (BSP_IN if inner_in else BSP_OUT))
-    return Partition(tokens=np.asarray(tokens, dtype=np.uint32), splits=splits, pieces=pieces, chain=chain)
+    return Partition(tokens=np.asarray(tokens, dtype=np.uint32), splits=splits, pieces=pieces, chain=chain,
+                     strategy=strategy)
 
 
 def _inner_is_solid(on: np.ndarray, normal: np.ndarray) -> bool:
@@ -158,11 +169,12 @@ def _inner_is_solid(on: np.ndarray, normal: np.ndarray) -> bool:
 
 
 def _choose_splitter(omega: np.ndarray, h: np.ndarray, t: np.ndarray, pool: np.ndarray, eps: float,
-                     rng: np.random.Generator) -> int:
-    """The best of a few random planes of ``pool`` by ``3 * splits + |inner - outer|``."""
+                     rng: np.random.Generator, strategy: tuple[int, float]) -> int:
+    """The best of ``strategy[0]`` random planes of ``pool`` by ``strategy[1] * splits + |inner - outer|``."""
     if len(pool) == 1:
         return int(pool[0])
-    cand = rng.choice(pool, size=min(CANDIDATES, len(pool)), replace=False)
+    candidates, weight = strategy
+    cand = rng.choice(pool, size=min(candidates, len(pool)), replace=False)
     d = np.einsum("nvj,kj->knv", t, omega[cand]) - h[cand][:, None, None]
     side = vertex_sides(d, eps)
     lo = (side < 0).any(axis=2)
@@ -170,7 +182,7 @@ def _choose_splitter(omega: np.ndarray, h: np.ndarray, t: np.ndarray, pool: np.n
     splits = (lo & hi).sum(axis=1)
     inner = (lo & ~hi).sum(axis=1)
     outer = (hi & ~lo).sum(axis=1)
-    score = 3 * splits + np.abs(inner - outer)
+    score = weight * splits + np.abs(inner - outer)
     return int(cand[np.argmin(score)])
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from planefmt import bodies, solids
 from planefmt.bodies import (decode_groups, encode_groups, euler_characteristic, is_closed_manifold,
                              signed_volume)
 from planefmt.bsptree import parse
@@ -219,14 +220,31 @@ def test_merged_planes_that_stray_are_replaced_by_exact_ones_only_there() -> Non
     assert 0 < exact < total / 4
 
 
+def test_the_smallest_tree_of_the_splitter_strategies_is_kept(monkeypatch) -> None:
+    """The 20mm cube (embossed letters): the first strategy alone makes a larger tree than the one
+    kept; both are solids that meet the contract."""
+    path = CORPUS / "cad" / "20mm-xyz-cube.stl"
+    if not path.exists():
+        pytest.skip(f"no corpus mesh {path}")
+    import trimesh
+
+    mesh = trimesh.load(path, process=False)
+    v, f = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
+    kept = check_solid(v, f)
+    monkeypatch.setattr(bodies, "STRATEGIES", solids.STRATEGIES[:1])
+    first = check_solid(v, f)
+    assert kept["kinds"] == first["kinds"] == ["solid"]
+    tokens = [sum(len(g.tree) for g in out["groups"]) for out in (kept, first)]
+    print(f"20mm cube: {tokens[0]} tokens kept, {tokens[1]} of strategy {solids.STRATEGIES[0]}")
+    assert tokens[0] < tokens[1]
+
+
 def test_edges_cut_by_nearly_coincident_planes_are_carried_by_their_ends(monkeypatch) -> None:
     """pins.glb "sides" (genus 10): two of its planes 6e-4 degrees apart cut the cap; their corners
     weld 5e-5 off the line the vertices of the neighbouring cells lie on. Only carrying each edge
     with its ends' rounding error inserts those vertices and closes the surface. (The encoder's
     mixed planes avoid that tree; without them it is the all-exact planes' tree that decodes.)"""
-    import planefmt.bodies
-
-    monkeypatch.setattr(planefmt.bodies, "MIXED_ROUNDS", 0)
+    monkeypatch.setattr(bodies, "MIXED_ROUNDS", 0)
     v, f = _corpus_node("gltf_scene/pins.glb", "sides#1:5:2:4:3")
     out = check_solid(v, f)
     assert out["kinds"] == ["solid"] and out["notes"] == ["exact planes"]
