@@ -26,16 +26,18 @@ splitting plane, so they still tile the solid.
   for one closed, outward, non-self-intersecting body; bodies are encoded one by one, and
   the encoder verifies the decoded surface, so a body where it fails
   (self-intersection, self-contact) is caught and encoded otherwise.
-* Output. The IN cells, each pruned to its non-redundant half-spaces
-  (``CELLS``, spec §8.3), or the same tree as preorder tokens (``BSP``, spec
-  §8.4) with each convex piece written as a chain; the smaller is kept.
+* Output. The tree as preorder tokens (``BSP``, spec §8.4), each convex
+  piece written as a chain.
 
-Decoding intersects each cell's half-spaces (:mod:`planefmt.polytopes`) and
-joins the cells into one closed surface (:func:`union_surface`).
+Decoding (:func:`decode_tree`) pushes square pieces of each splitting plane
+down the tree to the boundary between IN and OUT leaves
+(:func:`planefmt.bsptree.boundary`), welds them into one closed surface
+(closing cracks and slits where the welds alone do not), and falls back to
+the same traversal in exact arithmetic (:mod:`planefmt.exactbsp`) where
+that surface is still open.
 
 Conventions: planes ``(omega, h)``, outward unit normals, inside where
-``omega . x <= h``; cell entries ``2 * j + s`` with ``s = 1`` for the
-complement ``omega . x >= h``; lengths in model units.
+``omega . x <= h``; lengths in model units.
 """
 
 from __future__ import annotations
