@@ -17,9 +17,15 @@ splitting plane, so they still tile the solid.
   of nodes each peeling off an empty outer side (the chain trees that made a
   naive boundary extraction quadratic). Otherwise the splitter is the best of
   a few random non-supporting ("reflex") planes by ``w * splits + imbalance``.
-  The tree's size is what the file pays for; which strategy (candidates,
-  ``w``) makes the smallest tree depends on the body, so the encoder builds
-  trees of the strategies of :data:`STRATEGIES` and tries the smallest first.
+* Hull first. A convex piece lists every plane it has a fragment of, so a
+  plane bounding many pieces (the caps of an extruded profile, the faces of
+  a plate around its holes) is written once per piece. Split first on the
+  body's convex-hull face planes, whose outer sides are OUT leaves, they
+  bound every cell below and are written once.
+* The tree's size is what the file pays for; which strategy (candidates,
+  ``w``, hull first or not) makes the smallest tree depends on the body, so
+  the encoder builds the trees of :data:`STRATEGIES` and tries the smallest
+  first.
 * Leaves. A child with no fragment is uniformly inside or outside; it is IN
   when it lies on the side the splitter's fragments face away from, by net
   area (coincident opposite faces, zero-thickness fins, cancel). This holds
@@ -56,11 +62,18 @@ from .polygonize import edge_adjacency
 from .seams import Planes, close_cracks, fill_slits, stitch
 
 #: Splitter strategies: (candidates evaluated per node, weight of a split fragment against one of
-#: imbalance). (8, 3) alone made trees of 335, 957, 2139, 3427, 2995, 4205 and 5069 tokens on the
-#: corpus' 20mm cube, angle_block, plate_holes, octagonal_pocket, box, featuretype and tray at
-#: draco-14's error; the smallest of the three, 299, 691, 1945, 3229, 2459, 3061 and 5069: weighing
-#: splits more keeps the convex pieces, whose planes a tree lists again, fewer and larger.
-STRATEGIES = ((8, 3.0), (64, 10.0), (64, 30.0))
+#: imbalance, hull planes first). The first alone made trees of 335, 957, 2139, 3427, 2995, 4205 and
+#: 5069 tokens on the corpus's 20mm cube, angle_block, plate_holes, octagonal_pocket, box,
+#: featuretype and tray at draco-14's error; the smallest of the others, 141, 427, 1253, 1587,
+#: 1675, 2057 and 1769: the hull planes are written once, not in every convex piece, and weighing
+#: splits more keeps the pieces fewer and larger.
+STRATEGIES = ((8, 3.0, False), (8, 3.0, True), (64, 10.0, True), (64, 30.0, True))
+#: Hull planes split first, those of the largest area: a decoder pushes each one's square through
+#: everything below it, so a chain of a nearly convex body's thousands of hull planes decodes in
+#: quadratic time (tests' dented sphere, 2,808 triangles on 2,612 planes: 128 s to encode and check
+#: with all, on a loaded machine). 32 keep the trees of the CAD meshes as small (plate_holes, 198
+#: hull planes: 1,253 tokens, 1,255 with all).
+HULL_MAX = 32
 #: Cells with at most this many fragments are tested for convexity exhaustively
 #: (cost: planes x fragment vertices).
 EXHAUSTIVE = 2048
@@ -75,18 +88,19 @@ class Partition:
     chain (each of its planes splits, the outer side is OUT, the innermost
     leaf IN). ``splits`` counts the split nodes chosen by the splitter,
     ``pieces`` the convex pieces and ``chain`` the split nodes of their
-    chains; ``strategy`` is the splitter strategy that made it.
+    chains and of the hull planes' chain; ``strategy`` is the splitter
+    strategy that made it.
     """
 
     tokens: np.ndarray
     splits: int
     pieces: int
     chain: int
-    strategy: tuple[int, float]
+    strategy: tuple[int, float, bool]
 
 
 def partition(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.ndarray, eps: float,
-              reflex_planes: np.ndarray, *, seed: int = 0, strategy: tuple[int, float] = STRATEGIES[0]
+              reflex_planes: np.ndarray, *, seed: int = 0, strategy: tuple[int, float, bool] = STRATEGIES[0]
               ) -> Partition:
     """BSP autopartition of a closed body's triangles ``tri`` (n, 3, 3) on planes ``tri_plane`` (n,).
 
@@ -102,6 +116,13 @@ def partition(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.n
     splits = pieces = chain = 0
     # Work items: (triangles, planes) of a cell, or a leaf token.
     stack: list[tuple[np.ndarray, np.ndarray] | int] = [(tri, tri_plane)]
+    if strategy[2]:
+        hull, rest = _hull_planes(omega, h, tri, tri_plane, eps)
+        if len(hull) and rest.any():
+            # A chain whose outer sides are OUT: its inner end is the rest of the body.
+            tokens.extend(int(q) for q in hull)
+            chain += len(hull)
+            stack = [BSP_OUT] * len(hull) + [(tri[rest], tri_plane[rest])]
     while stack:
         item = stack.pop()
         if isinstance(item, int):
@@ -170,12 +191,37 @@ def _inner_is_solid(on: np.ndarray, normal: np.ndarray) -> bool:
     return net > 0
 
 
+def _hull_planes(omega: np.ndarray, h: np.ndarray, t: np.ndarray, pl: np.ndarray, eps: float
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Up to :data:`HULL_MAX` planes of ``pl`` no fragment of ``t`` (n, 3, 3) is outside of, whose
+    fragments face out, the largest first, and which triangles are on none of them; no planes if
+    every plane is one (a convex body).
+
+    A plane qualifies only where its fragments' net area faces along its normal (as
+    :func:`_inner_is_solid` decides a side): its outer side is then outside the body.
+    """
+    planes = np.unique(pl)
+    hull = planes[_reach(omega[planes], h[planes], t.reshape(-1, 3)) <= eps]
+    if len(hull) == len(planes):
+        return hull[:0], np.ones(len(t), dtype=bool)
+    area = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
+    size = np.linalg.norm(area, axis=1)
+    if len(hull) > HULL_MAX:
+        by_plane = np.bincount(pl, weights=size)[hull]
+        hull = np.sort(hull[np.argsort(-by_plane, kind="stable")[:HULL_MAX]])
+    side = vertex_sides(np.einsum("nvj,kj->nvk", t, omega[hull]) - h[hull], eps)
+    on = (pl[:, None] == hull[None, :]) | (side == 0).all(axis=1)
+    net = np.einsum("nk,nk->k", on, area @ omega[hull].T)
+    good = net > 1e-9 * (on.T @ size)
+    return hull[good], ~on[:, good].any(axis=1)
+
+
 def _choose_splitter(omega: np.ndarray, h: np.ndarray, t: np.ndarray, pool: np.ndarray, eps: float,
-                     rng: np.random.Generator, strategy: tuple[int, float]) -> int:
+                     rng: np.random.Generator, strategy: tuple[int, float, bool]) -> int:
     """The best of ``strategy[0]`` random planes of ``pool`` by ``strategy[1] * splits + |inner - outer|``."""
     if len(pool) == 1:
         return int(pool[0])
-    candidates, weight = strategy
+    candidates, weight, _ = strategy
     cand = rng.choice(pool, size=min(candidates, len(pool)), replace=False)
     d = np.einsum("nvj,kj->knv", t, omega[cand]) - h[cand][:, None, None]
     side = vertex_sides(d, eps)

@@ -239,6 +239,50 @@ def test_the_smallest_tree_of_the_splitter_strategies_is_kept(monkeypatch) -> No
     assert tokens[0] < tokens[1]
 
 
+def _partition_input(v: np.ndarray, f: np.ndarray) -> tuple:
+    from planefmt.bodies import plane_positions, reflex_planes
+    from planefmt.polygonize import polygonize
+
+    poly = polygonize(v, f, tolerance=1e-9)
+    x, rmax = plane_positions(poly.vertices, poly.faces, poly.face_plane, poly.omega, poly.h)
+    eps = max(1e-12, 4.0 * rmax)
+    return (poly.omega, poly.h, x[poly.faces], poly.face_plane, eps,
+            reflex_planes(x, poly.faces, poly.face_plane, poly.omega, poly.h, eps))
+
+
+def test_hull_planes_are_split_first_and_written_once() -> None:
+    """The plate with holes and a pocket: its six outer faces' planes lead the tree, each with an
+    OUT outer side, and no node below splits on them again."""
+    v, f = shapes.plate_with_holes()
+    omega, h, tri, tri_plane, eps, reflex = _partition_input(v, f)
+    extent = {0: 2.0, 1: 1.0, 2: 0.25}
+    outer = {j for j in np.unique(tri_plane) for axis, e in extent.items() for sign in (-1.0, 1.0)
+             if np.allclose(omega[j], sign * np.eye(3)[axis], atol=1e-9) and abs(h[j] - e) < 1e-9}
+    assert len(outer) == 6
+    hull_first = solids.partition(omega, h, tri, tri_plane, eps, reflex, strategy=(8, 3.0, True))
+    tokens = hull_first.tokens.astype(np.int64)
+    assert set(tokens[:6]) == outer and (tokens[-6:] == BSP_OUT).all()
+    assert not set(tokens[6:-6]) & outer
+    plain = solids.partition(omega, h, tri, tri_plane, eps, reflex, strategy=(8, 3.0, False))
+    print(f"plate with holes: {len(tokens)} tokens hull first, {len(plain.tokens)} without")
+    assert len(tokens) < len(plain.tokens)
+
+
+def test_hull_planes_split_first_are_the_largest_few() -> None:
+    """A nearly convex body has thousands of hull planes; only the HULL_MAX largest lead its tree
+    (a decoder pushes each one's square through everything below it)."""
+    v, f = shapes.dented_sphere(32)
+    omega, h, tri, tri_plane, eps, _ = _partition_input(v, f)
+    hull, rest = solids._hull_planes(omega, h, tri, tri_plane, eps)
+    assert len(hull) == solids.HULL_MAX
+    area = np.bincount(tri_plane, weights=np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]),
+                                                         axis=1))
+    reach = np.einsum("nvj,kj->knv", tri, omega).reshape(len(omega), -1).max(axis=1) - h
+    others = np.setdiff1d(np.flatnonzero((reach <= eps) & (area > 0)), hull)
+    assert len(others) and area[hull].min() >= area[others].max()
+    assert not np.isin(tri_plane[rest], hull).any() and np.isin(tri_plane[~rest], hull).all()
+
+
 def test_edges_cut_by_nearly_coincident_planes_are_carried_by_their_ends(monkeypatch) -> None:
     """pins.glb "sides" (genus 10): two of its planes 6e-4 degrees apart cut the cap; their corners
     weld 5e-5 off the line the vertices of the neighbouring cells lie on. Only carrying each edge
