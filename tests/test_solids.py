@@ -203,14 +203,18 @@ def test_smooth_closed_body_uses_exact_planes_and_closes_its_cracks() -> None:
     assert out["kinds"] == ["solid"] and out["notes"] == ["exact planes"]
 
 
-def test_merged_planes_that_stray_are_replaced_by_exact_ones_only_there() -> None:
-    """angle_block.STL at 1e-6: its merged planes meet at grazing angles, so a corner strays 1.9e-5
-    for a target of 2.2e-6; the all-exact planes do not decode closed (or not certifiably). Exact
-    planes only where the merged tree strayed give a solid on far fewer faces' own planes."""
+def test_merged_planes_that_stray_are_replaced_by_exact_ones_only_there(monkeypatch) -> None:
+    """angle_block.STL at 1e-6: its merged planes meet at grazing angles, so a corner of the first
+    splitter strategy's tree strays 1.9e-5 for a target of 2.2e-6; the all-exact planes do not
+    decode closed (or not certifiably). Exact planes only where the merged tree strayed give a
+    solid on far fewer faces' own planes. (The hull-first trees decode within the target on the
+    merged planes: the first strategy alone keeps this path tested.)"""
     path = CORPUS / "cad" / "angle_block.STL"
     if not path.exists():
         pytest.skip(f"no corpus mesh {path}")
     import trimesh
+
+    monkeypatch.setattr(bodies, "STRATEGIES", solids.STRATEGIES[:1])
 
     mesh = trimesh.load(path, process=False)
     out = check_solid(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces))
@@ -287,8 +291,11 @@ def test_edges_cut_by_nearly_coincident_planes_are_carried_by_their_ends(monkeyp
     """pins.glb "sides" (genus 10): two of its planes 6e-4 degrees apart cut the cap; their corners
     weld 5e-5 off the line the vertices of the neighbouring cells lie on. Only carrying each edge
     with its ends' rounding error inserts those vertices and closes the surface. (The encoder's
-    mixed planes avoid that tree; without them it is the all-exact planes' tree that decodes.)"""
+    mixed planes avoid that tree; without them it is the all-exact planes' tree that decodes. The
+    hull-first trees decode on the merged planes: the first splitter strategy alone keeps this
+    path tested.)"""
     monkeypatch.setattr(bodies, "MIXED_ROUNDS", 0)
+    monkeypatch.setattr(bodies, "STRATEGIES", solids.STRATEGIES[:1])
     v, f = _corpus_node("gltf_scene/pins.glb", "sides#1:5:2:4:3")
     out = check_solid(v, f)
     assert out["kinds"] == ["solid"] and out["notes"] == ["exact planes"]
