@@ -59,8 +59,12 @@ def _redeliver(signum: int) -> None:
 @contextlib.contextmanager
 def handled() -> Iterator[None]:
     """Within the block, SIGINT and SIGTERM raise ``KeyboardInterrupt`` and are recorded for
-    :func:`check` (main thread only); on leaving it, the handlers and the record are as before."""
+    :func:`check`; on leaving it, the handlers and the record are as before. Outside the main
+    thread, where Python neither delivers signals nor lets handlers be set, it does nothing."""
     global _received
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
     _received = None
     previous = {s: signal.signal(s, _handler) for s in _SIGNALS}
     try:

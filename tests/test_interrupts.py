@@ -9,6 +9,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
@@ -143,3 +144,20 @@ def test_a_signal_during_start_up_ends_the_command_without_a_traceback(sig: str,
     assert run.returncode == 130, run.stderr
     assert run.stderr.strip() == "pln: interrupted"
     assert not target.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_the_command_line_runs_outside_the_main_thread(tmp_path: Path) -> None:
+    # Signal handlers can be set in the main thread only: elsewhere main() runs without them.
+    from planefmt_converters import cli
+
+    source = Path(__file__).resolve().parents[1] / "samples" / "cylinder.stl"
+    codes: list[int] = []
+
+    def run() -> None:
+        codes.append(cli.main(["convert", str(source), str(tmp_path / "out.pln")]))
+        codes.append(cli.main(["info", str(tmp_path / "out.pln")]))
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    worker.join(timeout=300)
+    assert codes == [0, 0]
