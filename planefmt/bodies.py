@@ -270,9 +270,9 @@ def _trees(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.ndar
                     others.append(partition(omega, h, tri, tri_plane, eps, reflex, seed=seed, strategy=strategy))
                 except GeometryError as err:
                     reasons.append(f"seed {seed}, strategy {strategy}: {err.reason}")
-            smaller = [p for p in others if len(p.tokens) < len(base.tokens)]
-            if smaller:
-                yield seed, min(smaller, key=lambda p: len(p.tokens))
+            best = min(others, key=lambda p: len(p.tokens), default=None)
+            if best is not None and len(best.tokens) < len(base.tokens):
+                yield seed, best
         yield seed, base
 
 

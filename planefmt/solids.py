@@ -74,6 +74,9 @@ STRATEGIES = ((8, 3.0, False), (8, 3.0, True), (64, 10.0, True), (64, 30.0, True
 #: with all, on a loaded machine). 32 keep the trees of the CAD meshes as small (plate_holes, 198
 #: hull planes: 1,253 tokens, 1,255 with all).
 HULL_MAX = 32
+#: Net area of a plane's fragments, relative to their total, below which they cancel (a fin's two
+#: sides): the plane then tells neither side's class.
+CANCEL = 1e-9
 #: Cells with at most this many fragments are tested for convexity exhaustively
 #: (cost: planes x fragment vertices).
 EXHAUSTIVE = 2048
@@ -185,7 +188,7 @@ def _inner_is_solid(on: np.ndarray, normal: np.ndarray) -> bool:
     area = np.cross(on[:, 1] - on[:, 0], on[:, 2] - on[:, 0])
     net = float((area @ normal).sum())
     total = float(np.linalg.norm(area, axis=1).sum())
-    if not abs(net) > 1e-9 * total:
+    if not abs(net) > CANCEL * total:
         raise GeometryError("a splitting plane's fragments cancel: its empty side has no class",
                             code="DEGENERATE_GEOMETRY")
     return net > 0
@@ -212,7 +215,7 @@ def _hull_planes(omega: np.ndarray, h: np.ndarray, t: np.ndarray, pl: np.ndarray
     side = vertex_sides(np.einsum("nvj,kj->nvk", t, omega[hull]) - h[hull], eps)
     on = (pl[:, None] == hull[None, :]) | (side == 0).all(axis=1)
     net = np.einsum("nk,nk->k", on, area @ omega[hull].T)
-    good = net > 1e-9 * (on.T @ size)
+    good = net > CANCEL * (on.T @ size)
     return hull[good], ~on[:, good].any(axis=1)
 
 
