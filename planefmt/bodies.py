@@ -42,7 +42,7 @@ from .planes import from_triplets, to_triplets
 from .polygonize import COPLANAR_TOLERANCE, edge_adjacency, polygonize
 from .repair import merge_close_vertices
 from .sealed import decode_sealed, encode_sealed
-from .solids import STRATEGIES, Partition, TreeSurface, decode_tree, partition
+from .solids import STRATEGIES, Partition, Splitter, TreeSurface, decode_tree, partition
 from .trianglegeom import TriangleIndex
 
 #: Splitter seeds tried before a closed body falls back to patches.
@@ -71,6 +71,7 @@ class Group:
     triangles: int = 0  # source triangles it covers
     vertex_planes: np.ndarray | None = None
     facets: np.ndarray | None = None
+    splitter: Splitter | None = None  # the strategy that built a BSP tree (encoder only)
 
 
 @dataclass
@@ -186,12 +187,14 @@ def exact_planes(vertices: np.ndarray, faces: np.ndarray, table: PlaneTable) -> 
 
 
 def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray, omega: np.ndarray,
-                 h: np.ndarray, target: float, report: BodyReport, seeds: tuple[int, ...] = SEEDS) -> Group | None:
+                 h: np.ndarray, target: float, report: BodyReport, seeds: tuple[int, ...] = SEEDS,
+                 splitters: tuple[Splitter, ...] = STRATEGIES) -> Group | None:
     """A BSP group of a closed outward body, verified; None (reason in ``report.note``) if none passes.
 
     ``face_plane`` indexes ``omega``, ``h`` (the table's planes); ``target``
     (model units) bounds the vertex distances checked both ways; ``seeds``
-    the splitter seeds tried in turn. The planes where the first refused
+    the splitter seeds tried in turn; ``splitters`` the splitter strategies
+    (:func:`_trees`). The planes where the first refused
     closed surface strays beyond the target are left in ``report.stray``.
     """
     live = face_plane >= 0
@@ -207,8 +210,8 @@ def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
     source = TriangleIndex(vertices, faces)
     reasons = []
     report.stray = np.zeros(0, dtype=np.int64)
-    for seed, part in _trees(omega, h, x[f], fp, eps, reflex, seeds, reasons):
-        base = part.strategy == STRATEGIES[0]
+    for seed, part in _trees(omega, h, x[f], fp, eps, reflex, seeds, splitters, reasons):
+        base = part.strategy == splitters[0]
         label = f"seed {seed}" if base else f"seed {seed}, strategy {part.strategy}"
         try:
             used, local = np.unique(part.tokens[part.tokens <= np.uint32(0xFFFFFFEF)], return_inverse=True)
@@ -243,29 +246,30 @@ def encode_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
             report.error = _vertex_screen(vertices, faces, dv, dt, source)
             report.details["tokens"] = len(tokens)
             return Group(GroupKind.BSP, used.astype(np.int64), np.zeros(len(used), dtype=bool), tokens,
-                         triangles=len(faces))
+                         triangles=len(faces), splitter=part.strategy)
         reasons.append(f"{label}: {why}")
     report.note = "; ".join(reasons)
     return None
 
 
 def _trees(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.ndarray, eps: float,
-           reflex: np.ndarray, seeds: tuple[int, ...], reasons: list[str]) -> Iterator[tuple[int, Partition]]:
+           reflex: np.ndarray, seeds: tuple[int, ...], splitters: tuple[Splitter, ...],
+           reasons: list[str]) -> Iterator[tuple[int, Partition]]:
     """(seed, tree) in the order :func:`encode_solid` tries them: first the smallest tree of the
-    first seed's other :data:`~planefmt.solids.STRATEGIES` where it is smaller than that seed's
-    tree of the first strategy, then each seed's tree of the first strategy. A tree that fails
+    first seed's other ``splitters`` where it is smaller than that seed's tree of the first
+    splitter, then each seed's tree of the first splitter. A tree that fails
     only costs one more check, and the fallbacks (other seeds, the mixed and exact plane sets,
     which follow the planes the first strategy's tree strayed on) are those of that strategy alone.
     A partition that fails is skipped, its reason appended to ``reasons``."""
     for seed in seeds:
         try:
-            base = partition(omega, h, tri, tri_plane, eps, reflex, seed=seed, strategy=STRATEGIES[0])
+            base = partition(omega, h, tri, tri_plane, eps, reflex, seed=seed, strategy=splitters[0])
         except GeometryError as err:
             reasons.append(f"seed {seed}: {err.reason}")
             continue
-        if seed == seeds[0] and len(STRATEGIES) > 1:
+        if seed == seeds[0] and len(splitters) > 1:
             others = []
-            for strategy in STRATEGIES[1:]:
+            for strategy in splitters[1:]:
                 try:
                     others.append(partition(omega, h, tri, tri_plane, eps, reflex, seed=seed, strategy=strategy))
                 except GeometryError as err:
@@ -359,12 +363,15 @@ def is_convex_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarr
 
 
 def encode_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray, drift: np.ndarray,
-                table: PlaneTable, target: float) -> tuple[list[Group], BodyReport]:
+                table: PlaneTable, target: float, splitters: tuple[Splitter, ...] = STRATEGIES
+                ) -> tuple[list[Group], BodyReport]:
     """The part groups of one body: convex, BSP solid, or patches (see the module docstring).
 
     ``vertices``, ``faces`` of this body; ``face_plane`` indexes ``table``'s
     input planes; ``drift`` (per input plane) the fitting drift; ``target``
-    the error bound to meet (model units).
+    the error bound to meet (model units); ``splitters`` the BSP splitter
+    strategies (:data:`~planefmt.solids.STRATEGIES` or
+    :data:`~planefmt.solids.FLAT_STRATEGIES`).
     """
     labels = body_labels(faces, len(vertices))
     parts = [labels == b for b in range(int(labels.max(initial=0)) + 1)]
@@ -374,7 +381,7 @@ def encode_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray,
         groups: list[Group] = []
         reports = []
         for sel in parts:
-            g, r = encode_body(vertices, faces[sel], face_plane[sel], drift, table, target)
+            g, r = encode_body(vertices, faces[sel], face_plane[sel], drift, table, target, splitters)
             groups += g
             reports.append(r)
         kinds = sorted({r.kind for r in reports})
@@ -396,17 +403,19 @@ def encode_body(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray,
         closed = is_closed_manifold(faces, len(vertices))
         inside_out = closed and not signed_volume(vertices, faces) > 0
         if closed and not inside_out:
-            solid = encode_solid(vertices, faces, face_plane, omega[:table.base], h[:table.base], target, report)
+            solid = encode_solid(vertices, faces, face_plane, omega[:table.base], h[:table.base], target, report,
+                                 splitters=splitters)
             if solid is None:
                 # Merged planes pass near, not through, their vertices: where many meet (smooth
                 # surfaces), or nearly parallel ones meet, the cells' corners stray or leave
                 # cracks. Planes of exactly coplanar faces only pass through them all.
                 first = report.note
                 exact = exact_planes(vertices, faces, table)
-                solid = _mixed_solid(vertices, faces, face_plane, exact, table, target, report)
+                solid = _mixed_solid(vertices, faces, face_plane, exact, table, target, report, splitters)
                 if solid is None:
                     mixed = report.note
-                    solid = encode_solid(vertices, faces, exact, *table.arrays(), target, report)
+                    solid = encode_solid(vertices, faces, exact, *table.arrays(), target, report,
+                                         splitters=splitters)
                     report.note = (f"{first}; {mixed}exact planes: {report.note}" if solid is None
                                    else "exact planes")
             if solid is not None:
@@ -465,7 +474,8 @@ def _sealed_group(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarra
 
 
 def _mixed_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray, exact: np.ndarray,
-                 table: PlaneTable, target: float, report: BodyReport) -> Group | None:
+                 table: PlaneTable, target: float, report: BodyReport,
+                 splitters: tuple[Splitter, ...] = STRATEGIES) -> Group | None:
     """A solid on the merged planes ``face_plane`` but, where the merged tree strayed, the faces'
     ``exact`` planes; None if :data:`MIXED_ROUNDS` rounds of replacing do not give one.
 
@@ -482,7 +492,8 @@ def _mixed_solid(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray
         if not swap.any():
             break
         fp = np.where(swap, exact, fp)
-        solid = encode_solid(vertices, faces, fp, *table.arrays(), target, report, seeds=SEEDS[:1])
+        solid = encode_solid(vertices, faces, fp, *table.arrays(), target, report, seeds=SEEDS[:1],
+                             splitters=splitters)
         if solid is not None:
             report.details["exact faces"] = int((fp == exact).sum())
             report.note = f"mixed planes ({report.details['exact faces']} of {len(fp)} faces on exact ones)"
@@ -507,12 +518,14 @@ class MeshGroups:
 
 
 def encode_groups(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1e-6,
-                  coplanar: float | None = None) -> MeshGroups:
+                  coplanar: float | None = None,
+                  splitters: tuple[Splitter, ...] = STRATEGIES) -> MeshGroups:
     """Encode a triangle mesh body by body (module docstring); ``tolerance`` relative to the diagonal.
 
     Vertices closer than ``tolerance / 1000`` of the diagonal are welded
     first; planes come from :func:`planefmt.polygonize.polygonize` with
-    ``coplanar`` (relative; default its own, capped at half the tolerance).
+    ``coplanar`` (relative; default its own, capped at half the tolerance);
+    ``splitters`` the BSP splitter strategies (:func:`encode_body`).
     One plane table serves all bodies, so planes shared by bodies (and the
     bounding planes patches share) are stored once.
     """
@@ -533,7 +546,7 @@ def encode_groups(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float =
     reports: list[BodyReport] = []
     for b in range(int(labels.max(initial=-1)) + 1):
         sel = np.flatnonzero(labels == b)
-        g, r = encode_body(v, f[sel], poly.face_plane[sel], poly.distance, table, target)
+        g, r = encode_body(v, f[sel], poly.face_plane[sel], poly.distance, table, target, splitters)
         groups += g
         reports.append(r)
     omega, h = table.arrays()

@@ -24,8 +24,8 @@ splitting plane, so they still tile the solid.
   bound every cell below and are written once.
 * The tree's size is what the file pays for; which strategy (candidates,
   ``w``, hull first or not) makes the smallest tree depends on the body, so
-  the encoder builds the trees of :data:`STRATEGIES` and tries the smallest
-  first.
+  the encoder builds the trees of a set of strategies (:data:`STRATEGIES`,
+  :data:`FLAT_STRATEGIES`) and tries the smallest first.
 * Leaves. A child with no fragment is uniformly inside or outside; it is IN
   when it lies on the side the splitter's fragments face away from, by net
   area (coincident opposite faces, zero-thickness fins, cancel). This holds
@@ -61,13 +61,19 @@ from .model import BSP_IN, BSP_OUT
 from .polygonize import edge_adjacency
 from .seams import Planes, close_cracks, fill_slits, stitch
 
-#: Splitter strategies: (candidates evaluated per node, weight of a split fragment against one of
-#: imbalance, hull planes first). The first alone made trees of 335, 957, 2139, 3427, 2995, 4205 and
+#: A splitter strategy: (candidates evaluated per node, weight of a split fragment, hull planes first).
+Splitter = tuple[int, float, bool]
+#: Splitter strategies (the weight of a split fragment is against one of imbalance). The first alone made trees of 335, 957, 2139, 3427, 2995, 4205 and
 #: 5069 tokens on the corpus's 20mm cube, angle_block, plate_holes, octagonal_pocket, box,
 #: featuretype and tray at draco-14's error; the smallest of the others, 141, 427, 1253, 1587,
 #: 1675, 2057 and 1769: the hull planes are written once, not in every convex piece, and weighing
 #: splits more keeps the pieces fewer and larger.
 STRATEGIES = ((8, 3.0, False), (8, 3.0, True), (64, 10.0, True), (64, 30.0, True))
+#: The same without hull planes first (the strategies of 39501da). A hull-first tree is smaller, but
+#: its cells can need finer planes to decode within a tolerance, so the file is not always
+#: smaller: 1002_tray_bottom.STL at draco-14's error took 28 bits and 5,925 bytes where these
+#: trees took 18 bits and 4,941 bytes. The encoder keeps the smaller file of the two sets.
+FLAT_STRATEGIES = ((8, 3.0, False), (64, 10.0, False), (64, 30.0, False))
 #: Hull planes split first, those of the largest area: a decoder pushes each one's square through
 #: everything below it, so a chain of a nearly convex body's thousands of hull planes decodes in
 #: quadratic time (tests' dented sphere, 2,808 triangles on 2,612 planes: 128 s to encode and check
@@ -99,11 +105,11 @@ class Partition:
     splits: int
     pieces: int
     chain: int
-    strategy: tuple[int, float, bool]
+    strategy: Splitter
 
 
 def partition(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.ndarray, eps: float,
-              reflex_planes: np.ndarray, *, seed: int = 0, strategy: tuple[int, float, bool] = STRATEGIES[0]
+              reflex_planes: np.ndarray, *, seed: int = 0, strategy: Splitter = STRATEGIES[0]
               ) -> Partition:
     """BSP autopartition of a closed body's triangles ``tri`` (n, 3, 3) on planes ``tri_plane`` (n,).
 
@@ -220,7 +226,7 @@ def _hull_planes(omega: np.ndarray, h: np.ndarray, t: np.ndarray, pl: np.ndarray
 
 
 def _choose_splitter(omega: np.ndarray, h: np.ndarray, t: np.ndarray, pool: np.ndarray, eps: float,
-                     rng: np.random.Generator, strategy: tuple[int, float, bool]) -> int:
+                     rng: np.random.Generator, strategy: Splitter) -> int:
     """The best of ``strategy[0]`` random planes of ``pool`` by ``strategy[1] * splits + |inner - outer|``."""
     if len(pool) == 1:
         return int(pool[0])

@@ -24,9 +24,9 @@ TOL = 1e-6
 CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
 
 
-def check_solid(v: np.ndarray, f: np.ndarray) -> dict:
+def check_solid(v: np.ndarray, f: np.ndarray, splitters: tuple = solids.STRATEGIES) -> dict:
     """Encode and decode a closed mesh; assert the solid contract; return numbers for the caller."""
-    enc = encode_groups(v, f, tolerance=TOL)
+    enc = encode_groups(v, f, tolerance=TOL, splitters=splitters)
     # The planes as a float64 file holds them, (nu, phi, h): what a reader decodes.
     dv, df = decode_groups(*from_triplets(to_triplets(enc.omega, enc.h)), enc.groups)
     sv, sf = enc.vertices, enc.faces
@@ -203,7 +203,7 @@ def test_smooth_closed_body_uses_exact_planes_and_closes_its_cracks() -> None:
     assert out["kinds"] == ["solid"] and out["notes"] == ["exact planes"]
 
 
-def test_merged_planes_that_stray_are_replaced_by_exact_ones_only_there(monkeypatch) -> None:
+def test_merged_planes_that_stray_are_replaced_by_exact_ones_only_there() -> None:
     """angle_block.STL at 1e-6: its merged planes meet at grazing angles, so a corner of the first
     splitter strategy's tree strays 1.9e-5 for a target of 2.2e-6; the all-exact planes do not
     decode closed (or not certifiably). Exact planes only where the merged tree strayed give a
@@ -214,17 +214,15 @@ def test_merged_planes_that_stray_are_replaced_by_exact_ones_only_there(monkeypa
         pytest.skip(f"no corpus mesh {path}")
     import trimesh
 
-    monkeypatch.setattr(bodies, "STRATEGIES", solids.STRATEGIES[:1])
-
     mesh = trimesh.load(path, process=False)
-    out = check_solid(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces))
+    out = check_solid(np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces), solids.STRATEGIES[:1])
     assert out["kinds"] == ["solid"] and out["notes"][0].startswith("mixed planes"), out["notes"]
     exact, total = out["details"][0]["exact faces"], len(mesh.faces)
     print(f"angle_block: {exact} of {total} faces on their exact planes, {out['planes']} planes")
     assert 0 < exact < total / 4
 
 
-def test_the_smallest_tree_of_the_splitter_strategies_is_kept(monkeypatch) -> None:
+def test_the_smallest_tree_of_the_splitter_strategies_is_kept() -> None:
     """The 20mm cube (embossed letters): the first strategy alone makes a larger tree than the one
     kept; both are solids that meet the contract."""
     path = CORPUS / "cad" / "20mm-xyz-cube.stl"
@@ -235,8 +233,7 @@ def test_the_smallest_tree_of_the_splitter_strategies_is_kept(monkeypatch) -> No
     mesh = trimesh.load(path, process=False)
     v, f = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
     kept = check_solid(v, f)
-    monkeypatch.setattr(bodies, "STRATEGIES", solids.STRATEGIES[:1])
-    first = check_solid(v, f)
+    first = check_solid(v, f, solids.STRATEGIES[:1])
     assert kept["kinds"] == first["kinds"] == ["solid"]
     tokens = [sum(len(g.tree) for g in out["groups"]) for out in (kept, first)]
     print(f"20mm cube: {tokens[0]} tokens kept, {tokens[1]} of strategy {solids.STRATEGIES[0]}")
@@ -295,9 +292,8 @@ def test_edges_cut_by_nearly_coincident_planes_are_carried_by_their_ends(monkeyp
     hull-first trees decode on the merged planes: the first splitter strategy alone keeps this
     path tested.)"""
     monkeypatch.setattr(bodies, "MIXED_ROUNDS", 0)
-    monkeypatch.setattr(bodies, "STRATEGIES", solids.STRATEGIES[:1])
     v, f = _corpus_node("gltf_scene/pins.glb", "sides#1:5:2:4:3")
-    out = check_solid(v, f)
+    out = check_solid(v, f, solids.STRATEGIES[:1])
     assert out["kinds"] == ["solid"] and out["notes"] == ["exact planes"]
 
 
