@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 
 import numpy as np
@@ -81,13 +80,15 @@ def test_touching_bodies_stay_separate(shared: bool) -> None:
     assert closest_distance(enc.vertices, dv, df)[0].max() <= TOL
 
 
-def test_chain_trees_decode_in_bounded_time() -> None:
-    """A nearly convex body: its convex remainder is one piece, not a chain of empty peelings."""
+def test_nearly_convex_bodies_are_not_peeled_plane_by_plane() -> None:
+    """A nearly convex body: its convex remainder is one piece, not a chain of empty peelings (one
+    split per plane, which a decoder walks in quadratic time). 2,808 triangles on 2,612 planes: 619
+    splits, 131 pieces when this was written; a peeling chain splits on nearly every plane."""
     v, f = shapes.dented_sphere(64)
-    t0 = time.perf_counter()
     out = check_solid(v, f)
-    assert time.perf_counter() - t0 < 60
-    print(f"dented sphere: {len(f)} triangles, {out['planes']} planes, {len(out['groups'][0].tree)} tokens")
+    (kept,) = [d for d in out["details"][0].values() if isinstance(d, dict) and d.get("check") == "ok"]
+    print(f"dented sphere: {len(f)} triangles, {out['planes']} planes, {kept}")
+    assert kept["splits"] < out["planes"] / 2
 
 
 def test_decoding_survives_perturbed_planes() -> None:
