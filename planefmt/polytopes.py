@@ -167,8 +167,19 @@ def _enumerate(omega: np.ndarray, h: np.ndarray, first: np.ndarray, k: int, ids:
     c12 = cross[:, pair_of[t0, t1]]
     det = np.einsum("ntj,ntj->nt", w[:, t0], c23)
     ok = np.abs(det) > 1e-12
-    x = (hh[:, t0, None] * c23 + hh[:, t1, None] * c31 + hh[:, t2, None] * c12) / np.where(ok, det, 1.0)[:, :, None]
+    inv = 1.0 / np.where(ok, det, 1.0)[:, :, None]
+
+    def solve(b0: np.ndarray, b1: np.ndarray, b2: np.ndarray) -> np.ndarray:
+        return (b0[:, :, None] * c23 + b1[:, :, None] * c31 + b2[:, :, None] * c12) * inv
+
+    x = solve(hh[:, t0], hh[:, t1], hh[:, t2])
     res = np.matmul(x, w.transpose(0, 2, 1)) - hh[:, None, :]  # (n, t, k + nb)
+    # Cramer's rule loses digits as the determinant shrinks: where three nearly parallel planes
+    # meet (RoughnessTest.usdz: |det| 1.7e-9) the point misses its own planes by 1e-8, more than
+    # tol, and was on no face. One step of refinement on the triple's own residuals puts it back.
+    tri = np.arange(len(trip))
+    x = x - solve(res[:, tri, t0], res[:, tri, t1], res[:, tri, t2])
+    res = np.matmul(x, w.transpose(0, 2, 1)) - hh[:, None, :]
     # A feasible vertex on a far plane means the polytope does not end in that direction; such
     # vertices are far out, so their feasibility allows for rounding at their distance.
     far = t2 >= k

@@ -157,6 +157,39 @@ def test_redundant_planes_are_reported():
     assert set(np.unique(poly.triangle_plane)) | set(poly.redundant.tolist()) == set(range(9))
 
 
+#: The planes of one pseudo-concave patch of RoughnessTest.usdz at 29-bit quantization: three
+#: nearly parallel face planes (normals 3e-5 to 5e-5 rad apart, determinant 1.7e-9) that meet in a
+#: corner of the polytope, and five bounding planes, with coordinates in the hundreds.
+NEARLY_PARALLEL = np.array([
+    [1.5651054467297563, 0.15436488038544557, -97.44318665550969],
+    [1.5651393864291954, 0.15436484527541167, -97.45247057393897],
+    [1.5651054350264118, 0.1544136833325699, -97.44486018531978],
+    [0.9652407335109361, 4.809765512485255, 230.82471248825613],
+    [2.17971044059186, 1.7679737271336435, -180.75119675498865],
+    [1.5712611485337307, 4.823147034816515, 90.36487692287835],
+    [2.1744469666727584, 1.7678602046906924, -179.6701453023712],
+    [1.4666947485805957, 3.296852137639072, 135.06366794585944],
+])
+
+
+def test_small_polytopes_keep_the_corner_of_nearly_parallel_planes():
+    # The numpy path of small polytopes solved that corner by Cramer's rule 1e-8 off its own
+    # planes, on none of their faces: the patch decoded without one face, a third of its area.
+    from planefmt.polytopes import intersect_many
+
+    omega, h = planes.from_triplets(NEARLY_PARALLEL)
+    batch = intersect_many(omega, h, np.zeros(len(h), dtype=np.int64), 1, 1e-11 * np.abs(h).max())
+    qhull = intersect(omega, h)
+
+    def faces(rows, offsets, vertices, corners):
+        return {int(r): frozenset(map(tuple, np.round(vertices[corners[a:b]], 6)))
+                for r, a, b in zip(rows, offsets[:-1], offsets[1:])}
+
+    ours = faces(batch.polygon_row, batch.polygon_offsets, batch.vertices, batch.polygon_vertices)
+    assert ours == faces(qhull.polygon_plane, qhull.polygon_offsets, qhull.vertices, qhull.polygon_vertices)
+    assert len(ours) == 8 and len(ours[0]) == 3
+
+
 @pytest.mark.parametrize("bad", [np.array([[0.0, 0.0, np.nan]]), np.empty((0, 3))])
 def test_malformed_planes_are_geometry_errors(bad):
     with pytest.raises(GeometryError):
