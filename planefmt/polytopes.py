@@ -173,13 +173,12 @@ def _enumerate(omega: np.ndarray, h: np.ndarray, first: np.ndarray, k: int, ids:
         return (b0[:, :, None] * c23 + b1[:, :, None] * c31 + b2[:, :, None] * c12) * inv
 
     x = solve(hh[:, t0], hh[:, t1], hh[:, t2])
-    res = np.matmul(x, w.transpose(0, 2, 1)) - hh[:, None, :]  # (n, t, k + nb)
     # Cramer's rule loses digits as the determinant shrinks: where three nearly parallel planes
     # meet (RoughnessTest.usdz: |det| 1.7e-9) the point misses its own planes by 1e-8, more than
     # tol, and was on no face. One step of refinement on the triple's own residuals puts it back.
-    tri = np.arange(len(trip))
-    x = x - solve(res[:, tri, t0], res[:, tri, t1], res[:, tri, t2])
-    res = np.matmul(x, w.transpose(0, 2, 1)) - hh[:, None, :]
+    own = [np.einsum("ntj,ntj->nt", x, w[:, t]) - hh[:, t] for t in (t0, t1, t2)]
+    x = x - solve(*own)
+    res = np.matmul(x, w.transpose(0, 2, 1)) - hh[:, None, :]  # (n, t, k + nb)
     # A feasible vertex on a far plane means the polytope does not end in that direction; such
     # vertices are far out, so their feasibility allows for rounding at their distance.
     far = t2 >= k
