@@ -35,6 +35,9 @@ Encoding a mesh (:func:`encode_mesh`):
    solid where finer ones keep it, so a few failures at the narrow end say
    nothing of the rest); if none passes, float32, then float64. The winner's
    measured error is the header's ``error_bound``.
+5. At a lossy tolerance, where a body kept a hull-first BSP tree, steps 3–4
+   run again with the flat splitter strategies and the smaller file is kept
+   (:func:`_encode_objects`; :func:`encode_scene` does the same per scene).
 
 Decoding dispatches on ``group.kind`` through :data:`DECODERS`.
 """
@@ -544,8 +547,17 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     source's structure.
     """
     forced = coding is not None or bits is not None
-    obj = _prepare(vertices, faces, np.eye(4), tolerance, delta, tau, diagonal=None if forced else 0.0)
-    choice = _choose([obj], tolerance, coding, bits, watertight)
+
+    def prepare(_: int, splitters: tuple[Splitter, ...] = STRATEGIES) -> _Object:
+        return _prepare(vertices, faces, np.eye(4), tolerance, delta, tau, diagonal=None if forced else 0.0,
+                        splitters=splitters)
+
+    def size(objects: list[_Object], choice: _Choice) -> int:
+        buf = io.BytesIO()
+        _write(Scene((Node("", mesh=Mesh(vertices, faces)),)), buf, [0], objects, choice, tolerance, False, False)
+        return len(buf.getvalue())
+
+    (obj,), choice = _encode_objects(prepare, 1, tolerance, coding, bits, watertight, size)
     return Encoded(triplets=obj.triplets, groups=obj.groups, coding=choice.coding,
                    quantization=choice.quantization, bbox=choice.bbox, tolerance=float(tolerance),
                    error_bound=choice.error_bound, lossy=choice.lossy, mesh=choice.meshes[0],
@@ -1015,7 +1027,7 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                             tolerance, coding, bits)
             for k in opened:
                 warnings.warn(f"{named(k)} is closed but no coding keeps it a closed solid: stored as an open surface "
-                              f"(distance and area kept, not watertight), marked lossy", PlnWarning, stacklevel=3)
+                              f"(distance and area kept, not watertight), marked lossy", PlnWarning, stacklevel=4)
             return replace(found, lossy=True)
     hint = ""
     if watertight and opened:
@@ -1153,23 +1165,40 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     forced = coding is not None or bits is not None
     diagonal = _scene_diagonal(scene, worlds, meshes) if not forced else None
 
-    def prepare(i: int, splitters: tuple[Splitter, ...] = STRATEGIES) -> _Object:
-        node = scene.nodes[i]
-        return replace(_prepare(node.mesh.vertices, node.mesh.faces, worlds[i], tolerance, delta, tau,
+    if not meshes:
+        raise GeometryError("the scene has no mesh to encode")
+
+    def prepare(k: int, splitters: tuple[Splitter, ...] = STRATEGIES) -> _Object:
+        node = scene.nodes[meshes[k]]
+        return replace(_prepare(node.mesh.vertices, node.mesh.faces, worlds[meshes[k]], tolerance, delta, tau,
                                 node.mesh.face_colours, diagonal, splitters), name=node.name)
 
-    objects = [prepare(i) for i in meshes]
-    if not objects:
-        raise GeometryError("the scene has no mesh to encode")
-    # Hull-first trees are smaller but can need finer planes (solids.FLAT_STRATEGIES): where one was
-    # kept and the widths are free to shrink (a lossy tolerance, no forced coding), the objects are
-    # encoded again with the flat strategies and the smaller file kept. At 1e-6 the hull-first
-    # files were never the larger on the corpus meshes measured (six), and CAD encodes take minutes.
+    def size(objects: list[_Object], choice: _Choice) -> int:
+        buf = io.BytesIO()
+        _write(scene, buf, meshes, objects, choice, tolerance, compress, compact)
+        return len(buf.getvalue())
+
+    objects, choice = _encode_objects(prepare, len(meshes), tolerance, coding, bits, watertight, size)
+    return _write(scene, target, meshes, objects, choice, tolerance, compress, compact)
+
+
+def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: float, coding: Coding | None,
+                    bits: int | tuple[int, int, int] | None, watertight: bool,
+                    size: Callable[[list[_Object], _Choice], int]) -> tuple[list[_Object], _Choice]:
+    """The objects ``prepare(k[, splitters])`` (k < ``count``) and the coding to write them in.
+
+    Hull-first trees are smaller but can need finer planes (solids.FLAT_STRATEGIES): where one was
+    kept and the widths are free to shrink (a lossy tolerance, no forced coding), the objects are
+    encoded again with the flat strategies and the encoding whose file ``size`` finds smaller is
+    kept (a set whose objects meet no coding is passed over). At 1e-6 the hull-first files were
+    never the larger on the corpus meshes measured (six), and CAD encodes take minutes.
+    """
+    objects = [prepare(k) for k in range(count)]
+    forced = coding is not None or bits is not None
     hull = [k for k, o in enumerate(objects) if any(g.splitter and g.splitter[2] for g in o.groups)]
     if not hull or forced or tolerance <= LOSSLESS_TOLERANCE:
-        choice = _choose(objects, tolerance, coding, bits, watertight)
-        return _write(scene, target, meshes, objects, choice, tolerance, compress, compact)
-    flat = [prepare(i, FLAT_STRATEGIES) if k in hull else o for k, (i, o) in enumerate(zip(meshes, objects))]
+        return objects, _choose(objects, tolerance, coding, bits, watertight)
+    flat = [prepare(k, FLAT_STRATEGIES) if k in hull else o for k, o in enumerate(objects)]
     found = []
     failure = None
     for candidate in (objects, flat):
@@ -1181,15 +1210,13 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
             except GeometryError as err:
                 failure = failure or err
                 continue
-        buf = io.BytesIO()
-        _write(scene, buf, meshes, candidate, choice, tolerance, compress, compact)
-        found.append((len(buf.getvalue()), candidate, choice, caught))
+        found.append((size(candidate, choice), candidate, choice, caught))
     if not found:
         raise failure
     _, best, choice, caught = min(found, key=lambda f: f[0])
     for w in caught:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return _write(scene, target, meshes, best, choice, tolerance, compress, compact)
+    return best, choice
 
 
 def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int], objects: list[_Object],

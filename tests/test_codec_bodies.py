@@ -241,14 +241,14 @@ def test_float_planes_uncertified_within_the_budget_are_verified_again_with_a_la
                                    "2,000,000 pieces")
 
 
-def _scene_bytes(v: np.ndarray, f: np.ndarray, tolerance: float) -> bytes:
+def _scene_bytes(v: np.ndarray, f: np.ndarray, tolerance: float, compact: bool = True) -> bytes:
     import io
 
     from planefmt.model import Mesh, Node, Scene
 
     buf = io.BytesIO()
     codec.encode_scene(Scene(nodes=(Node(name="boxes", mesh=Mesh(v, f)),)), buf, tolerance=tolerance,
-                       compress=True, compact=True)
+                       compress=compact, compact=compact)
     return buf.getvalue()
 
 
@@ -271,6 +271,34 @@ def test_the_smaller_file_of_the_two_splitter_sets_is_written(monkeypatch):
         monkeypatch.setattr(codec, "STRATEGIES", (base, first))
         monkeypatch.setattr(codec, "FLAT_STRATEGIES", (base, second))
         assert _scene_bytes(v, f, 1e-3) == smaller
+
+
+def test_encode_mesh_keeps_the_smaller_of_the_two_splitter_sets(monkeypatch):
+    """encode_mesh chooses between the two splitter sets as encode_scene does: its planes are
+    those of the smaller (version 1) file, whichever set is tried first."""
+    from planefmt import solids
+
+    v, f = shapes.random_boxes(1)
+    base, one, other = solids.STRATEGIES[0], (8, 3.0, True), (64, 30.0, True)
+    alone, size = {}, {}
+    for s in (one, other):
+        monkeypatch.setattr(codec, "STRATEGIES", (base, s))
+        monkeypatch.setattr(codec, "FLAT_STRATEGIES", (base, s))
+        alone[s] = codec.encode_mesh(v, f, tolerance=1e-3)
+        size[s] = len(_scene_bytes(v, f, 1e-3, compact=False))
+    assert size[one] != size[other] and _trees(alone[one]) != _trees(alone[other])
+    smaller = alone[min(size, key=size.get)]
+    for first, second in ((one, other), (other, one)):
+        monkeypatch.setattr(codec, "STRATEGIES", (base, first))
+        monkeypatch.setattr(codec, "FLAT_STRATEGIES", (base, second))
+        e = codec.encode_mesh(v, f, tolerance=1e-3)
+        assert e.quantization == smaller.quantization
+        np.testing.assert_array_equal(e.triplets, smaller.triplets)
+        assert _trees(e) == _trees(smaller)
+
+
+def _trees(e: codec.Encoded) -> list:
+    return [(g.splitter, g.refs.tolist(), None if g.tree is None else g.tree.tolist()) for g in e.groups]
 
 
 def test_the_second_splitter_set_is_tried_only_where_widths_can_shrink(monkeypatch):
