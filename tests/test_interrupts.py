@@ -79,6 +79,9 @@ def test_sigkill_at_any_moment_leaves_no_file_under_the_target_name(tmp_path: Pa
             assert proc.returncode == -signal.SIGKILL
             killed += 1
     assert killed >= 3, "the conversion finished before most kill points: the test did not test"
+    # SIGKILL allows no clean-up: besides the whole outputs, only hidden temporaries may stay.
+    strays = [p.name for p in tmp_path.iterdir() if p.name not in left]
+    assert all(n.startswith(".") and ".tmp" in n for n in strays), strays
     assert _digest(BUNNY) == before
 
 
