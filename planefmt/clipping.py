@@ -13,6 +13,8 @@ created. Winding is preserved: pieces face the way their triangle faced.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 
@@ -94,13 +96,14 @@ def split_polygons(pts: np.ndarray, count: np.ndarray, labels: np.ndarray, omega
     hi = (side > 0).any(axis=1)
     on = ~lo & ~hi
     cross = np.flatnonzero(lo & hi)
+    edges = _Edges.of(pts[cross], count[cross], labels[cross], d[cross], side[cross])
     out: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray] | None] = []
     for keep, whole in ((-1, lo & ~hi), (1, hi & ~lo)):
         if keep not in sides:
             out.append(None)
             continue
         ids = np.flatnonzero(whole)
-        p, c, lab = _clip_rows(pts[cross], count[cross], labels[cross], d[cross], side[cross], keep, plane_id)
+        p, c, lab = _clip_rows(edges, keep, plane_id)
         width = max(int(count[ids].max(initial=3)), p.shape[1])
         stacked = np.zeros((len(ids) + len(cross), width, 3))
         stacked_lab = np.zeros((len(ids) + len(cross), width), dtype=np.int64)
@@ -116,8 +119,45 @@ def split_polygons(pts: np.ndarray, count: np.ndarray, labels: np.ndarray, omega
     return out[0], out[1], on
 
 
-def _clip_rows(pts: np.ndarray, count: np.ndarray, labels: np.ndarray, d: np.ndarray, side: np.ndarray,
-               keep: int, plane_id: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+@dataclass
+class _Edges:
+    """What both sides of a split share, per padded polygon row that straddles the plane: the
+    rows (``pts``, ``labels``, vertex ``side``), which slots are corners (``live``), the slot each
+    edge ends at (``nxt``), and each edge's crossing point (``crossing`` marks edges that have
+    one)."""
+
+    pts: np.ndarray
+    labels: np.ndarray
+    side: np.ndarray
+    live: np.ndarray
+    nxt: np.ndarray
+    crossing: np.ndarray
+    point: np.ndarray
+
+    @classmethod
+    def of(cls, pts: np.ndarray, count: np.ndarray, labels: np.ndarray, d: np.ndarray,
+           side: np.ndarray) -> "_Edges":
+        n, m = pts.shape[:2]
+        slot = np.arange(m)[None, :]
+        live = slot < count[:, None]
+        nxt = np.where(slot + 1 < count[:, None], slot + 1, 0)
+        rows = np.arange(n)[:, None]
+        b = pts[rows, nxt]
+        sb = side[rows, nxt]
+        db = d[rows, nxt]
+        crossing = live & (side * sb < 0)
+        # The crossing point from the edge's end on the inner side, so that both sides of a split,
+        # and the neighbour sharing the edge, compute the same point.
+        lo_is_a = side < 0
+        p_lo = np.where(lo_is_a[:, :, None], pts, b)
+        p_hi = np.where(lo_is_a[:, :, None], b, pts)
+        d_lo = np.where(lo_is_a, d, db)
+        d_hi = np.where(lo_is_a, db, d)
+        t = d_lo / np.where(crossing, d_lo - d_hi, 1.0)
+        return cls(pts, labels, side, live, nxt, crossing, p_lo + t[:, :, None] * (p_hi - p_lo))
+
+
+def _clip_rows(e: _Edges, keep: int, plane_id: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Sutherland-Hodgman on padded polygon rows; every row straddles the plane.
 
     Slot ``2 k`` of the output holds corner ``k`` if it is kept, slot ``2 k + 1``
@@ -126,37 +166,22 @@ def _clip_rows(pts: np.ndarray, count: np.ndarray, labels: np.ndarray, d: np.nda
     the next output point lies on that edge too (the crossing on it, or the
     kept corner ``k + 1``), and along the clipping plane otherwise.
     """
-    n, m = pts.shape[:2]
+    n, m = e.pts.shape[:2]
     if n == 0:
         return np.zeros((0, 3, 3)), np.zeros(0, dtype=np.int64), np.zeros((0, 3), dtype=np.int64)
-    slot = np.arange(m)[None, :]
-    live = slot < count[:, None]
-    nxt = np.where(slot + 1 < count[:, None], slot + 1, 0)
-    b = np.take_along_axis(pts, nxt[:, :, None], axis=1)
-    sb = np.take_along_axis(side, nxt, axis=1)
-    db = np.take_along_axis(d, nxt, axis=1)
-    crossing = live & (side * sb < 0)
-    kept = live & (side * keep >= 0)
-    kept_next = np.take_along_axis(kept, nxt, axis=1)
-    # The crossing point from the edge's end on the inner side, so that both sides of a split,
-    # and the neighbour sharing the edge, compute the same point.
-    lo_is_a = side < 0
-    p_lo = np.where(lo_is_a[:, :, None], pts, b)
-    p_hi = np.where(lo_is_a[:, :, None], b, pts)
-    d_lo = np.where(lo_is_a, d, db)
-    d_hi = np.where(lo_is_a, db, d)
-    t = d_lo / np.where(crossing, d_lo - d_hi, 1.0)
+    rows = np.arange(n)[:, None]
+    kept = e.live & (e.side * keep >= 0)
+    kept_next = kept[rows, e.nxt]
     outp = np.empty((n, 2 * m, 3))
-    outp[:, 0::2] = pts
-    outp[:, 1::2] = p_lo + t[:, :, None] * (p_hi - p_lo)
+    outp[:, 0::2] = e.pts
+    outp[:, 1::2] = e.point
     ok = np.empty((n, 2 * m), dtype=bool)
     ok[:, 0::2] = kept
-    ok[:, 1::2] = crossing
+    ok[:, 1::2] = e.crossing
     lab = np.empty((n, 2 * m), dtype=np.int64)
-    lab[:, 0::2] = np.where(crossing | kept_next, labels, plane_id)
-    lab[:, 1::2] = np.where(kept_next, labels, plane_id)
+    lab[:, 0::2] = np.where(e.crossing | kept_next, e.labels, plane_id)
+    lab[:, 1::2] = np.where(kept_next, e.labels, plane_id)
     order = np.argsort(~ok, axis=1, kind="stable")
     c = ok.sum(axis=1)
     width = int(c.max(initial=0))
-    return (np.take_along_axis(outp, order[:, :width, None], axis=1), c,
-            np.take_along_axis(lab, order[:, :width], axis=1))
+    return outp[rows, order[:, :width]], c, lab[rows, order[:, :width]]
