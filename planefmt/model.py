@@ -50,7 +50,8 @@ class Units(IntEnum):
 
 
 class GroupKind(IntEnum):
-    """Part group kinds: 0-4 of version 1.0 (spec §8.2), 5 of version 3.1 (spec 3.1 §8.8)."""
+    """Part group kinds: 0-4 of version 1.0 (spec §8.2), 5 of version 3.1 (spec 3.1 §8.8), 6 of
+    version 3.2 (spec 3.2 §8.9)."""
 
     CONVEX = 0
     CELLS = 1
@@ -58,6 +59,7 @@ class GroupKind(IntEnum):
     PSEUDO_CONVEX = 3
     PSEUDO_CONCAVE = 4
     SEALED = 5
+    SHELL = 6
 
 
 #: BSP tree leaf tokens (spec §8.4); every smaller token is a split plane.
@@ -134,6 +136,40 @@ class PlaneBlock:
     triplets: np.ndarray  # (n, 3) float64, dequantized where quantized
 
 
+#: Face reference of a free triangle (no face plane), in :attr:`Shell.facets`.
+FREE = -1
+#: Largest magnitude of a grid coordinate (spec 3.2 §8.9): integers of float64 exactly.
+MAX_GRID = 1 << 52
+
+
+@dataclass(frozen=True)
+class Shell:
+    """A shell group's corners and triangles in local references.
+
+    ``explicit`` (V,) bool: which corners store coordinates; ``vertex_planes``
+    (N, 3) the three references of each named corner, in corner order;
+    ``grid`` (E, 3) int64 the integer coordinates of each explicit corner, in
+    corner order, at ``origin + step * grid`` (model units); ``facets`` (T, 4)
+    each triangle's face reference (:data:`FREE` for none) and its three
+    corners, planar triangles in non-decreasing face order, then free ones;
+    corners numbered in order of first use. ``error`` is the largest corner
+    displacement from the source (model units), 0 when not measured.
+    """
+
+    explicit: np.ndarray
+    vertex_planes: np.ndarray
+    grid: np.ndarray
+    origin: np.ndarray
+    step: float
+    facets: np.ndarray
+    error: float = 0.0
+
+    def __repr__(self) -> str:
+        return (f"Shell({len(self.explicit)} corners, {len(self.vertex_planes)} named, "
+                f"{len(self.facets)} triangles, step {self.step:g})")
+
+
+
 @dataclass(frozen=True)
 class PartGroup:
     """A GRUP chunk (spec §8.2).
@@ -160,6 +196,7 @@ class PartGroup:
     extra: bytes = b""  # kind-specific bytes of a kind this reader does not know
     vertex_planes: np.ndarray | None = None  # (V, 3) uint32, SEALED groups
     facets: np.ndarray | None = None  # (T, 4) uint32, SEALED groups
+    shell: Shell | None = None  # SHELL groups
     planes: np.ndarray | None = field(default=None, compare=False)
 
 

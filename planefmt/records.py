@@ -16,16 +16,16 @@ import numpy as np
 from . import quantize, schema, varint
 from .chunks import Limits
 from .errors import FormatError, LimitError, PlnError, VersionError
-from .model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, Coding, Colours, GroupKind, Header,
-                    ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
+from .model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, FREE, MAX_GRID, NO_PARENT, Coding, Colours, GroupKind, Header,
+                    ObjectRecord, PartGroup, PlaneBlock, Quantization, Shell, Units)
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 1}
+VERSIONS = {1: 0, 2: 0, 3: 2}
 #: Triplet codings each major version allows (spec §5; 2.0 §7.4; 3.0 §5).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
-KIND_VERSION = {int(GroupKind.SEALED): (3, 1)}
+KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2)}
 
 
 def kinds_of(major: int, minor: int) -> frozenset[int]:
@@ -283,6 +283,8 @@ def encode_group(g: PartGroup, compress: bool, major: int = 1) -> bytes:
     head of 3.0 §8.2."""
     if g.facets is not None and major != 3:
         raise PlnError("sealed groups need version 3.1", code="UNKNOWN_GROUP_KIND")
+    if g.shell is not None and major != 3:
+        raise PlnError("shell groups need version 3.2", code="UNKNOWN_GROUP_KIND")
     body = _compact_body(g) if major >= 2 else _body(g)
     method, stored = pack(body, compress)
     if major == 3:
@@ -320,6 +322,8 @@ def _compact_body(g: PartGroup) -> bytes:
         out += [varint.encode([len(g.vertex_planes)]), varint.encode(np.asarray(g.vertex_planes, dtype=np.uint64)),
                 varint.encode([len(facets)]),
                 varint.encode(np.column_stack([gaps, facets[:, 1:]]).astype(np.uint64))]
+    elif g.kind == GroupKind.SHELL and g.shell is not None:
+        out.append(_shell_body(g.shell))
     else:
         out.append(g.extra)
     return b"".join(out)
@@ -405,15 +409,15 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
     count = int(count)
     if count > limits.max_refs_per_group:
         raise LimitError(f"group declares {count} references, the limit is {limits.max_refs_per_group}")
-    if count == 0:
+    if count == 0 and not (head.kind == GroupKind.SHELL and head.kind in kinds):
         raise FormatError(f"group {head.index} references no planes", code="BAD_GROUP_STRUCTURE")
     gaps, used = varint.decode(raw[pos:], count, "group references")
     pos += used
-    if gaps.max() >= planes:
+    if count and gaps.max() >= planes:
         raise FormatError(f"group {head.index} references a plane past the {planes} defined",
                           code="BAD_PLANE_REFERENCE")
     refs = np.cumsum(gaps.astype(np.int64))
-    if refs[-1] >= planes:
+    if count and refs[-1] >= planes:
         raise FormatError(f"group {head.index} references plane {int(refs[-1])}, only {planes} defined",
                           code="BAD_PLANE_REFERENCE")
     nroles = (count + 7) // 8
@@ -425,10 +429,12 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
         raise FormatError("non-zero padding bits after the role bits", code="BAD_PAYLOAD")
     rest = raw[pos:]
     bounding = role_bits[:count].astype(bool)
-    cells = tree = vertex_planes = facets = None
+    cells = tree = vertex_planes = facets = shell = None
     extra = b""
     if head.kind not in kinds:
         extra = rest.tobytes()
+    elif head.kind == GroupKind.SHELL:
+        shell = _decode_shell(rest, bounding)
     elif head.kind == GroupKind.CELLS:
         cells = _decode_compact_cells(rest, count, limits)
     elif head.kind == GroupKind.BSP:
@@ -439,7 +445,7 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
         raise FormatError(f"{len(rest)} unexpected bytes after the role bits", code="BAD_PAYLOAD")
     return PartGroup(index=head.index, object=head.object, kind=head.kind, refs=refs.astype(np.uint32),
                      bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
-                     facets=facets)
+                     facets=facets, shell=shell)
 
 
 def _decode_counted(raw: np.ndarray, what: str, limit: int) -> tuple[np.ndarray, int]:
@@ -578,7 +584,14 @@ def encode_colours(c: Colours) -> bytes:
     return schema.Colours.build(dict(group=c.group, count=len(rgba), rgba=rgba.tobytes()))
 
 
+def colour_count(kind: int, refs: int) -> int:
+    """Colours a cOLR chunk holds for a group of ``kind`` with ``refs`` references: one per
+    reference, and for a shell one more, its free triangles' (spec 3.2 §8.9)."""
+    return refs + (kind == GroupKind.SHELL)
+
+
 def decode_colours(payload: bytes, group_refs: dict[int, int]) -> Colours:
+    """A cOLR chunk, checked against ``group_refs``: the colour count of each group read so far."""
     r = _parse(schema.Colours, payload, "cOLR")
     if len(payload) != 8 + 4 * r.count:
         raise FormatError("cOLR size does not match its count", code="BAD_COLOURS")
@@ -627,3 +640,135 @@ def decode_end(payload: bytes, major: int = 1) -> int:
     if major == 3 and not index_offset:
         raise FormatError("a version 3 PEND of 8 bytes must point at the index, not 0", code="BAD_INDEX")
     return index_offset
+
+
+# spec 3.2 §8.9 Shells --------------------------------------------------------------------------
+
+def first_use_order(triangles: np.ndarray, count: int) -> np.ndarray:
+    """New number of each of ``count`` corners when numbered in order of first use by ``triangles``
+    (read row by row); -1 for corners no triangle uses."""
+    flat = np.asarray(triangles, dtype=np.int64).reshape(-1)
+    seen, first = np.unique(flat, return_index=True)
+    rank = np.full(count, -1, dtype=np.int64)
+    rank[seen[np.argsort(first, kind="stable")]] = np.arange(len(seen))
+    return rank
+
+
+def check_shell(shell: Shell, bounding: np.ndarray) -> None:
+    """``FormatError`` (``BAD_GROUP_STRUCTURE``) naming the first rule of spec 3.2 §8.9 ``shell``
+    breaks for a group whose references have roles ``bounding``."""
+    def bad(reason: str) -> FormatError:
+        return FormatError(f"shell group: {reason}", code="BAD_GROUP_STRUCTURE")
+    explicit = np.asarray(shell.explicit, dtype=bool)
+    vp = np.asarray(shell.vertex_planes, dtype=np.int64).reshape(-1, 3)
+    grid = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
+    fc = np.asarray(shell.facets, dtype=np.int64)
+    v = len(explicit)
+    if v < 3 or fc.ndim != 2 or fc.shape[1] != 4 or not len(fc):
+        raise bad("needs at least 3 corners and 1 triangle")
+    if len(vp) != int((~explicit).sum()) or len(grid) != int(explicit.sum()):
+        raise bad("one triple per named corner and one coordinate row per explicit corner")
+    count = len(bounding)
+    if len(vp) and (vp.min() < 0 or vp.max() >= count):
+        raise bad("a corner refers past the group's references")
+    if ((vp[:, 0] == vp[:, 1]) | (vp[:, 1] == vp[:, 2]) | (vp[:, 0] == vp[:, 2])).any():
+        raise bad("a corner names one plane twice")
+    if np.abs(grid).max(initial=0) > MAX_GRID:
+        raise bad("a grid coordinate is beyond 2^52")
+    if explicit.any() and not (np.isfinite(shell.origin).all() and math.isfinite(shell.step) and shell.step > 0):
+        raise bad("the grid's origin and step must be finite, the step positive")
+    face, tri = fc[:, 0], fc[:, 1:]
+    planar = face != FREE
+    if planar.any() and ((~planar[:np.flatnonzero(planar)[-1]]).any()):
+        raise bad("a free triangle comes before a planar one")
+    f = face[planar]
+    if len(f) and (f.min() < 0 or f.max() >= count or bounding[f].any()):
+        raise bad("a triangle lies on a reference that is not a face plane")
+    if (np.diff(f) < 0).any():
+        raise bad("triangles are not in order of their face references")
+    if tri.min() < 0 or tri.max() >= v:
+        raise bad("a triangle refers past the group's corners")
+    if ((tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 0] == tri[:, 2])).any():
+        raise bad("a triangle names one corner twice")
+    if not np.array_equal(first_use_order(tri, v), np.arange(v)):
+        raise bad("corners are not numbered in order of first use, or one is unused")
+
+
+def _shell_body(shell: Shell) -> bytes:
+    """The kind data of a SHELL group (spec 3.2 §8.9)."""
+    explicit = np.asarray(shell.explicit, dtype=bool)
+    fc = np.asarray(shell.facets, dtype=np.int64)
+    face, tri = fc[:, 0], fc[:, 1:].reshape(-1)
+    planar = face[face != FREE]
+    seen = np.cumsum(np.r_[True, tri[1:] > np.maximum.accumulate(tri)[:-1]]) if len(tri) else tri
+    # A corner's first use is 0; a later use k counts back from the newest corner (1 is the newest).
+    codes = np.where(np.r_[True, tri[1:] > np.maximum.accumulate(tri)[:-1]], 0, seen - tri)
+    out = [varint.encode([len(explicit), len(fc), len(fc) - len(planar)]),
+           np.packbits(explicit, bitorder="little").tobytes(),
+           varint.encode(np.asarray(shell.vertex_planes, dtype=np.uint64).reshape(-1))]
+    if explicit.any():
+        grid = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
+        out += [schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step))),
+                varint.encode(varint.zigzag(np.diff(grid, axis=0, prepend=np.zeros((1, 3), dtype=np.int64))))]
+    out += [varint.encode(np.diff(planar, prepend=0)), varint.encode(codes)]
+    return b"".join(out)
+
+
+def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
+    """The corners and triangles of a SHELL body (spec 3.2 §8.9), checked."""
+    (v, t, u), pos = varint.decode(raw, 3, "shell counts")
+    v, t, u = int(v), int(t), int(u)
+    left = len(raw) - pos
+    if not (3 <= v <= 8 * left and 1 <= t <= left // 3 and u <= t):
+        raise FormatError(f"shell group: {v} corners, {t} triangles, {u} free: outside the ranges the body "
+                          f"allows", code="BAD_GROUP_STRUCTURE")
+    nflags = (v + 7) // 8
+    if len(raw) < pos + nflags:
+        raise FormatError("shell group: the body ends inside its corner flags", code="BAD_PAYLOAD")
+    bits = np.unpackbits(raw[pos:pos + nflags], bitorder="little")
+    pos += nflags
+    if bits[v:].any():
+        raise FormatError("shell group: non-zero padding bits after the corner flags", code="BAD_PAYLOAD")
+    explicit = bits[:v].astype(bool)
+    e = int(explicit.sum())
+    if 3 * (v - e) + 3 * e + 3 * t > len(raw) - pos:
+        raise FormatError("shell group: more corners and triangles declared than the body holds",
+                          code="BAD_GROUP_STRUCTURE")
+    triples, used = varint.decode(raw[pos:], 3 * (v - e), "shell corner planes")
+    pos += used
+    origin, step, grid = np.zeros(3), 0.0, np.zeros((0, 3), dtype=np.int64)
+    if e:
+        if len(raw) < pos + schema.SHELL_GRID_BYTES:
+            raise FormatError("shell group: the body ends inside its grid", code="BAD_PAYLOAD")
+        g = schema.ShellGrid.parse(raw[pos:pos + schema.SHELL_GRID_BYTES].tobytes())
+        pos += schema.SHELL_GRID_BYTES
+        origin, step = np.array(g.origin, dtype=np.float64), float(g.step)
+        deltas, used = varint.decode(raw[pos:], 3 * e, "shell corner coordinates")
+        pos += used
+        steps = varint.unzigzag(deltas).reshape(-1, 3)
+        if np.abs(steps).max(initial=0) > MAX_GRID:
+            raise FormatError("shell group: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE")
+        grid = np.cumsum(steps, axis=0)
+    gaps, used = varint.decode(raw[pos:], t - u, "shell face references")
+    pos += used
+    codes, used = varint.decode(raw[pos:], 3 * t, "shell triangle corners")
+    if pos + used != len(raw):
+        raise FormatError("shell group: the triangles do not fill the body", code="BAD_GROUP_STRUCTURE")
+    if len(gaps) and gaps.max() >= len(bounding):
+        raise FormatError("shell group: a face reference is past the group's references",
+                          code="BAD_GROUP_STRUCTURE")
+    if codes.max() > np.uint64(3 * t):
+        raise FormatError("shell group: a triangle corner refers back past the first corner",
+                          code="BAD_GROUP_STRUCTURE")
+    codes = codes.astype(np.int64)
+    new = codes == 0
+    seen = np.cumsum(new)
+    tri = np.where(new, seen - 1, seen - codes)
+    if tri.min() < 0:
+        raise FormatError("shell group: a triangle corner refers back past the first corner",
+                          code="BAD_GROUP_STRUCTURE")
+    face = np.r_[np.cumsum(gaps.astype(np.int64)), np.full(u, FREE, dtype=np.int64)]
+    shell = Shell(explicit=explicit, vertex_planes=triples.astype(np.int64).reshape(-1, 3), grid=grid,
+                  origin=origin, step=step, facets=np.column_stack([face, tri.reshape(-1, 3)]))
+    check_shell(shell, bounding)
+    return shell

@@ -186,6 +186,15 @@ COMPACT_IN, COMPACT_OUT, COMPACT_SPLIT = 0, 1, 2
 # three vertices; all varints (read in bulk by varint.decode)
 SEALED_VERTEX_FIELDS, SEALED_TRIANGLE_FIELDS = 3, 4
 
+# spec 3.2 §8.9 Shell group (kind 6) data: corner, triangle and free-triangle counts (varints),
+# one flag bit per corner, three references per named corner (varints), and where a corner is
+# explicit this grid, then zigzag varint coordinate steps, face reference steps and corner codes
+ShellGrid = cs.Struct(
+    "origin" / cs.Array(3, cs.Float64l),
+    "step" / cs.Float64l,
+)
+SHELL_GRID_BYTES = 32
+
 # spec §8.5 Face colours (cOLR, ancillary)
 Colours = cs.Struct(
     "group" / cs.Int32ul,

@@ -20,7 +20,7 @@ import numpy as np
 from . import records, schema
 from .chunks import chunk_bytes, is_ancillary, valid_type
 from .errors import PlnError
-from .model import (Colours, GroupKind, Header, ObjectRecord, PartGroup, PlaneBlock, Record,
+from .model import (Colours, GroupKind, Header, ObjectRecord, PartGroup, PlaneBlock, Record, Shell,
                     UnknownChunk)
 
 def _read_umask() -> int:
@@ -141,17 +141,18 @@ class Writer:
     def add_group(self, obj: int, kind: int, refs: np.ndarray, bounding: np.ndarray | None = None, *,
                   cells: tuple[np.ndarray, ...] | None = None, tree: np.ndarray | None = None,
                   extra: bytes = b"", vertex_planes: np.ndarray | None = None,
-                  facets: np.ndarray | None = None) -> int:
+                  facets: np.ndarray | None = None, shell: Shell | None = None) -> int:
         """Write a part group of object ``obj`` over plane-table indices ``refs``; returns its index.
 
         ``bounding[i]`` marks ``refs[i]`` as a bounding/cut plane (default: all faces). A BSP
         group needs ``tree``, a CELLS group ``cells``, a SEALED group (version 3.1 and later)
-        ``vertex_planes`` and ``facets`` in local references (spec 3.1 §8.8).
+        ``vertex_planes`` and ``facets`` in local references (spec 3.1 §8.8), a SHELL group
+        (version 3.2 and later) ``shell`` (spec 3.2 §8.9), which may have no references.
         """
         refs = np.asarray(refs, dtype=np.int64).reshape(-1)
-        if len(refs) == 0:
+        if len(refs) == 0 and kind != GroupKind.SHELL:
             raise PlnError("a part group needs at least one plane", code="BAD_GROUP_STRUCTURE")
-        if refs.min() < 0 or refs.max() >= self._planes:
+        if len(refs) and (refs.min() < 0 or refs.max() >= self._planes):
             raise PlnError(f"references must lie in 0..{self._planes - 1}: planes are written before "
                            f"the groups that use them", code="BAD_PLANE_REFERENCE")
         if not 0 <= obj < self._objects:
@@ -171,12 +172,19 @@ class Writer:
             # Without the kind in its version, kind 5 is opaque ``extra`` (a skipped group re-written).
             raise PlnError(f"sealed groups need version 3.1, not {self._version[0]}.{self._version[1]}",
                            code="UNKNOWN_GROUP_KIND")
+        if kind == GroupKind.SHELL and int(kind) in records.kinds_of(*self._version):
+            if shell is None:
+                raise PlnError("a shell group needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
+            records.check_shell(shell, bounding)
+        elif shell is not None or (kind == GroupKind.SHELL and not extra):
+            raise PlnError(f"shell groups need version 3.2, not {self._version[0]}.{self._version[1]}",
+                           code="UNKNOWN_GROUP_KIND")
         index = len(self._groups)
         group = PartGroup(index=index, object=obj, kind=int(kind), refs=refs.astype(np.uint32),
                           bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
-                          facets=facets)
+                          facets=facets, shell=shell)
         self._emit(schema.GRUP, records.encode_group(group, self._compress, self._major), index)
-        self._groups.append(len(refs))
+        self._groups.append(records.colour_count(int(kind), len(refs)))
         return index
 
     def add_colours(self, group: int, rgba: np.ndarray) -> None:
@@ -202,7 +210,7 @@ class Writer:
         elif isinstance(record, PartGroup):
             self.add_group(record.object, record.kind, record.refs, record.bounding, cells=record.cells,
                            tree=record.tree, extra=record.extra, vertex_planes=record.vertex_planes,
-                           facets=record.facets)
+                           facets=record.facets, shell=record.shell)
         elif isinstance(record, Colours):
             self.add_colours(record.group, record.rgba)
         elif isinstance(record, UnknownChunk):
