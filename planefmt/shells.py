@@ -131,6 +131,10 @@ def encode_shell(plan: ShellPlan, omega: np.ndarray, h: np.ndarray, budget: floa
         raise GeometryError(f"a shell needs a positive error budget, not {budget}")
     p, triple = plan.points, plan.triple
     named = plan.det >= MIN_DETERMINANT
+    if named.any():
+        # Coarsely coded normals can make a well-conditioned triple dependent.
+        k = np.flatnonzero(named)
+        named[k[~(np.abs(np.linalg.det(omega[triple[k]])) >= MIN_DETERMINANT)]] = False
     moved = np.zeros(len(p))
     if named.any():
         x = corners(omega, h, triple[named])
@@ -158,7 +162,9 @@ def reordered(shell: Shell, local: np.ndarray) -> Shell:
     triangles re-sorted by their new face references and corners renumbered by first use, the
     same corners and triangles."""
     fc = np.asarray(shell.facets, dtype=np.int64)
-    face = np.where(fc[:, 0] == FREE, FREE, local[np.maximum(fc[:, 0], 0)])
+    face = np.full(len(fc), FREE, dtype=np.int64)
+    planar = fc[:, 0] != FREE
+    face[planar] = local[fc[planar, 0]]
     order = np.argsort(np.where(face == FREE, np.iinfo(np.int64).max, face), kind="stable")
     tri = fc[order, 1:]
     rank = first_use_order(tri, len(shell.explicit))
