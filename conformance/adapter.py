@@ -54,6 +54,12 @@ def _group(g: planefmt.PartGroup) -> dict:
     if g.vertex_planes is not None:
         out["vertex_planes"] = g.vertex_planes.tolist()
         out["facets"] = g.facets.tolist()
+    if g.shell is not None:
+        s = g.shell
+        out["shell"] = {"explicit": np.flatnonzero(s.explicit).tolist(), "vertex_planes": s.vertex_planes.tolist(),
+                        "grid": s.grid.tolist(), "origin": [float(x) for x in s.origin] if s.explicit.any() else None,
+                        "step": float(s.step) if s.explicit.any() else None,
+                        "facets": s.facets.tolist()}
     return out
 
 

@@ -147,6 +147,18 @@ def optional_float(x: float) -> float | None:
     return None if math.isnan(x) else float(x)
 
 
+def shell_json(shell) -> dict:
+    """A shell group's corners and triangles as the contract reports them (README.md): indices of
+    the explicit corners, named corners' references, grid, triangles (face -1: free)."""
+    return {"explicit": np.flatnonzero(shell.explicit).tolist(),
+            "vertex_planes": np.asarray(shell.vertex_planes, dtype=np.int64).reshape(-1, 3).tolist(),
+            "grid": np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3).tolist(),
+            # The grid is stored only for explicit corners (spec 3.2 §8.9).
+            "origin": [float(x) for x in shell.origin] if np.any(shell.explicit) else None,
+            "step": float(shell.step) if np.any(shell.explicit) else None,
+            "facets": np.asarray(shell.facets, dtype=np.int64).tolist()}
+
+
 def header_json(h: Header, counts: tuple[int, int, int] | None) -> dict:
     q = h.quantization
     return {

@@ -26,7 +26,8 @@ from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Qua
 
 from . import reference
 from .build import CUBE, SPEC_HEADER, Layout, box, finish, frame, offsets
-from .cases_valid import IN, L_CELLS, L_PLANES, L_TREE, OUT, SEALED_CUBE_FACETS, SEALED_CUBE_VERTICES
+from .cases_valid import (IN, L_CELLS, L_PLANES, L_TREE, OUT, SEALED_CUBE_FACETS, SEALED_CUBE_VERTICES, SHELL_CUBE,
+                          SHELL_MIXED)
 
 
 @dataclass(frozen=True)
@@ -117,11 +118,11 @@ def f32_bits(bits: int) -> float:
 
 
 def geometry_defect(code: str, kind: int, triplets, bounding=None, cells=None, tree=None, vertex_planes=None,
-                    facets=None) -> None:
+                    facets=None, shell=None) -> None:
     """Check, with the reference decoder, that the planes really have the stated defect."""
     bounding = np.zeros(len(triplets), bool) if bounding is None else np.array(bounding, bool)
     try:
-        reference.summary(kind, np.asarray(triplets), bounding, cells, tree, vertex_planes, facets)
+        reference.summary(kind, np.asarray(triplets), bounding, cells, tree, vertex_planes, facets, shell)
     except reference.Defect as exc:
         if exc.code == code:
             return
@@ -717,6 +718,84 @@ def _():
     return sealed_file(b[:-1] + bytes([b[-1] | 0x80]))
 
 
+# -- shell groups (spec/pln-3.md §8.9, version 3.2) ----------------------------------------------
+
+def shell_file(body: bytes, version: tuple[int, int] = (3, 2), colours: bytes | None = None) -> bytes:
+    """The cube of spec §12 as a version 3.2 file (or ``version``), float64, with a shell group of
+    ``body`` (its references and roles included) in place of the convex one, and a cOLR chunk of
+    ``colours`` after it if given."""
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=6, compression=0, raw_size=len(body), body=body))
+    layout = cube(PHDR=header(version=version, coding=Coding.FLOAT64), OBJT=records.encode_object(
+        ObjectRecord(0, "cube", None, None), 3), PLNS=records.encode_planes(0, CUBE, V3_F64, False), GRUP=group)
+    if colours is not None:
+        layout.append((schema.COLR, colours))
+    return frame(finish(layout, True, 3))
+
+
+def shell_body(shell=SHELL_CUBE, refs: bytes = b"\x06\x00\x01\x01\x01\x01\x01", roles: bytes = b"\0") -> bytes:
+    """A shell group's body: 6 references 0..5 as differences, their roles, the kind data."""
+    return refs + roles + records._shell_body(shell)
+
+
+@case("xv3_shell_in_3_1", "UNKNOWN_GROUP_KIND", "a well-formed shell cube (kind 6) in a version 3.1 file, whose "
+      "version has no kind 6")
+def _():
+    return shell_file(shell_body(), (3, 1))
+
+
+@case("xv3_shell_code_back", "BAD_GROUP_STRUCTURE", "version 3.2 shell cube whose first triangle's second corner "
+      "code is 2: two corners back from the only one named so far")
+def _():
+    b = bytearray(shell_body())
+    codes_at = len(b) - 36  # 12 triangles x 3 one-byte corner codes end the body
+    b[codes_at + 1] = 2
+    return shell_file(bytes(b))
+
+
+@case("xv3_shell_unused_corner", "BAD_GROUP_STRUCTURE", "version 3.2 shell cube with a ninth named corner (as "
+      "corner 7) that no triangle uses")
+def _():
+    s = dataclasses.replace(SHELL_CUBE, explicit=np.zeros(9, dtype=bool),
+                            vertex_planes=np.vstack([SHELL_CUBE.vertex_planes, SHELL_CUBE.vertex_planes[-1:]]))
+    return shell_file(shell_body(s))
+
+
+@case("xv3_shell_flag_padding", "BAD_PAYLOAD", "version 3.2 shell cube of 8 corners whose flag byte is followed by "
+      "a second one (corner_count 9 would need it): a padding bit set in a two-byte flag field of 9 corners")
+def _():
+    s = dataclasses.replace(SHELL_CUBE, explicit=np.zeros(9, dtype=bool))
+    b = bytearray(records._shell_body(s))
+    b[4] = 0x80  # flags of corners 8..15: corner 9's and later bits are padding
+    return shell_file(b"\x06\x00\x01\x01\x01\x01\x01\0" + bytes(b))
+
+
+@case("xv3_shell_zero_step", "BAD_GROUP_STRUCTURE", "version 3.2 shell cube whose explicit corner's grid has step 0")
+def _():
+    return shell_file(shell_body(dataclasses.replace(SHELL_MIXED, step=0.0)))
+
+
+@case("xv3_shell_cut", "BAD_PAYLOAD", "version 3.2 shell cube whose last corner code has its continuation bit set: "
+      "the body ends inside it")
+def _():
+    b = shell_body()
+    return shell_file(b[:-1] + bytes([b[-1] | 0x80]))
+
+
+@case("xv3_shell_colours", "BAD_COLOURS", "version 3.2 shell cube with a cOLR of 6 colours: a shell's cOLR has one "
+      "per reference and one for its free triangles, 7")
+def _():
+    rgba = np.full((6, 4), 255, dtype=np.uint8)
+    return shell_file(shell_body(), colours=records.encode_colours(Colours(0, rgba)))
+
+
+@case("xv3_convex_no_refs", "BAD_GROUP_STRUCTURE", "version 3.2 convex group with no references: only a shell may "
+      "have none")
+def _():
+    body = b"\x00"
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=0, compression=0, raw_size=len(body), body=body))
+    return v3(PHDR=header(version=(3, 2)), GRUP=group)
+
+
 @case("xgrup_deflate_bomb", "LIMIT_EXCEEDED", "a deflated GRUP body declaring raw_size 2^32-1 (a deflate bomb)",
       also=("SIZE_MISMATCH",))
 def _():
@@ -1064,6 +1143,16 @@ def _():
     vertices = SEALED_CUBE_VERTICES[:7] + ((0, 2, 4),)
     geometry_defect("BAD_VERTEX", 5, CUBE, vertex_planes=vertices, facets=SEALED_CUBE_FACETS)
     return sealed_file(sealed_body(vertices))
+
+
+@geometry_case("xgeom_v3_shell_parallel", "BAD_VERTEX", "version 3.2 shell cube whose last corner is named by "
+               "x <= 1, x >= 0 and z <= 1: two parallel planes (|det| 1e-16 in float64)")
+def _():
+    vp = SHELL_CUBE.vertex_planes.copy()
+    vp[-1] = (0, 2, 4)
+    s = dataclasses.replace(SHELL_CUBE, vertex_planes=vp)
+    geometry_defect("BAD_VERTEX", 6, CUBE, shell=s)
+    return shell_file(shell_body(s))
 
 
 @geometry_case("xgeom_cells_overlap", "BAD_GROUP_STRUCTURE", "a cells group whose two cells are the same prism: "

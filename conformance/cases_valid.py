@@ -20,11 +20,11 @@ import numpy as np
 import planefmt
 import planefmt.quantize
 from planefmt import records, schema
-from planefmt.model import (Coding, Colours, GroupKind, Header, ObjectRecord, PartGroup, Quantization,
+from planefmt.model import (Coding, Colours, GroupKind, Header, ObjectRecord, PartGroup, Quantization, Shell,
                             Units)
 
 from . import reference
-from .build import (CUBE, SPEC_HEADER, box, finish, frame, header_json, rounded, stored_header, stored_planes,
+from .build import (CUBE, SPEC_HEADER, box, finish, frame, header_json, rounded, shell_json, stored_header, stored_planes,
                     world_matrices)
 
 #: Relative tolerance of geometry comparisons (see README.md).
@@ -54,6 +54,7 @@ class Group:
     tree: tuple[int, ...] | None = None
     vertex_planes: tuple[tuple[int, int, int], ...] | None = None  # sealed groups: local references
     facets: tuple[tuple[int, int, int, int], ...] | None = None  # sealed groups: face reference, 3 vertices
+    shell: Shell | None = None  # shell groups (spec 3.2 §8.9)
     extra: bytes = b""  # kind data of a kind this version does not know
 
 
@@ -154,7 +155,7 @@ def written(case: ValidCase, header: Header) -> bytes:
                 w.add_planes(op.triplets)
             elif isinstance(op, Group):
                 w.add_group(op.obj, op.kind, np.array(op.refs), _role_bits(op), cells=_cells(op), tree=_tree(op),
-                            extra=op.extra, vertex_planes=_vertex_planes(op), facets=_facets(op))
+                            extra=op.extra, vertex_planes=_vertex_planes(op), facets=_facets(op), shell=op.shell)
             elif isinstance(op, Colour):
                 w.add_colours(op.group, op.rgba)
             else:
@@ -181,7 +182,7 @@ def assembled(case: ValidCase, header: Header) -> bytes:
         elif isinstance(op, Group):
             rec = PartGroup(groups, op.obj, op.kind, np.array(op.refs, dtype=np.uint32), _role_bits(op),
                             cells=_cells(op), tree=_tree(op), extra=op.extra, vertex_planes=_vertex_planes(op),
-                            facets=_facets(op))
+                            facets=_facets(op), shell=op.shell)
             layout.append((schema.GRUP, records.encode_group(rec, case.compress, header.version[0])))
             groups += 1
         elif isinstance(op, Colour):
@@ -201,7 +202,7 @@ def geometry(case: ValidCase) -> tuple[dict, np.ndarray | None]:
             summaries.append(None)  # skipped: SKIPPED_GROUP_KIND (kind 5 too, in a version before 3.1)
             continue
         s, points = reference.summary(g.kind, case.table[list(g.refs)], _role_bits(g), g.cells, g.tree,
-                                      g.vertex_planes, g.facets)
+                                      g.vertex_planes, g.facets, g.shell)
         summaries.append({k: v if k in ("vertices", "triangles") else rounded(v) for k, v in s.items()})
         corners.append(points @ worlds[g.obj][:3, :3].T + worlds[g.obj][:3, 3])
     world = None
@@ -227,6 +228,8 @@ def expected(case: ValidCase, header: Header, geo: dict) -> dict:
         if g.vertex_planes is not None:
             entry["vertex_planes"] = [list(v) for v in g.vertex_planes]
             entry["facets"] = [list(f) for f in g.facets]
+        if g.shell is not None:
+            entry["shell"] = shell_json(g.shell)
         groups.append(entry)
     colours = [{"group": op.group, "rgba": np.asarray(op.rgba).tolist()} for op in case.ops
                if isinstance(op, Colour)]
@@ -360,6 +363,36 @@ SEALED_CUBE_FACETS = tuple((f, *t) for f, (a, b, c, d) in enumerate(_CUBE_QUADS)
 CORNER_PLANE = np.array([[2.186276, 3.926991, 0.0]])
 #: SEALED_CUBE_VERTICES with the corner (0, 0, 0) named by x = 0, y = 0 and CORNER_PLANE (reference 6).
 SEALED_CORNER_VERTICES = ((2, 3, 6),) + SEALED_CUBE_VERTICES[1:]
+
+def shell_of(corners, facets, origin=(0.0, 0.0, 0.0), step: float = 1.0) -> Shell:
+    """A :class:`Shell` from ``corners`` (each a triple of local references, or ``("grid", x, y, z)``)
+    and ``facets`` (face or -1, i0, i1, i2) in any order: triangles sorted by face, free ones last,
+    and corners renumbered by first use, as spec 3.2 §8.9 stores them."""
+    fc = sorted(facets, key=lambda f: (f[0] < 0, f[0]))
+    order: list[int] = []
+    for f in fc:
+        order += [i for i in f[1:] if i not in order]
+    rank = {old: new for new, old in enumerate(order)}
+    explicit = np.array([corners[k][0] == "grid" for k in order])
+    return Shell(explicit=explicit,
+                 vertex_planes=np.array([corners[k] for k in order if corners[k][0] != "grid"],
+                                        dtype=np.int64).reshape(-1, 3),
+                 grid=np.array([corners[k][1:] for k in order if corners[k][0] == "grid"], dtype=np.int64).reshape(-1, 3),
+                 origin=np.array(origin, dtype=np.float64), step=float(step),
+                 facets=np.array([(f[0], *(rank[i] for i in f[1:])) for f in fc], dtype=np.int64))
+
+
+#: The unit cube as a shell (kind 6, spec 3.2 §8.9): the corners and triangles of the sealed cube.
+SHELL_CUBE = shell_of(SEALED_CUBE_VERTICES, SEALED_CUBE_FACETS)
+#: The same with its corner (0, 0, 0) explicit (grid step 0.25, at 0, 0, 0) and the two triangles of
+#: face 5 (z >= 0) free: reference 5 then only names corners.
+SHELL_MIXED = shell_of((("grid", 0, 0, 0),) + SEALED_CUBE_VERTICES[1:],
+                       [(-1 if f == 5 else f, a, b, c) for f, a, b, c in SEALED_CUBE_FACETS], step=0.25)
+#: An open square pyramid without a base, every corner explicit on a grid of step 0.5 (apex at
+#: (0.5, 0.5, 1)), every triangle free: a shell of no references.
+SHELL_PYRAMID = shell_of((("grid", 0, 0, 0), ("grid", 2, 0, 0), ("grid", 2, 2, 0), ("grid", 0, 2, 0), ("grid", 1, 1, 2)),
+                         [(-1, 0, 1, 4), (-1, 1, 2, 4), (-1, 2, 3, 4), (-1, 3, 0, 4)], step=0.5)
+V32_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 2))
 
 #: A newer minor version's additions: OBJT bytes after the transform, a group of unknown kind 9
 #: between two known ones, a new flag bit (the PHDR bytes are each case's header extra).
@@ -511,10 +544,22 @@ CASES = [
                Group(0, GroupKind.SEALED, tuple(range(7)), bounding=(6,), vertex_planes=SEALED_CORNER_VERTICES,
                      facets=SEALED_CUBE_FACETS)),
               decoded_bbox=True, index=False),
-    ValidCase("minor_3_2", "version 3.2: 8 more PHDR bytes after the counts and a new flag bit, 5 more OBJT bytes "
+    ValidCase("minor_3_3", "version 3.3: 8 more PHDR bytes after the counts and a new flag bit, 5 more OBJT bytes "
               "after the transform, a group of unknown kind 9 (skipped) between two known ones",
-              dataclasses.replace(V3_CUBE, version=(3, 2), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
+              dataclasses.replace(V3_CUBE, version=(3, 3), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
               **NEWER_MINOR),
+    ValidCase("shell_cube_v3_2", "version 3.2: the unit cube as a shell (kind 6), float32, with index: 8 corners "
+              "each named by its three face planes, 12 triangles on the 6 faces, corners numbered by first use",
+              V32_CUBE, (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL, tuple(range(6)), shell=SHELL_CUBE))),
+    ValidCase("shell_mixed_v3_2", "version 3.2: the shell cube with its corner (0, 0, 0) explicit (grid origin 0, "
+              "step 0.25) and the two triangles of z >= 0 free, with a cOLR of 7 colours (the last for the free "
+              "triangles)", V32_CUBE,
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL, tuple(range(6)), shell=SHELL_MIXED),
+               Colour(0, np.array([[255, 0, 0, 255]] * 6 + [[0, 0, 255, 255]], dtype=np.uint8)))),
+    ValidCase("shell_pyramid_v3_2", "version 3.2: an open square pyramid as a shell of no references: 5 explicit "
+              "corners on a grid of step 0.5, 4 free triangles, no plane table, one colour", V32_CUBE,
+              (Obj("pyramid"), Group(0, GroupKind.SHELL, (), shell=SHELL_PYRAMID),
+               Colour(0, np.array([[0, 128, 0, 255]], dtype=np.uint8))), decoded_bbox=True),
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),
 ]

@@ -208,7 +208,7 @@ def sealed_vertices(omega: np.ndarray, h: np.ndarray, vertex_planes) -> np.ndarr
 
 
 def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, tree=None, vertex_planes=None,
-            facets=None) -> tuple[dict, np.ndarray]:
+            facets=None, shell=None) -> tuple[dict, np.ndarray]:
     """The geometry summary of the conformance contract for one group (see README.md).
 
     ``triplets`` (m, 3) are the planes of the group's references in order;
@@ -219,7 +219,22 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
     """
     omega, h = planes_of(triplets)
     volume = None
-    if kind == 5:
+    if kind == 6:
+        # spec 3.2 §8.9: named corners as sealed vertices, explicit ones on the grid; no volume (a
+        # shell may be open).
+        explicit = np.asarray(shell.explicit, dtype=bool)
+        points = np.zeros((len(explicit), 3))
+        if (~explicit).any():
+            points[~explicit] = sealed_vertices(omega, h, shell.vertex_planes)
+        for k, g in zip(np.flatnonzero(explicit), np.asarray(shell.grid).reshape(-1, 3)):
+            points[k] = [shell.origin[i] + shell.step * float(g[i]) for i in range(3)]
+        tri = np.asarray(shell.facets)[:, 1:]
+        a, b, c = (points[tri[:, k]] for k in range(3))
+        cross = np.cross(b - a, c - a)
+        area = float(np.linalg.norm(cross, axis=1).sum()) / 2
+        vector = cross.sum(axis=0) / 2
+        counts = (len(points), len(tri))
+    elif kind == 5:
         points = sealed_vertices(omega, h, vertex_planes)
         a, b, c = (points[[f[k] for f in facets]] for k in (1, 2, 3))
         cross = np.cross(b - a, c - a)

@@ -301,7 +301,7 @@ def encode_shell_body(body: Body) -> list[GroupSpec]:
 
 #: Planes of the largest convex body the shell scheme stores as a convex group. Its error is
 #: certified by the Hausdorff search, whose time grows with the planes (unit_sphere.STL, 1,280
-#: triangles on 1,280 planes: 23-31 s at 1e-6; test_sphere.stl, 224 planes: 0.4 s); a larger body is a
+#: triangles on 1,280 planes: 23-31 s at 1e-6; test_sphere.stl, 224 on 128: 0.4 s); a larger body is a
 #: shell, whose bound holds by construction.
 CONVEX_MAX_PLANES = 256
 

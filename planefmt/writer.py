@@ -176,7 +176,7 @@ class Writer:
             if shell is None:
                 raise PlnError("a shell group needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
             records.check_shell(shell, bounding)
-        elif shell is not None or (kind == GroupKind.SHELL and not extra):
+        elif shell is not None:
             raise PlnError(f"shell groups need version 3.2, not {self._version[0]}.{self._version[1]}",
                            code="UNKNOWN_GROUP_KIND")
         index = len(self._groups)

@@ -13,8 +13,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import planefmt
-from planefmt import chunk_bytes, quantize, schema
-from planefmt.model import BSP_IN, BSP_OUT, Coding, GroupKind, Header, PartGroup, PlaneBlock, Quantization
+from planefmt import chunk_bytes, quantize, records, schema
+from planefmt.model import BSP_IN, BSP_OUT, Coding, GroupKind, Header, PartGroup, PlaneBlock, Quantization, Shell
 
 from streams import TrickleReader, TrickleWriter
 
@@ -53,7 +53,8 @@ quantizations = st.builds(
 
 
 def groups_for(n: int, draw, version: tuple[int, int] = (1, 0)) -> list[dict]:
-    kinds = [k for k in GroupKind if k != GroupKind.SEALED or (version >= (3, 1) and n >= 3)]
+    kinds = [k for k in GroupKind if (k != GroupKind.SEALED or (version >= (3, 1) and n >= 3))
+             and (k != GroupKind.SHELL or version >= (3, 2))]
     out = []
     for kind in draw(st.lists(st.sampled_from(kinds), min_size=1, max_size=4)):
         m = draw(st.integers(3 if kind == GroupKind.SEALED else 1, min(n, 12)))
@@ -73,6 +74,8 @@ def groups_for(n: int, draw, version: tuple[int, int] = (1, 0)) -> list[dict]:
             corners = np.vstack([cover] + [np.array(more).reshape(-1, 3)])
             g["facets"] = np.column_stack([np.sort(draw(st.lists(st.sampled_from(list(faces)), min_size=len(corners),
                                                                  max_size=len(corners)))), corners])
+        if kind == GroupKind.SHELL:
+            g["shell"] = draw(shells(m, bounding))
         if kind == GroupKind.CELLS:
             g["cells"] = (np.array([0, 3], dtype=np.uint32) % (2 * m), np.array([1], dtype=np.uint32))
         if kind == GroupKind.BSP:
@@ -82,13 +85,42 @@ def groups_for(n: int, draw, version: tuple[int, int] = (1, 0)) -> list[dict]:
 
 
 @st.composite
+def shells(draw, m: int, bounding: np.ndarray) -> Shell:
+    """A well-formed shell over ``m`` references with roles ``bounding`` (spec 3.2 §8.9): corners
+    named by three distinct references (where ``m`` >= 3) or explicit, triangles on face planes or
+    free, corners in order of first use."""
+    v = draw(st.integers(3, 9))
+    explicit = np.array(draw(st.lists(st.booleans(), min_size=v, max_size=v))) | (m < 3)
+    explicit[0] = True  # at least one corner on the grid: its origin and step are then stored
+    cover = (3 * np.arange((v + 2) // 3)[:, None] + np.arange(3)) % v
+    more = draw(st.lists(st.permutations(range(v)).map(lambda p: p[:3]), max_size=4))
+    tri = np.vstack([cover] + [np.array(more, dtype=np.int64).reshape(-1, 3)])
+    rank = records.first_use_order(tri, v)
+    tri, explicit = rank[tri], explicit[np.argsort(rank)]
+    faces = np.flatnonzero(~bounding)
+    free = draw(st.integers(0, len(tri))) if len(faces) else len(tri)
+    face = np.r_[np.sort(draw(st.lists(st.sampled_from(list(faces)) if len(faces) else st.nothing(),
+                                       min_size=len(tri) - free, max_size=len(tri) - free))),
+                 np.full(free, -1)].astype(np.int64)
+    named = int((~explicit).sum())
+    vertex_planes = np.array(draw(st.lists(st.permutations(range(m)).map(lambda p: p[:3]), min_size=named,
+                                           max_size=named)), dtype=np.int64).reshape(-1, 3)
+    grid = np.array(draw(st.lists(st.integers(-2**40, 2**40), min_size=3 * int(explicit.sum()),
+                                  max_size=3 * int(explicit.sum()))), dtype=np.int64).reshape(-1, 3)
+    origin = np.array(draw(st.lists(st.floats(-1e6, 1e6), min_size=3, max_size=3)))
+    return Shell(explicit=explicit, vertex_planes=vertex_planes, grid=grid, origin=origin,
+                 step=draw(st.floats(1e-9, 1e3)), facets=np.column_stack([face, tri]))
+
+
+@st.composite
 def files(draw):
     """Planes, coding, quantization, groups, compression and version: the predicted coding only in
     versions 2 and 3, whose groups list their references in increasing order."""
     planes = draw(plane_sets)
     coding = draw(st.sampled_from(list(Coding)))
     q = draw(quantizations) if coding.quantized else None
-    versions = [(2, 0), (3, 0), (3, 1)] if coding == Coding.PREDICTED else [(1, 0), (2, 0), (3, 0), (3, 1)]
+    versions = [(2, 0), (3, 0), (3, 1), (3, 2)] if coding == Coding.PREDICTED else \
+        [(1, 0), (2, 0), (3, 0), (3, 1), (3, 2)]
     version = draw(st.sampled_from(versions))
     groups = groups_for(len(planes), draw, version)
     if version[0] >= 2:
@@ -108,7 +140,7 @@ def test_write_read_roundtrip_trickled(spec):
         w.add_planes(planes)
         for g in groups:
             w.add_group(obj, g["kind"], g["refs"], g["bounding"], cells=g.get("cells"), tree=g.get("tree"),
-                        vertex_planes=g.get("vertex_planes"), facets=g.get("facets"))
+                        vertex_planes=g.get("vertex_planes"), facets=g.get("facets"), shell=g.get("shell"))
     with planefmt.open(TrickleReader(bytes(sink.data))) as r:
         records = list(r)
     assert r.header.plane_count is None  # a non-seekable sink cannot patch counts in
@@ -139,6 +171,11 @@ def test_write_read_roundtrip_trickled(spec):
         if "facets" in want:
             assert np.array_equal(g.vertex_planes, want["vertex_planes"])
             assert np.array_equal(g.facets, want["facets"])
+        if "shell" in want:
+            s, w = g.shell, want["shell"]
+            assert np.array_equal(s.explicit, w.explicit) and np.array_equal(s.facets, w.facets)
+            assert np.array_equal(s.vertex_planes, w.vertex_planes) and np.array_equal(s.grid, w.grid)
+            assert s.origin.tobytes() == w.origin.tobytes() and s.step == w.step
 
 
 @pytest.mark.parametrize("widths", [(8, 8, 8), (16, 16, 16), (32, 32, 32), (8, 16, 32), (7, 9, 13),
