@@ -29,7 +29,7 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
           delta: float | None = None, tau: float | None = None, compress: bool = False,
-          compact: bool = False, watertight: bool = True) -> list[str]:
+          compact: bool = False, watertight: bool = True, scheme: str = "shell") -> list[str]:
     """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane.
 
     Returns what the encoder gave up (its :class:`PlnWarning` lines): with
@@ -40,7 +40,7 @@ def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PlnWarning)
         codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta, tau=tau,
-                           compress=compress, compact=compact, watertight=watertight)
+                           compress=compress, compact=compact, watertight=watertight, scheme=scheme)
     return [str(w) for w in _pln_warnings(caught)]
 
 

@@ -1193,6 +1193,16 @@ def _shell_structure_problem(mesh: Mesh, obj: _Object, distance: float) -> str |
     return None if off <= allowed else f"area off by {off / obj.area:.2g} (relative)"
 
 
+def _planeless(obj: _Object) -> _Object | None:
+    """``obj`` with its shells stripped of their planes, or None where that changes it (it has
+    convex groups, or colours that ride on planes)."""
+    if any(g.kind != GroupKind.SHELL for g in obj.groups):
+        return None
+    if obj.face_colours is not None and (obj.face_colours != obj.face_colours[0]).any():
+        return None
+    return replace(obj, groups=tuple(replace(g, refs=g.refs[:0], bounding=g.bounding[:0]) for g in obj.groups))
+
+
 def _as_shells(obj: _Object) -> _Object:
     """``obj`` with its convex groups turned into (one) shell over their planes."""
     groups = [GroupSpec(GroupKind.SHELL, g.refs, np.zeros(len(g.refs), dtype=bool), faces=g.faces)
@@ -1256,14 +1266,21 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     band = tolerance if tolerance > LOSSLESS_TOLERANCE else 0.0
     best: tuple[int, list[_Object], _Choice] | None = None
     why = ""
-    plans = [_shell_plans(o) for o in objects]
     offsets = np.cumsum([0] + [len(o.triplets) for o in objects])
-    for cod, q in candidates:
+    # Planes that name no corner within the budget only cost bytes: the same shells without them
+    # (every corner explicit, every triangle free) compete too, where colours do not ride on them.
+    freed = [_planeless(o) for o in objects]
+    variants = [(objects, candidates)]
+    if not forced and all(f is not None for f in freed):
+        variants.append((freed, candidates[:1]))
+    trials = [(objs, cod, q) for objs, cands in variants for cod, q in cands]
+    plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants}
+    for objs, cod, q in trials:
         rt = quantize.roundtrip(table, cod, q) if len(table) else table
         budget = tolerance * diag_src / (1.0 + 2.0 * tolerance)
         for _ in range(_SHELL_TIGHTENINGS):
             built, moved = zip(*(_shells_for(o, pl, rt[a:b], budget / sc)
-                                 for o, pl, a, b, sc in zip(objects, plans, offsets[:-1], offsets[1:], scale)))
+                                 for o, pl, a, b, sc in zip(objs, plans[id(objs)], offsets[:-1], offsets[1:], scale)))
             error = plane_error(cod, q, tolerance, diag_src)
             meshes = [_concatenate(_decode_object(rt[a:b], o, error))
                       for o, a, b in zip(built, offsets[:-1], offsets[1:])]

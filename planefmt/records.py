@@ -644,6 +644,16 @@ def decode_end(payload: bytes, major: int = 1) -> int:
 
 # spec 3.2 §8.9 Shells --------------------------------------------------------------------------
 
+def corner_codes(triangles: np.ndarray) -> np.ndarray:
+    """The corner codes of spec 3.2 §8.9 of ``triangles`` (T, 3) whose corners are numbered by first
+    use: 0 for a corner's first use, ``k`` for a later one of the k-th newest corner."""
+    tri = np.asarray(triangles, dtype=np.int64).reshape(-1)
+    if not len(tri):
+        return tri
+    new = np.r_[True, tri[1:] > np.maximum.accumulate(tri)[:-1]]
+    return np.where(new, 0, np.cumsum(new) - tri)
+
+
 def first_use_order(triangles: np.ndarray, count: int) -> np.ndarray:
     """New number of each of ``count`` corners when numbered in order of first use by ``triangles``
     (read row by row); -1 for corners no triangle uses."""
@@ -698,11 +708,9 @@ def _shell_body(shell: Shell) -> bytes:
     """The kind data of a SHELL group (spec 3.2 §8.9)."""
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
-    face, tri = fc[:, 0], fc[:, 1:].reshape(-1)
+    face = fc[:, 0]
     planar = face[face != FREE]
-    seen = np.cumsum(np.r_[True, tri[1:] > np.maximum.accumulate(tri)[:-1]]) if len(tri) else tri
-    # A corner's first use is 0; a later use k counts back from the newest corner (1 is the newest).
-    codes = np.where(np.r_[True, tri[1:] > np.maximum.accumulate(tri)[:-1]], 0, seen - tri)
+    codes = corner_codes(fc[:, 1:])
     out = [varint.encode([len(explicit), len(fc), len(fc) - len(planar)]),
            np.packbits(explicit, bitorder="little").tobytes(),
            varint.encode(np.asarray(shell.vertex_planes, dtype=np.uint64).reshape(-1))]

@@ -22,13 +22,17 @@ counter-clockwise seen from outside.
 from __future__ import annotations
 
 import math
+import zlib
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components, depth_first_order
 
 from .errors import GeometryError
 from .model import FREE, MAX_GRID, Shell
-from .records import first_use_order
+from . import varint
+from .records import corner_codes, first_use_order
 from .sealed import corners
 
 #: Smallest ``|det|`` of three unit normals the encoder names a corner by: below it a plane
@@ -106,8 +110,14 @@ def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omeg
     local reference ``face`` (or :data:`FREE`) of planes with exact normals ``omega``."""
     triangles = np.asarray(triangles, dtype=np.int64)
     face = np.asarray(face, dtype=np.int64)
-    # Planar triangles by face (runs of one reference), free ones last.
-    order = np.argsort(np.where(face == FREE, np.iinfo(np.int64).max, face), kind="stable")
+    # Planar triangles by face (runs of one reference), free ones last; within a run in the source's
+    # order or in that of a depth-first walk across shared edges, whichever codes the corners in
+    # fewer deflated bytes (npm_bunny.ply: the walk's 8.0 kB against 13.4; plate_holes.STL: 2.6
+    # against 2.5).
+    run = np.where(face == FREE, np.iinfo(np.int64).max, face)
+    orders = [np.argsort(run, kind="stable"), np.lexsort((walk_order(triangles, len(points)), run))]
+    order = min(orders, key=lambda o: len(zlib.compress(varint.encode(corner_codes(
+        first_use_order(triangles[o], len(points))[triangles[o]])), 6)))
     triangles, face = triangles[order], face[order]
     rank = first_use_order(triangles, len(points))
     used = np.flatnonzero(rank >= 0)
@@ -117,6 +127,27 @@ def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omeg
     p = points[source]
     triple, det = corner_triples(p, tri, face, omega)
     return ShellPlan(points=p, source=source, facets=np.column_stack([face, tri]), triple=triple, det=det)
+
+
+def walk_order(triangles: np.ndarray, count: int) -> np.ndarray:
+    """Rank of each triangle in a depth-first walk across shared edges (every connected piece in
+    turn, from a virtual root joined to each piece's first triangle)."""
+    t = len(triangles)
+    a = triangles.reshape(-1)
+    b = triangles[:, [1, 2, 0]].reshape(-1)
+    key = np.minimum(a, b) * count + np.maximum(a, b)
+    order = np.argsort(key, kind="stable")
+    same = key[order][1:] == key[order][:-1]
+    u, v = order[:-1][same] // 3, order[1:][same] // 3
+    pieces = connected_components(coo_matrix((np.ones(len(u)), (u, v)), shape=(t, t)), directed=False)[1]
+    _, first = np.unique(pieces, return_index=True)
+    rows = np.r_[u, v, np.full(len(first), t)]
+    cols = np.r_[v, u, first]
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(t + 1, t + 1)).tocsr()
+    visit = depth_first_order(graph, t, directed=True, return_predecessors=False)
+    rank = np.empty(t + 1, dtype=np.int64)
+    rank[visit] = np.arange(len(visit))
+    return rank[:t]
 
 
 def encode_shell(plan: ShellPlan, omega: np.ndarray, h: np.ndarray, budget: float) -> Shell:

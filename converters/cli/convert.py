@@ -1,6 +1,6 @@
 """``pln convert``: between any two supported formats, .pln on either side.
 
-    pln convert IN OUT [--tolerance T] [--bits N] [--allow-open] [--lossy --delta D --tau A]
+    pln convert IN OUT [--tolerance T] [--bits N] [--scheme shell|paper] [--allow-open] [--lossy --delta D --tau A]
     pln convert A B C -d OUTDIR --to glb [--jobs N]
 
 ``-`` reads standard input (format detected from the content) or writes
@@ -49,6 +49,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--allow-open", action="store_true",
                    help="store a closed mesh that planes cannot close as an open surface (distance and area "
                         "kept, not watertight; marked lossy) instead of failing")
+    g.add_argument("--scheme", choices=["shell", "paper"], default="shell",
+                   help="shell (default): convex bodies as convex groups, the rest as one shell group, fast, "
+                        "error by construction; paper: BSP trees, sealed groups and patches, verified by a "
+                        "certified Hausdorff search (minutes for a few thousand CAD triangles)")
     g.add_argument("--lossy", action="store_true", help="allow the paper's lossy options below")
     g.add_argument("--delta", type=float, help="lossy: drop planes of faces under delta x total area")
     g.add_argument("--tau", type=float, help="lossy: merge neighbour planes whose normals differ < tau radians")
@@ -65,7 +69,7 @@ def _pln_options(args: argparse.Namespace) -> dict:
     from planefmt.model import Coding
 
     opts = {"tolerance": args.tolerance, "compress": args.compress, "compact": args.compact,
-            "watertight": not args.allow_open}
+            "watertight": not args.allow_open, "scheme": args.scheme}
     if args.bits is not None:
         opts["bits"] = args.bits
     if args.coding:

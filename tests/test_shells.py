@@ -1,0 +1,164 @@
+"""Shell groups (kind 6, spec 3.2 §8.9): the default scheme's encoding of every body that is not a
+small convex one, its error bound by construction, and its structure kept."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+import pytest
+import planefmt
+from planefmt import codec
+from planefmt.bodies import euler_characteristic, is_closed_manifold, signed_volume
+from planefmt.errors import GeometryError
+from planefmt.model import GroupKind, Mesh, Node, Scene, Shell
+from planefmt.shells import decode_shell
+from planefmt_converters import registry
+
+import shapes
+
+CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
+
+
+def wall_with_hole() -> tuple[np.ndarray, np.ndarray]:
+    """A flat 3.5 x 2.5 wall of 0.5 squares (7 x 5) with a 1 x 0.5 rectangular hole (2 squares): 33
+    squares, 66 triangles, area 8.25."""
+    xs, ys = np.linspace(0, 3.5, 8), np.linspace(0, 2.5, 6)
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    v = np.column_stack([gx.ravel(), gy.ravel(), np.zeros(gx.size)])
+    faces = []
+    for i in range(len(xs) - 1):
+        for j in range(len(ys) - 1):
+            cx, cy = (xs[i] + xs[i + 1]) / 2, (ys[j] + ys[j + 1]) / 2
+            if 1.5 < cx < 2.5 and 1.0 < cy < 1.5:
+                continue
+            a, b, c, d = i * len(ys) + j, (i + 1) * len(ys) + j, (i + 1) * len(ys) + j + 1, i * len(ys) + j + 1
+            faces += [(a, b, c), (a, c, d)]
+    return v, np.array(faces)
+
+
+def _closest_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Exact distance of each point ``p`` (P, 3) to each triangle (a, b, c) (T, 3) -> (P, T), by the
+    Voronoi regions of a triangle (Ericson, Real-Time Collision Detection, 5.1.5)."""
+    p = p[:, None, :]
+    ab, ac, ap = b - a, c - a, p - a
+    d1, d2 = (ab * ap).sum(-1), (ac * ap).sum(-1)
+    bp = p - b
+    d3, d4 = (ab * bp).sum(-1), (ac * bp).sum(-1)
+    cp = p - c
+    d5, d6 = (ab * cp).sum(-1), (ac * cp).sum(-1)
+    va, vb, vc = d3 * d6 - d5 * d4, d5 * d2 - d1 * d6, d1 * d4 - d3 * d2
+    with np.errstate(divide="ignore", invalid="ignore"):
+        denom = va + vb + vc
+        v, w = vb / denom, vc / denom
+        q = a + ab * v[..., None] + ac * w[..., None]  # inside the face
+        t_ab = d1 / (d1 - d3)
+        q = np.where(((vc <= 0) & (d1 >= 0) & (d3 <= 0))[..., None], a + ab * t_ab[..., None], q)
+        t_ac = d2 / (d2 - d6)
+        q = np.where(((vb <= 0) & (d2 >= 0) & (d6 <= 0))[..., None], a + ac * t_ac[..., None], q)
+        t_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        q = np.where(((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0))[..., None], b + (c - b) * t_bc[..., None], q)
+    q = np.where(((d6 >= 0) & (d5 <= d6))[..., None], np.broadcast_to(c, q.shape), q)
+    q = np.where(((d3 >= 0) & (d4 <= d3))[..., None], np.broadcast_to(b, q.shape), q)
+    q = np.where(((d1 <= 0) & (d2 <= 0))[..., None], np.broadcast_to(a, q.shape), q)
+    return np.linalg.norm(p - q, axis=-1)
+
+
+def sampled_distance(v: np.ndarray, f: np.ndarray, to_v: np.ndarray, to_f: np.ndarray, n: int = 3000) -> float:
+    """Largest distance of points of the surface (v, f) (its vertices, edge midpoints and random
+    points) from the surface (to_v, to_f), measured exactly point by triangle: a lower bound of the
+    one-sided Hausdorff distance, from code the codec does not use."""
+    rng = np.random.default_rng(1)
+    t = rng.integers(0, len(f), n)
+    r = rng.random((n, 2))
+    r = np.where(r.sum(axis=1, keepdims=True) > 1, 1 - r, r)
+    p = v[f[t, 0]] + r[:, :1] * (v[f[t, 1]] - v[f[t, 0]]) + r[:, 1:] * (v[f[t, 2]] - v[f[t, 0]])
+    points = np.vstack([p, v[np.unique(f)], (v[f[:, 0]] + v[f[:, 1]]) / 2])
+    a, b, c = (to_v[to_f[:, k]] for k in range(3))
+    return max(float(_closest_distance(points[s:s + 256], a, b, c).min(axis=1).max())
+               for s in range(0, len(points), 256))
+
+
+def encode(v: np.ndarray, f: np.ndarray, tolerance: float) -> tuple[planefmt.Header, Mesh, bytes]:
+    buf = io.BytesIO()
+    header = codec.encode_scene(Scene((Node("m", mesh=Mesh(v, f)),)), buf, tolerance=tolerance,
+                                compress=True, compact=True)
+    data = buf.getvalue()
+    (node,) = codec.decode_scene(io.BytesIO(data)).nodes
+    return header, node.mesh, data
+
+
+def test_wall_with_a_hole_converts():
+    v, f = wall_with_hole()
+    assert len(f) == 66
+    header, mesh, data = encode(v, f, 1e-6)
+    assert header.version == (3, 2) and header.error_bound <= 1e-6 and not header.lossy
+    assert len(mesh.faces) == 66
+    assert abs(shapes.area(mesh.vertices, mesh.faces) - 8.25) <= 1e-6 * 8.25
+    with planefmt.open(io.BytesIO(data)) as r:
+        assert [g.kind for g in r.part_groups()] == [GroupKind.SHELL]
+
+
+@pytest.mark.parametrize("tolerance", [1e-3, 1e-5])
+@pytest.mark.parametrize("path", ["nonconvex_watertight/fuze.obj", "smooth_dense/npm_bunny.ply",
+                                  "open/suzanne.ply", "cad/plate_holes.STL"])
+def test_recorded_bound_covers_the_decoded_surface(path, tolerance):
+    scene, _ = registry.read(CORPUS / path)
+    (mesh,) = [n.mesh for n in scene.nodes if n.mesh is not None]
+    v, f = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
+    header, mesh, _ = encode(v, f, tolerance)
+    diag = float(np.linalg.norm(np.ptp(mesh.vertices, axis=0)))
+    assert header.error_bound <= tolerance
+    # The decoded triangles are the source's: same count, closed stays closed with its Euler number.
+    assert len(mesh.faces) == len(f)
+    if is_closed_manifold(f, len(v)):
+        assert is_closed_manifold(mesh.faces, len(mesh.vertices))
+        assert euler_characteristic(mesh.faces) == euler_characteristic(f)
+    # Both sides, sampled densely: never above the recorded bound (float32 header rounding aside).
+    bound = float(header.error_bound) * diag * (1 + 1e-6) + 1e-12 * diag
+    assert sampled_distance(mesh.vertices, mesh.faces, v, f) <= bound
+    assert sampled_distance(v, f, mesh.vertices, mesh.faces) <= bound
+
+
+def test_closed_solid_keeps_its_volume_at_the_lossless_tolerance():
+    v, f = shapes.random_boxes(3)
+    enc = codec.encode_mesh(v, f, tolerance=1e-6)
+    assert {g.kind for g in enc.groups} <= {GroupKind.SHELL, GroupKind.CONVEX}
+    m = enc.mesh
+    assert is_closed_manifold(m.faces, len(m.vertices))
+    assert abs(signed_volume(m.vertices, m.faces) - signed_volume(v, f)) <= 1e-6 * abs(signed_volume(v, f))
+
+
+def test_small_convex_body_stays_a_convex_group():
+    v, f = shapes.cube()
+    enc = codec.encode_mesh(v, f, tolerance=1e-6)
+    assert [g.kind for g in enc.groups] == [GroupKind.CONVEX]
+
+
+def test_paper_scheme_is_still_available():
+    v, f = shapes.ring(12)
+    enc = codec.encode_mesh(v, f, tolerance=1e-4, scheme="paper")
+    assert GroupKind.SHELL not in {g.kind for g in enc.groups}
+
+
+def test_triangles_without_area_are_left_out():
+    v, f = shapes.cube()
+    degenerate = np.vstack([f, [[0, 0, 1], [2, 3, 3]]])
+    _, mesh, _ = encode(v, degenerate, 1e-6)
+    assert len(mesh.faces) == len(f)
+
+
+def test_all_degenerate_input_is_refused():
+    v = np.array([[0.0, 0, 0], [1, 0, 0], [0, 1, 0]])
+    with pytest.raises(GeometryError, match="three distinct corners"):
+        encode(v, np.array([[0, 0, 1], [1, 1, 2]]), 1e-6)
+
+
+def test_explicit_corners_sit_on_their_grid():
+    shell = Shell(explicit=np.array([True, True, True]), vertex_planes=np.zeros((0, 3), dtype=np.int64),
+                  grid=np.array([[0, 0, 0], [4, 0, 0], [0, 2, 0]]), origin=np.array([1.0, 2.0, 3.0]), step=0.25,
+                  facets=np.array([[-1, 0, 1, 2]]))
+    points, triangles = decode_shell(np.zeros((0, 3)), np.zeros(0), shell)
+    assert np.array_equal(points, [[1, 2, 3], [2, 2, 3], [1, 2.5, 3]])
+    assert np.array_equal(triangles, [[0, 1, 2]])
