@@ -27,7 +27,7 @@ from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Qua
 from . import reference
 from .build import CUBE, SPEC_HEADER, Layout, box, finish, frame, offsets
 from .cases_valid import (IN, L_CELLS, L_PLANES, L_TREE, OUT, SEALED_CUBE_FACETS, SEALED_CUBE_VERTICES, SHELL_CUBE,
-                          SHELL_MIXED)
+                          SHELL_MIXED, SHELL_PYRAMID)
 
 
 @dataclass(frozen=True)
@@ -760,13 +760,13 @@ def _():
     return shell_file(shell_body(s))
 
 
-@case("xv3_shell_flag_padding", "BAD_PAYLOAD", "version 3.2 shell cube of 8 corners whose flag byte is followed by "
-      "a second one (corner_count 9 would need it): a padding bit set in a two-byte flag field of 9 corners")
+@case("xv3_shell_flag_padding", "BAD_PAYLOAD", "version 3.2 shell pyramid (5 explicit corners: flags 0x1f) with "
+      "padding bit 7 set (flags 0x9f); read as flags, the rest of the body is well formed")
 def _():
-    s = dataclasses.replace(SHELL_CUBE, explicit=np.zeros(9, dtype=bool))
-    b = bytearray(records._shell_body(s))
-    b[4] = 0x80  # flags of corners 8..15: corner 9's and later bits are padding
-    return shell_file(b"\x06\x00\x01\x01\x01\x01\x01\0" + bytes(b))
+    b = bytearray(records._shell_body(SHELL_PYRAMID))
+    assert b[3] == 0x1F  # after the three one-byte counts
+    b[3] = 0x9F
+    return shell_file(b"\x01\x00\0" + bytes(b))
 
 
 @case("xv3_shell_zero_step", "BAD_GROUP_STRUCTURE", "version 3.2 shell cube whose explicit corner's grid has step 0")
@@ -781,19 +781,17 @@ def _():
     return shell_file(b[:-1] + bytes([b[-1] | 0x80]))
 
 
-@case("xv3_shell_colours", "BAD_COLOURS", "version 3.2 shell cube with a cOLR of 6 colours: a shell's cOLR has one "
-      "per reference and one for its free triangles, 7")
+@case("xv3_shell_colours", "BAD_COLOURS", "version 3.2 shell cube with a cOLR of 7 colours: one per reference, 6, "
+      "as for every group (free triangles take the last reference's)")
 def _():
-    rgba = np.full((6, 4), 255, dtype=np.uint8)
+    rgba = np.full((7, 4), 255, dtype=np.uint8)
     return shell_file(shell_body(), colours=records.encode_colours(Colours(0, rgba)))
 
 
-@case("xv3_convex_no_refs", "BAD_GROUP_STRUCTURE", "version 3.2 convex group with no references: only a shell may "
-      "have none")
+@case("xv3_shell_no_refs", "BAD_GROUP_STRUCTURE", "version 3.2 shell pyramid of no references: every group has "
+      "at least one, shells too")
 def _():
-    body = b"\x00"
-    group = schema.GroupHead3.build(dict(index=0, object=0, kind=0, compression=0, raw_size=len(body), body=body))
-    return v3(PHDR=header(version=(3, 2)), GRUP=group)
+    return shell_file(shell_body(SHELL_PYRAMID, refs=b"\x00", roles=b""))
 
 
 @case("xgrup_deflate_bomb", "LIMIT_EXCEEDED", "a deflated GRUP body declaring raw_size 2^32-1 (a deflate bomb)",

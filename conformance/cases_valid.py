@@ -389,7 +389,8 @@ SHELL_CUBE = shell_of(SEALED_CUBE_VERTICES, SEALED_CUBE_FACETS)
 SHELL_MIXED = shell_of((("grid", 0, 0, 0),) + SEALED_CUBE_VERTICES[1:],
                        [(-1 if f == 5 else f, a, b, c) for f, a, b, c in SEALED_CUBE_FACETS], step=0.25)
 #: An open square pyramid without a base, every corner explicit on a grid of step 0.5 (apex at
-#: (0.5, 0.5, 1)), every triangle free: a shell of no references.
+#: (0.5, 0.5, 1)), every triangle free: its one reference (z <= 1 of CUBE, local 0) names nothing
+#: and gives the free triangles their colour.
 SHELL_PYRAMID = shell_of((("grid", 0, 0, 0), ("grid", 2, 0, 0), ("grid", 2, 2, 0), ("grid", 0, 2, 0), ("grid", 1, 1, 2)),
                          [(-1, 0, 1, 4), (-1, 1, 2, 4), (-1, 2, 3, 4), (-1, 3, 0, 4)], step=0.5)
 V32_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 2))
@@ -552,13 +553,14 @@ CASES = [
               "each named by its three face planes, 12 triangles on the 6 faces, corners numbered by first use",
               V32_CUBE, (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL, tuple(range(6)), shell=SHELL_CUBE))),
     ValidCase("shell_mixed_v3_2", "version 3.2: the shell cube with its corner (0, 0, 0) explicit (grid origin 0, "
-              "step 0.25) and the two triangles of z >= 0 free, with a cOLR of 7 colours (the last for the free "
-              "triangles)", V32_CUBE,
+              "step 0.25) and the two triangles of z >= 0 free, with a cOLR of 6 colours (free triangles take the "
+              "last one's)", V32_CUBE,
               (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL, tuple(range(6)), shell=SHELL_MIXED),
-               Colour(0, np.array([[255, 0, 0, 255]] * 6 + [[0, 0, 255, 255]], dtype=np.uint8)))),
-    ValidCase("shell_pyramid_v3_2", "version 3.2: an open square pyramid as a shell of no references: 5 explicit "
-              "corners on a grid of step 0.5, 4 free triangles, no plane table, one colour", V32_CUBE,
-              (Obj("pyramid"), Group(0, GroupKind.SHELL, (), shell=SHELL_PYRAMID),
+               Colour(0, np.array([[255, 0, 0, 255]] * 5 + [[0, 0, 255, 255]], dtype=np.uint8)))),
+    ValidCase("shell_pyramid_v3_2", "version 3.2: an open square pyramid as a shell of one reference that names "
+              "nothing: 5 explicit corners on a grid of step 0.5, 4 free triangles in the colour of that reference",
+              V32_CUBE,
+              (Obj("pyramid"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL, (0,), shell=SHELL_PYRAMID),
                Colour(0, np.array([[0, 128, 0, 255]], dtype=np.uint8))), decoded_bbox=True),
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),

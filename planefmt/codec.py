@@ -293,9 +293,12 @@ def encode_shell_body(body: Body) -> list[GroupSpec]:
     triangles (of every face with ``body.every_plane``); its corners are named or made explicit
     once the planes' coding is known (:func:`_shells_for`)."""
     fp = body.face_plane
+    if not (fp >= 0).any():
+        raise GeometryError(f"a body of {len(fp)} triangles, none with an area", code="DEGENERATE_GEOMETRY")
     count = np.bincount(fp[fp >= 0], minlength=len(body.h))
     keep = (fp >= 0) & ((count[np.maximum(fp, 0)] >= 2) | body.every_plane)
-    refs = np.unique(fp[keep])
+    # A group has at least one reference (spec §8.2).
+    refs = np.unique(fp[keep]) if keep.any() else fp[fp >= 0][:1]
     return [GroupSpec(GroupKind.SHELL, refs, np.zeros(len(refs), dtype=bool), faces=body.faces)]
 
 
@@ -404,7 +407,7 @@ def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, erro
     if shell is None:
         raise GeometryError(f"part group {label}: shell groups are kind 6 only from version 3.2 on",
                             code="UNKNOWN_GROUP_KIND")
-    omega, h = from_triplets(planes) if len(planes) else (np.zeros((0, 3)), np.zeros(0))
+    omega, h = from_triplets(planes)
     try:
         v, t = decode_shell(omega, h, shell)
     except GeometryError as exc:
@@ -694,9 +697,10 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     groups: list[GroupSpec] = []
     table = PlaneTable(omega, h)
     colours = None if face_colours is None else np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)
+    # A shell's free triangles take its last reference's colour: an object of several colours keeps
+    # the plane of every face (each plane takes its faces' colour).
+    every = colours is not None and bool((colours != colours[0]).any())
     for b, faces_b in enumerate(np.split(by_body, np.cumsum(np.bincount(body_of_face))[:-1])):
-        # Free triangles share one colour: a body of several keeps the plane of every face.
-        every = colours is not None and bool((colours[faces_b] != colours[faces_b[0]]).any())
         body = Body(poly, faces_b, face_plane[faces_b], omega, h, tolerance, table, simplified, splitters, every)
         groups.extend(_encode_body(body, b, SCHEMES[scheme]))
     groups = _one_shell(groups)
@@ -1154,11 +1158,12 @@ def _shell_plans(obj: _Object) -> dict[int, ShellPlan]:
         if g.kind != GroupKind.SHELL:
             continue
         fp = obj.face_plane[g.faces]
-        at = np.searchsorted(g.refs, fp)
-        on = (fp >= 0) & (at < len(g.refs)) & (g.refs[np.minimum(at, max(len(g.refs) - 1, 0))] == fp) \
-            if len(g.refs) else np.zeros(len(fp), dtype=bool)
-        omega, _ = from_triplets(obj.triplets[g.refs]) if len(g.refs) else (np.zeros((0, 3)), None)
-        plans[k] = plan_shell(obj.vertices, obj.faces[g.faces], np.where(on, at, FREE), omega)
+        # References are in the object's first-use order, not sorted.
+        by_value = np.argsort(g.refs)
+        at = np.minimum(np.searchsorted(g.refs[by_value], fp), len(g.refs) - 1)
+        local = np.where((fp >= 0) & (g.refs[by_value][at] == fp), by_value[at], FREE)
+        omega, _ = from_triplets(obj.triplets[g.refs])
+        plans[k] = plan_shell(obj.vertices, obj.faces[g.faces], local, omega)
     return plans
 
 
@@ -1171,7 +1176,7 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
     moved = 0.0
     for k, plan in plans.items():
         g = groups[k]
-        omega, h = from_triplets(planes[g.refs]) if len(g.refs) else (np.zeros((0, 3)), np.zeros(0))
+        omega, h = from_triplets(planes[g.refs])
         shell = encode_shell(plan, omega, h, budget)
         decoded, _ = decode_shell(omega, h, shell)
         moved = max(moved, float(np.linalg.norm(decoded - plan.points, axis=1).max(initial=0.0)))
@@ -1200,7 +1205,8 @@ def _planeless(obj: _Object) -> _Object | None:
         return None
     if obj.face_colours is not None and (obj.face_colours != obj.face_colours[0]).any():
         return None
-    return replace(obj, groups=tuple(replace(g, refs=g.refs[:0], bounding=g.bounding[:0]) for g in obj.groups))
+    # A group keeps one reference (spec §8.2: m >= 1), which its free triangles take their colour from.
+    return replace(obj, groups=tuple(replace(g, refs=g.refs[:1], bounding=g.bounding[:1]) for g in obj.groups))
 
 
 def _as_shells(obj: _Object) -> _Object:
@@ -1256,13 +1262,10 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
             convex_error = c.error_bound * c.diagonal
     table = np.concatenate([o.triplets for o in objects])
     if not candidates:
-        if not len(table):
-            candidates = [(Coding.FLOAT32, None)]
-        else:
-            radius = max(float(np.linalg.norm(o.vertices, axis=1).max()) for o in objects)
-            every = _candidates(coding, bits, table, radius)
-            candidates = every if forced else \
-                [(cod, q) for cod, q in every if cod == Coding.QUANTIZED and q.bits_nu in SHELL_WIDTHS]
+        radius = max(float(np.linalg.norm(o.vertices, axis=1).max()) for o in objects)
+        every = _candidates(coding, bits, table, radius)
+        candidates = every if forced else \
+            [(cod, q) for cod, q in every if cod == Coding.QUANTIZED and q.bits_nu in SHELL_WIDTHS]
     band = tolerance if tolerance > LOSSLESS_TOLERANCE else 0.0
     best: tuple[int, list[_Object], _Choice] | None = None
     why = ""
@@ -1276,7 +1279,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     trials = [(objs, cod, q) for objs, cands in variants for cod, q in cands]
     plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants}
     for objs, cod, q in trials:
-        rt = quantize.roundtrip(table, cod, q) if len(table) else table
+        rt = quantize.roundtrip(table, cod, q)
         budget = tolerance * diag_src / (1.0 + 2.0 * tolerance)
         for _ in range(_SHELL_TIGHTENINGS):
             built, moved = zip(*(_shells_for(o, pl, rt[a:b], budget / sc)
@@ -1538,7 +1541,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                 continue
             o, a = by_node[i]
             refs = global_index[a:a + len(o.triplets)]
-            if len(refs) and refs.max() >= w.plane_count:
+            if refs.max() >= w.plane_count:
                 w.add_planes(rows[w.plane_count:refs.max() + 1])
             for g in o.groups:
                 perm = np.argsort(refs[g.refs], kind="stable") if compact else np.arange(len(g.refs))
@@ -1546,20 +1549,8 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                 k = w.add_group(obj_index, g.kind, refs[g.refs[perm]], g.bounding[perm], cells=p.cells, tree=p.tree,
                                 vertex_planes=p.vertex_planes, facets=p.facets, shell=p.shell)
                 if o.plane_colours is not None:
-                    rgba = o.plane_colours[g.refs[perm]]
-                    if g.kind == GroupKind.SHELL:
-                        rgba = np.vstack([rgba, _free_colour(o, g)])
-                    w.add_colours(k, rgba)
+                    w.add_colours(k, o.plane_colours[g.refs[perm]])
     return header
-
-
-def _free_colour(obj: _Object, g: GroupSpec) -> np.ndarray:
-    """The colour of a shell's free triangles (spec 3.2 §8.9): its first free triangle's, which all
-    share (:func:`_prepare` keeps the planes of a body of several colours)."""
-    if obj.face_colours is None or g.faces is None:
-        return UNCOLOURED
-    free = g.faces[~np.isin(obj.face_plane[g.faces], g.refs)]
-    return obj.face_colours[free[0]] if len(free) else UNCOLOURED
 
 
 def _table_bytes(rows: np.ndarray, coding: Coding, q: Quantization, compress: bool) -> int:
@@ -1712,7 +1703,7 @@ def _object_mesh(parts: list[tuple[int, DecodedGroup]], colours: dict[int, np.nd
     mesh = _concatenate([d for _, d in parts])
     if not any(k in colours for k, _ in parts):
         return mesh
-    # A shell's free triangles (reference -1) take its cOLR's last colour (spec 3.2 §8.9).
+    # A shell's free triangles (reference -1) take its last reference's colour (spec 3.2 §8.9).
     face = np.concatenate([colours[k][d.triangle_ref] if k in colours else np.tile(UNCOLOURED, (len(d.triangles), 1))
                            for k, d in parts]).astype(np.uint8)
     return Mesh(mesh.vertices, mesh.faces, face_colours=face)

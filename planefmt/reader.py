@@ -156,7 +156,7 @@ class Reader:
                 major=self.header.version[0])
             self.findings.extend(found)
             self._listed.append((raw.offset, t, group.index))
-            self._group_refs[group.index] = records.colour_count(int(group.kind), len(group.refs))
+            self._group_refs[group.index] = len(group.refs)
             self._group_count += 1
             if self.retain_planes:
                 group = _with_planes(group, self._table[group.refs])

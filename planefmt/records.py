@@ -409,15 +409,15 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
     count = int(count)
     if count > limits.max_refs_per_group:
         raise LimitError(f"group declares {count} references, the limit is {limits.max_refs_per_group}")
-    if count == 0 and not (head.kind == GroupKind.SHELL and head.kind in kinds):
+    if count == 0:
         raise FormatError(f"group {head.index} references no planes", code="BAD_GROUP_STRUCTURE")
     gaps, used = varint.decode(raw[pos:], count, "group references")
     pos += used
-    if count and gaps.max() >= planes:
+    if gaps.max() >= planes:
         raise FormatError(f"group {head.index} references a plane past the {planes} defined",
                           code="BAD_PLANE_REFERENCE")
     refs = np.cumsum(gaps.astype(np.int64))
-    if count and refs[-1] >= planes:
+    if refs[-1] >= planes:
         raise FormatError(f"group {head.index} references plane {int(refs[-1])}, only {planes} defined",
                           code="BAD_PLANE_REFERENCE")
     nroles = (count + 7) // 8
@@ -582,12 +582,6 @@ def check_tree(tokens: np.ndarray, count: int) -> None:
 def encode_colours(c: Colours) -> bytes:
     rgba = np.ascontiguousarray(c.rgba, dtype=np.uint8).reshape(-1, 4)
     return schema.Colours.build(dict(group=c.group, count=len(rgba), rgba=rgba.tobytes()))
-
-
-def colour_count(kind: int, refs: int) -> int:
-    """Colours a cOLR chunk holds for a group of ``kind`` with ``refs`` references: one per
-    reference, and for a shell one more, its free triangles' (spec 3.2 §8.9)."""
-    return refs + (kind == GroupKind.SHELL)
 
 
 def decode_colours(payload: bytes, group_refs: dict[int, int]) -> Colours:

@@ -224,7 +224,7 @@ class _Salvager:
                               code="BAD_OBJECT_REFERENCE")
         if self.lost_planes[group.refs].any():
             raise FormatError(f"part group {index} references lost planes", code="BAD_PLANE_REFERENCE")
-        self.group_refs[index] = records.colour_count(int(group.kind), len(group.refs))
+        self.group_refs[index] = len(group.refs)
         self.out.records.append(dataclasses.replace(group, planes=self.table[group.refs]))
 
 

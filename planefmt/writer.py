@@ -147,12 +147,12 @@ class Writer:
         ``bounding[i]`` marks ``refs[i]`` as a bounding/cut plane (default: all faces). A BSP
         group needs ``tree``, a CELLS group ``cells``, a SEALED group (version 3.1 and later)
         ``vertex_planes`` and ``facets`` in local references (spec 3.1 §8.8), a SHELL group
-        (version 3.2 and later) ``shell`` (spec 3.2 §8.9), which may have no references.
+        (version 3.2 and later) ``shell`` (spec 3.2 §8.9).
         """
         refs = np.asarray(refs, dtype=np.int64).reshape(-1)
-        if len(refs) == 0 and kind != GroupKind.SHELL:
+        if len(refs) == 0:
             raise PlnError("a part group needs at least one plane", code="BAD_GROUP_STRUCTURE")
-        if len(refs) and (refs.min() < 0 or refs.max() >= self._planes):
+        if refs.min() < 0 or refs.max() >= self._planes:
             raise PlnError(f"references must lie in 0..{self._planes - 1}: planes are written before "
                            f"the groups that use them", code="BAD_PLANE_REFERENCE")
         if not 0 <= obj < self._objects:
@@ -184,7 +184,7 @@ class Writer:
                           bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
                           facets=facets, shell=shell)
         self._emit(schema.GRUP, records.encode_group(group, self._compress, self._major), index)
-        self._groups.append(records.colour_count(int(kind), len(refs)))
+        self._groups.append(len(refs))
         return index
 
     def add_colours(self, group: int, rgba: np.ndarray) -> None:

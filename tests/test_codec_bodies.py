@@ -36,7 +36,7 @@ def area(v: np.ndarray, f: np.ndarray) -> float:
 
 
 def round_trip(v: np.ndarray, f: np.ndarray) -> tuple[codec.Encoded, np.ndarray, np.ndarray]:
-    enc = codec.encode_mesh(v, f, tolerance=TOL)
+    enc = codec.encode_mesh(v, f, tolerance=TOL, scheme="paper")
     mesh = codec.decode_mesh(enc)
     sv, sf = enc.mesh.vertices, enc.mesh.faces
     assert np.array_equal(mesh.vertices, sv) and np.array_equal(mesh.faces, sf)
@@ -70,7 +70,7 @@ def test_open_surface_becomes_patches_and_keeps_its_area():
 def test_lossy_options_on_a_non_convex_body_are_refused_clearly():
     v, f = l_prism()
     with pytest.raises(GeometryError, match="delta and tau apply to convex bodies only"):
-        codec.encode_mesh(v, f, tau=0.01)
+        codec.encode_mesh(v, f, tau=0.01, scheme="paper")
 
 
 def test_file_round_trip_of_a_mixed_scene(tmp_path):
@@ -82,7 +82,7 @@ def test_file_round_trip_of_a_mixed_scene(tmp_path):
     shift = np.eye(4)
     shift[0, 3] = 5
     scene = Scene(nodes=(Node("L", None, None, Mesh(lv, lf)), Node("open", None, shift, Mesh(open_v, open_f))))
-    header = codec.encode_scene(scene, tmp_path / "mixed.pln")
+    header = codec.encode_scene(scene, tmp_path / "mixed.pln", scheme="paper")
     back = codec.decode_scene(tmp_path / "mixed.pln")
     assert [n.name for n in back.nodes] == ["L", "open"] and header.error_bound <= TOL
     m = back.nodes[0].mesh
@@ -111,7 +111,7 @@ def test_face_colours_survive_as_colour_chunks(make, compact, tmp_path):
     v, f = make()
     colours = _colour_by_normal(v, f)
     codec.encode_scene(Scene(nodes=(Node("m", mesh=Mesh(v, f, face_colours=colours)),)), tmp_path / "c.pln",
-                       compact=compact)
+                       compact=compact, scheme="paper")
     with planefmt_open(tmp_path / "c.pln") as r:
         assert any(type(rec).__name__ == "Colours" for rec in r)
     m = codec.decode_scene(tmp_path / "c.pln").nodes[0].mesh
@@ -159,7 +159,7 @@ def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkey
     monkeypatch.setattr(codec, "_encode_body", no_body)
     monkeypatch.setattr(codec, "polygonize", uncapped)
     with pytest.raises(GeometryError, match="fitted polygon planes are 1.42e-06") as err:
-        codec.encode_mesh(v, f, tolerance=1e-6)
+        codec.encode_mesh(v, f, tolerance=1e-6, scheme="paper")
     assert err.value.code == "TOLERANCE_NOT_MET"
 
 
@@ -169,7 +169,7 @@ def test_a_lossy_tolerance_lets_the_volume_move_with_the_surface():
     falling back to float32 planes."""
     m = trimesh.creation.icosphere(subdivisions=3)
     v, f = np.asarray(m.vertices), np.asarray(m.faces)
-    enc = codec.encode_mesh(v, f, tolerance=1e-4)
+    enc = codec.encode_mesh(v, f, tolerance=1e-4, scheme="paper")
     assert enc.coding == codec.Coding.QUANTIZED
     assert enc.error_bound <= 1e-4
     obj = codec._prepare(v, f, np.eye(4), 1e-4, None, None)
@@ -186,7 +186,7 @@ def test_a_closed_source_that_decodes_open_is_refused_with_the_reason():
     a closed cube whose decoding lost one triangle (three edges left on one triangle)."""
     v, f = shapes.cube()
     obj = codec._prepare(v, f, np.eye(4), TOL, None, None)
-    enc = codec.encode_mesh(v, f, tolerance=TOL)
+    enc = codec.encode_mesh(v, f, tolerance=TOL, scheme="paper")
     holed = codec.Mesh(enc.mesh.vertices, enc.mesh.faces[1:])
     assert codec.structure_problem(holed, obj) == "a closed source decodes open (3 edges not on exactly two triangles)"
     assert codec.structure_problem(enc.mesh, obj) is None
@@ -204,7 +204,7 @@ def test_patch_groups_decode_the_same_batched_as_alone():
     mesh = trimesh.load("/work/shared/corpus/open/suzanne.ply", process=False)
     buf = io.BytesIO()
     codec.encode_scene(Scene(nodes=(Node("s", mesh=Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces))),)),
-                       buf, compact=True)
+                       buf, compact=True, scheme="paper")
     with Reader(io.BytesIO(buf.getvalue())) as r:
         error = codec.header_plane_error(r.header)
         groups = [rec for rec in r if hasattr(rec, "refs")]
@@ -230,12 +230,12 @@ def test_float_planes_uncertified_within_the_budget_are_verified_again_with_a_la
         return real(mesh, obj, target, pieces) if pieces >= 3_000_000 else (math.inf, 0.0)
 
     monkeypatch.setattr(codec, "_verify", needs_3m)
-    enc = codec.encode_mesh(v, f, tolerance=TOL)
+    enc = codec.encode_mesh(v, f, tolerance=TOL, scheme="paper")
     assert enc.coding == codec.Coding.FLOAT64 and 0 <= enc.error_bound <= TOL
     assert asked[-2:] == [codec.DEFAULT_MAX_PIECES, codec._FINAL_PIECES]
     monkeypatch.setattr(codec, "_FINAL_PIECES", 2_000_000)
     with pytest.raises(GeometryError) as err:
-        codec.encode_mesh(v, f, tolerance=TOL)
+        codec.encode_mesh(v, f, tolerance=TOL, scheme="paper")
     assert err.value.code == "TOLERANCE_NOT_MET"
     assert str(err.value).endswith("with float64 planes object 0: its distance is not certified within "
                                    "2,000,000 pieces")
@@ -248,7 +248,7 @@ def _scene_bytes(v: np.ndarray, f: np.ndarray, tolerance: float, compact: bool =
 
     buf = io.BytesIO()
     codec.encode_scene(Scene(nodes=(Node(name="boxes", mesh=Mesh(v, f)),)), buf, tolerance=tolerance,
-                       compress=compact, compact=compact)
+                       compress=compact, compact=compact, scheme="paper")
     return buf.getvalue()
 
 
@@ -284,14 +284,14 @@ def test_encode_mesh_keeps_the_smaller_of_the_two_splitter_sets(monkeypatch):
     for s in (one, other):
         monkeypatch.setattr(codec, "STRATEGIES", (base, s))
         monkeypatch.setattr(codec, "FLAT_STRATEGIES", (base, s))
-        alone[s] = codec.encode_mesh(v, f, tolerance=1e-3)
+        alone[s] = codec.encode_mesh(v, f, tolerance=1e-3, scheme="paper")
         size[s] = len(_scene_bytes(v, f, 1e-3, compact=False))
     assert size[one] != size[other] and _trees(alone[one]) != _trees(alone[other])
     smaller = alone[min(size, key=size.get)]
     for first, second in ((one, other), (other, one)):
         monkeypatch.setattr(codec, "STRATEGIES", (base, first))
         monkeypatch.setattr(codec, "FLAT_STRATEGIES", (base, second))
-        e = codec.encode_mesh(v, f, tolerance=1e-3)
+        e = codec.encode_mesh(v, f, tolerance=1e-3, scheme="paper")
         assert e.quantization == smaller.quantization
         np.testing.assert_array_equal(e.triplets, smaller.triplets)
         assert _trees(e) == _trees(smaller)
@@ -352,7 +352,7 @@ def test_open_patches_at_a_lossy_tolerance_are_not_held_to_the_lossless_area(tmp
         warnings.simplefilter("ignore")
         scene, _ = registry.read("/work/shared/corpus/usd/RoughnessTest.usdz")
     path = tmp_path / "rough.pln"
-    header = codec.encode_scene(scene, path, tolerance=1e-4, compact=True)
+    header = codec.encode_scene(scene, path, tolerance=1e-4, compact=True, scheme="paper")
     assert header.error_bound <= 1e-4
     decoded = codec.decode_scene(path)
     assert sum(len(n.mesh.faces) for n in decoded.nodes if n.mesh is not None) > 0

@@ -121,7 +121,7 @@ def test_compact_files_decode_to_the_surface_of_version_1_files(name, tolerance)
     files = {}
     for compact in (False, True):
         buf = io.BytesIO()
-        codec.encode_scene(scene, buf, tolerance=tolerance, compress=True, compact=compact)
+        codec.encode_scene(scene, buf, tolerance=tolerance, compress=True, compact=compact, scheme="paper")
         files[compact] = buf.getvalue()
     with planefmt_open(io.BytesIO(files[True])) as r:
         header = r.header
@@ -143,7 +143,7 @@ def test_a_compact_bsp_group_keeps_its_tree_when_references_are_sorted():
     notch = trimesh.creation.box([1, 1, 1.2])
     notch.apply_translation([0.5, 0.5, 0.0])
     m = box.difference(notch, engine="manifold")
-    enc = codec.encode_mesh(np.asarray(m.vertices), np.asarray(m.faces), tolerance=1e-6)
+    enc = codec.encode_mesh(np.asarray(m.vertices), np.asarray(m.faces), tolerance=1e-6, scheme="paper")
     assert [g.kind for g in enc.groups] == [GroupKind.BSP]
     from planefmt.model import Mesh, Node, Scene
 
@@ -151,7 +151,7 @@ def test_a_compact_bsp_group_keeps_its_tree_when_references_are_sorted():
     volumes = []
     for compact in (False, True):
         buf = io.BytesIO()
-        codec.encode_scene(scene, buf, compact=compact)
+        codec.encode_scene(scene, buf, compact=compact, scheme="paper")
         back = codec.decode_scene(io.BytesIO(buf.getvalue())).nodes[0].mesh
         volumes.append(trimesh.Trimesh(back.vertices, back.faces).volume)
     assert volumes[1] == pytest.approx(volumes[0], rel=1e-12)
@@ -168,7 +168,7 @@ def test_the_encoder_narrows_the_widths_below_the_bisections_choice():
     scene = _load("cad/20mm-xyz-cube.stl")
     tolerance = 2.4e-5
     buf = io.BytesIO()
-    codec.encode_scene(scene, buf, tolerance=tolerance, compress=True, compact=True)
+    codec.encode_scene(scene, buf, tolerance=tolerance, compress=True, compact=True, scheme="paper")
     with planefmt_open(io.BytesIO(buf.getvalue())) as r:
         header = r.header
     assert header.coding.quantized and header.quantization.bits_nu <= 18

@@ -65,7 +65,7 @@ def random_hull(n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
 # -- the paper's cube --------------------------------------------------------------------------
 
 def test_paper_cube_planes_and_72_bytes():
-    enc = encode_mesh(CUBE_V, CUBE_F, coding=Coding.FLOAT32)
+    enc = encode_mesh(CUBE_V, CUBE_F, coding=Coding.FLOAT32, scheme="paper")
     got = np.column_stack([np.degrees(enc.triplets[:, :2]), enc.triplets[:, 2]])
     assert sorted(map(tuple, np.round(got, 9).tolist())) == sorted(map(tuple, PAPER_CUBE_DEGREES))
     assert len(quantize.encode_payload(enc.triplets, Coding.FLOAT32)) == 72 == enc.payload_bytes
@@ -78,7 +78,7 @@ def test_paper_cube_planes_and_72_bytes():
     assert signed_volume(mesh.vertices, mesh.faces) == pytest.approx(1.0, abs=1e-6)
     assert np.abs(mesh.vertices - np.round(mesh.vertices)).max() < 2e-7
     assert sorted(map(tuple, np.round(mesh.vertices).tolist())) == sorted(map(tuple, CUBE_V.tolist()))
-    exact = encode_mesh(CUBE_V, CUBE_F, coding=Coding.FLOAT64)
+    exact = encode_mesh(CUBE_V, CUBE_F, coding=Coding.FLOAT64, scheme="paper")
     assert exact.error_bound <= 1e-9  # only the certifier's rounding margin: the planes are exact
     assert signed_volume(exact.mesh.vertices, exact.mesh.faces) == pytest.approx(1.0, abs=1e-15)
 
@@ -199,7 +199,7 @@ def test_malformed_planes_are_geometry_errors(bad):
 def test_unreachable_tolerance_is_tolerance_not_met():
     v, f = random_hull(30, 9)
     with pytest.raises(GeometryError) as err:
-        encode_mesh(v, f, tolerance=1e-17)  # below float64 rounding of the decoded vertices
+        encode_mesh(v, f, tolerance=1e-17, scheme="paper")  # below float64 rounding of the decoded vertices
     assert err.value.code == "TOLERANCE_NOT_MET"
 
 
@@ -208,7 +208,7 @@ def test_unreachable_tolerance_is_tolerance_not_met():
 def check_round_trip(vertices: np.ndarray, faces: np.ndarray, tolerance: float = 1e-6):
     # Welded (STL repeats vertices per triangle): the certifier needs the surface's connectivity.
     vertices, faces = weld(vertices, faces)
-    enc = encode_mesh(vertices, faces, tolerance=tolerance)
+    enc = encode_mesh(vertices, faces, tolerance=tolerance, scheme="paper")
     mesh = decode_mesh(enc)
     assert np.array_equal(mesh.faces, enc.mesh.faces) and np.array_equal(mesh.vertices, enc.mesh.vertices)
     assert_closed_outward(mesh.vertices, mesh.faces)
@@ -223,7 +223,7 @@ def check_round_trip(vertices: np.ndarray, faces: np.ndarray, tolerance: float =
     area = trimesh.Trimesh(vertices, faces, process=False).area
     got = signed_volume(mesh.vertices, mesh.faces)
     assert abs(got - src_volume) <= 2 * area * enc.error_bound * diag + 1e-12 * src_volume
-    exact = encode_mesh(vertices, faces, tolerance=tolerance, coding=Coding.FLOAT64)
+    exact = encode_mesh(vertices, faces, tolerance=tolerance, coding=Coding.FLOAT64, scheme="paper")
     assert signed_volume(exact.mesh.vertices, exact.mesh.faces) == pytest.approx(src_volume, rel=1e-6)
     return enc
 
@@ -246,11 +246,11 @@ def test_random_hull_round_trip(n, seed):
 
 def test_forced_bits_report_their_error():
     mesh = trimesh.load(CORPUS / "convex" / "cylinder.stl", process=True, force="mesh")
-    coarse = encode_mesh(mesh.vertices, mesh.faces, bits=10)
+    coarse = encode_mesh(mesh.vertices, mesh.faces, bits=10, scheme="paper")
     assert coarse.quantization.bits_per_plane == 30 and coarse.payload_bytes == math.ceil(30 * 66 / 8)
     assert coarse.error_bound > 1e-6 and coarse.lossy
     assert_remeasured(coarse.mesh, mesh.vertices, mesh.faces, coarse.error_bound, coarse.bbox)
-    fine = encode_mesh(mesh.vertices, mesh.faces, bits=(24, 25, 24))
+    fine = encode_mesh(mesh.vertices, mesh.faces, bits=(24, 25, 24), scheme="paper")
     assert fine.error_bound < coarse.error_bound
 
 
@@ -272,7 +272,7 @@ def assert_remeasured(mesh: Mesh, vertices: np.ndarray, faces: np.ndarray, bound
 @pytest.mark.parametrize("options", [dict(tau=0.2), dict(delta=7.5e-4), dict(tau=0.15, delta=1e-3)])
 def test_lossy_options_reduce_planes_and_record_the_measured_error(options):
     mesh = trimesh.load(CORPUS / "convex" / "unit_sphere.STL", process=True, force="mesh")
-    enc = encode_mesh(mesh.vertices, mesh.faces, **options)
+    enc = encode_mesh(mesh.vertices, mesh.faces, **options, scheme="paper")
     assert enc.lossy and len(enc.triplets) < 1280
     assert_closed_outward(enc.mesh.vertices, enc.mesh.faces)
     assert_remeasured(enc.mesh, mesh.vertices, mesh.faces, enc.error_bound, enc.bbox)
@@ -326,7 +326,7 @@ def test_scene_round_trip_through_a_file(tmp_path):
                          Node("ball", 1, None, Mesh(sphere.vertices, sphere.faces)),
                          Node("cube again", None, None, cube)), units=Units.MILLIMETRE)
     target = tmp_path / "scene.pln"
-    header = encode_scene(scene, target)
+    header = encode_scene(scene, target, scheme="paper")
     assert 0 <= header.error_bound <= header.tolerance == 1e-6 and not header.lossy
     with planefmt.open(target) as r:
         groups = list(r.part_groups())
@@ -351,7 +351,7 @@ def test_scene_round_trip_through_a_file(tmp_path):
 def test_scene_round_trip_through_a_stream():
     sink = io.BytesIO()
     header = encode_scene(Scene(nodes=(Node("cube", None, None, Mesh(CUBE_V, CUBE_F)),)), sink,
-                          coding=Coding.FLOAT32)
+                          coding=Coding.FLOAT32, scheme="paper")
     assert header.coding == Coding.FLOAT32
     sink.seek(0)
     scene = decode_scene(sink)
@@ -377,7 +377,7 @@ def test_separate_convex_bodies_are_groups_sharing_planes():
     # Two unit cubes side by side with a gap: z = 0, z = 1, y = 0 and y = 1 are shared planes.
     v = np.concatenate([CUBE_V, CUBE_V + [2.0, 0.0, 0.0]])
     f = np.concatenate([CUBE_F, CUBE_F + 8])
-    enc = encode_mesh(v, f)
+    enc = encode_mesh(v, f, scheme="paper")
     assert [g.kind for g in enc.groups] == [GroupKind.CONVEX] * 2
     assert len(enc.triplets) == 8 and len(set(enc.groups[0].refs) & set(enc.groups[1].refs)) == 4
     assert len(enc.mesh.vertices) == 16 and signed_volume(enc.mesh.vertices, enc.mesh.faces) == \

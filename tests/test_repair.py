@@ -54,7 +54,7 @@ def test_twin_vertices_merge_and_the_cube_is_one_convex_group():
     mv, mf, kept, moved = merge_close_vertices(v, f, 1e-9)
     assert len(mv) == 8 and np.array_equal(kept, np.arange(len(f))) and 0 < moved < 1e-16
     assert is_closed_manifold(mf, len(mv))
-    enc = codec.encode_mesh(v, f, tolerance=1e-6)
+    enc = codec.encode_mesh(v, f, tolerance=1e-6, scheme="paper")
     assert [g.kind for g in enc.groups] == [GroupKind.CONVEX]
     assert len(enc.triplets) == 6 and 0 <= enc.error_bound <= 1e-6
 
@@ -69,7 +69,7 @@ def test_t_junction_splits_into_a_closed_cube():
     assert signed_volume(v, split.faces) == pytest.approx(1.0, abs=1e-12)
     # Every new face comes from the face it split, and orientation is kept (the volume above).
     assert np.bincount(split.origin, minlength=len(f)).tolist().count(2) == 1
-    enc = codec.encode_mesh(v, f, tolerance=1e-6)
+    enc = codec.encode_mesh(v, f, tolerance=1e-6, scheme="paper")
     assert [g.kind for g in enc.groups] == [GroupKind.CONVEX]
     mesh = codec.decode_mesh(enc)
     assert is_closed_manifold(mesh.faces, len(mesh.vertices))

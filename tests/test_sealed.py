@@ -107,7 +107,7 @@ def _grid_cube(n: int) -> tuple[np.ndarray, np.ndarray]:
 def test_sealed_files_are_version_3_1_and_decode_as_encoded(no_tree) -> None:
     v, f = shapes.ring(12)
     buf = io.BytesIO()
-    header = codec.encode_scene(Scene(nodes=(Node(name="ring", mesh=Mesh(v, f)),)), buf, tolerance=TOL)
+    header = codec.encode_scene(Scene(nodes=(Node(name="ring", mesh=Mesh(v, f)),)), buf, tolerance=TOL, scheme="paper")
     assert header.version == (3, 1)
     with planefmt.open(io.BytesIO(buf.getvalue())) as r:
         groups = list(r.part_groups())
@@ -175,7 +175,7 @@ def test_a_closed_surface_facing_inwards_decodes_closed() -> None:
         f = f[:, ::-1]
         enc = encode_groups(v, f, tolerance=TOL)
         assert [r.kind for r in enc.reports] == [kind], [r.note for r in enc.reports]
-        mesh = codec.decode_mesh(codec.encode_mesh(v, f, tolerance=TOL))
+        mesh = codec.decode_mesh(codec.encode_mesh(v, f, tolerance=TOL, scheme="paper"))
         assert is_closed_manifold(mesh.faces, len(mesh.vertices))
         assert euler_characteristic(mesh.faces) == euler_characteristic(f)
         assert signed_volume(mesh.vertices, mesh.faces) == pytest.approx(signed_volume(v, f), rel=1e-6)

@@ -4,10 +4,12 @@ It was written from `spec/pln-1.md`, `spec/pln-2.md` and `spec/pln-3.md`
 alone (plus the output contract of `conformance/README.md`), without looking
 at planefmt or at the suite's generator, to show that the written spec and
 the conformance contract are enough for a second implementation.  It uses
-the Python 3.11 standard library only.  It reads versions 1.0, 2.0, 3.0 and
-3.1 (pln-3 §11: files of major versions 1, 2 and 3, each as its own document
-says).  Its version 3.1 part, the sealed groups of pln-3 §8.8, was added
-later by a session that had seen planefmt's version 3.1 code.
+the Python 3.11 standard library only.  It reads versions 1.0, 2.0, 3.0,
+3.1 and 3.2 (pln-3 §11: files of major versions 1, 2 and 3, each as its own
+document says).  Its version 3.1 part, the sealed groups of pln-3 §8.8, was
+added later by a session that had seen planefmt's version 3.1 code; its
+version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
+text and the golden files' JSON, not planefmt's shell code.
 
 It checks everything a reader must check without decoding geometry
 (signature, chunk framing, CRC-32, header, plane table in every coding,
@@ -26,7 +28,12 @@ COUNTS_KNOWN are null, and an OBJT parent stored as index + 1 (0 for a root)
 is given as the parent's index or null.  A sealed group (kind 5, version
 3.1) adds "vertex_planes", each vertex's three local references, and
 "facets", each triangle as [face local reference, i0, i1, i2] with the face
-references summed from their differences.
+references summed from their differences.  A shell (kind 6, version 3.2)
+adds "shell": {"explicit": the explicit corners' indices, "vertex_planes":
+each named corner's three local references, "grid": each explicit corner's
+integer coordinates (the zigzag steps summed), "origin" and "step" (null
+without explicit corners), "facets": each triangle as [face local reference
+or -1 for a free one, i0, i1, i2] with the corner codes resolved}.
 
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
@@ -61,8 +68,8 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0, 2.0 and 3.1; pln-3 §11: a reader of 3.m reads major versions 1, 2 and 3)
-READER_VERSIONS = {1: 0, 2: 0, 3: 1}
+# (1.0, 2.0 and 3.2; pln-3 §11: a reader of 3.m reads major versions 1, 2 and 3)
+READER_VERSIONS = {1: 0, 2: 0, 3: 2}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 
@@ -82,8 +89,12 @@ FLAG_LOSSY, FLAG_COUNTS_KNOWN, FLAG_BBOX_KNOWN = 1, 2, 4  # §5
 OBJ_HAS_TRANSFORM = 1  # §8.1
 KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
 # pln-3 §8.2: kind 5, the sealed surface (§8.8), exists in files of version 3.1
-# and later only; in older files it is a kind the file's version does not have
-SEALED_KIND, SEALED_SINCE = 5, (3, 1)
+# and later only, kind 6, the shell (§8.9), in files of version 3.2 and later;
+# in older files each is a kind the file's version does not have
+SEALED_KIND, SHELL_KIND = 5, 6
+KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2)}
+SHELL_COORD_LIMIT = 2**52  # pln-3 §8.9: each grid step and coordinate of magnitude at most 2^52
+SHELL_GRID_BYTES = 32  # pln-3 §8.9: origin x, y, z and step s, f64 each
 
 F32_PI = struct.unpack("<f", struct.pack("<I", 0x40490FDB))[0]  # §7.1
 F32_2PI = struct.unpack("<f", struct.pack("<I", 0x40C90FDB))[0]
@@ -767,7 +778,7 @@ class Reader:
         if obj >= len(self.objects):
             raise PlnError("BAD_OBJECT_REFERENCE",
                            "object %d, %d defined" % (obj, len(self.objects)))
-        known = kind in KNOWN_KINDS or (kind == SEALED_KIND and (self.major, self.minor) >= SEALED_SINCE)
+        known = kind in KNOWN_KINDS or (kind in KIND_SINCE and (self.major, self.minor) >= KIND_SINCE[kind])
         if not known and self.minor <= READER_VERSIONS[self.major]:
             raise PlnError("UNKNOWN_GROUP_KIND",
                            "kind %d in a version %d.%d file" % (kind, self.major, self.minor))
@@ -775,6 +786,7 @@ class Reader:
 
         c = Cursor(body, "GRUP body")
         v2 = self.major >= 2  # pln-2 §8.7: varint bodies, in major 3 too (pln-3 §8.2)
+        shell = known and kind == SHELL_KIND
         refs = self.read_refs_v2(c) if v2 else self.read_refs(c)
         m = len(refs)
         roles = c.take((m + 7) // 8, "roles")
@@ -794,6 +806,8 @@ class Reader:
             g["tree"] = self.read_tree_v2(c, m) if v2 else self.read_tree(c, m)
         elif kind == SEALED_KIND:
             g["vertex_planes"], g["facets"] = self.read_sealed(c, m, set(bounding))
+        elif shell:
+            g["shell"] = self.read_shell(c, m, set(bounding))
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.chunk_list.append((offset, b"GRUP", index))
@@ -989,6 +1003,97 @@ class Reader:
         if len(used) != v:
             raise PlnError("BAD_GROUP_STRUCTURE", "%d of %d vertices on no triangle" % (v - len(used), v))
         return vertices, facets
+
+    def read_shell(self, c, m, bounding):
+        """pln-3 §8.9, kind 6: corner_count V, triangle_count T, free_count U;
+        ceil(V/8) bytes of flags (bit k: corner k explicit); the three local
+        references of each of the N = V - E named corners; if E > 0 the grid
+        (origin x, y, z and step s, f64) and the zigzag steps of the explicit
+        corners' integer coordinates; T - U face differences; 3T corner codes
+        (0 the next new corner, k >= 1 corner n - k).  The three counts are
+        checked against the bytes left after them (the table measures them
+        there), the padding of the flags as they are read (BAD_PAYLOAD),
+        everything else once every field the counts call for is read.
+        Returned as the JSON "shell" object: explicit corners, named corners'
+        references, explicit corners' integer coordinates, origin and step
+        (null without explicit corners), and facets [face or -1, i0, i1, i2]."""
+        # 1. the fields, counts checked as they are read
+        v = c.varint("corner_count")
+        t = c.varint("triangle_count")
+        u = c.varint("free_count")
+        left = c.remaining()
+        if not 3 <= v <= 8 * left:
+            raise PlnError("BAD_GROUP_STRUCTURE", "corner_count %d, %d bytes left" % (v, left))
+        if not 1 <= t <= left // 3:
+            raise PlnError("BAD_GROUP_STRUCTURE", "triangle_count %d, %d bytes left" % (t, left))
+        if u > t:
+            raise PlnError("BAD_GROUP_STRUCTURE", "free_count %d of %d triangles" % (u, t))
+        flags = c.take((v + 7) // 8, "corner flags")
+        check_bit_padding(flags, v, "GRUP shell corner flags")
+        explicit = [k for k in range(v) if (flags[k >> 3] >> (k & 7)) & 1]
+        e = len(explicit)
+        named = [[c.varint("a plane of named corner %d" % k) for _ in range(3)] for k in range(v - e)]
+        origin = step = None
+        steps = []
+        if e:
+            origin = c.f64s(3, "grid origin")
+            step = c.f64s(1, "grid step")[0]
+            steps = [[unzigzag(c.varint("a coordinate step of explicit corner %d" % k)) for _ in range(3)]
+                     for k in range(e)]
+        diffs = [c.varint("the face difference of triangle %d" % k) for k in range(t - u)]
+        codes = [c.varint("corner code %d" % k) for k in range(3 * t)]
+        # 2. the values
+        if c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the corner codes" % c.remaining())
+        for k, planes in enumerate(named):
+            if max(planes) >= m or len(set(planes)) != 3:
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "named corner %d: local references %r, of %d" % (k, planes, m))
+        if e:
+            if not all(math.isfinite(x) for x in origin) or not (math.isfinite(step) and step > 0):
+                raise PlnError("BAD_GROUP_STRUCTURE", "grid origin %r, step %r" % (origin, step))
+        grid = []
+        xyz = [0, 0, 0]
+        for k, st in enumerate(steps):
+            for a in range(3):
+                xyz[a] += st[a]
+                if abs(st[a]) > SHELL_COORD_LIMIT or abs(xyz[a]) > SHELL_COORD_LIMIT:
+                    raise PlnError("BAD_GROUP_STRUCTURE",
+                                   "explicit corner %d: step %d to coordinate %d, beyond 2^52"
+                                   % (k, st[a], xyz[a]))
+            grid.append(list(xyz))
+        faces = []
+        face = 0  # f_{-1} = 0
+        for k, d in enumerate(diffs):
+            if d >= m or face + d >= m:
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "triangle %d: face %d + difference %d, of %d" % (k, face, d, m))
+            face += d
+            if face in bounding:
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "triangle %d: local reference %d is a bounding plane (role bit 1)" % (k, face))
+            faces.append(face)
+        faces += [-1] * u  # the last U triangles are free
+        facets = []
+        n = 0  # corners named by a code 0 so far
+        for k in range(t):
+            corners = []
+            for code in codes[3 * k:3 * k + 3]:
+                if code == 0:
+                    corners.append(n)
+                    n += 1
+                elif code > n:
+                    raise PlnError("BAD_GROUP_STRUCTURE",
+                                   "triangle %d: corner code %d, %d corners named so far" % (k, code, n))
+                else:
+                    corners.append(n - code)
+            if len(set(corners)) != 3:
+                raise PlnError("BAD_GROUP_STRUCTURE", "triangle %d: corners %r" % (k, corners))
+            facets.append([faces[k]] + corners)
+        if n != v:
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d corners used, corner_count %d" % (n, v))
+        return {"explicit": explicit, "vertex_planes": named, "grid": grid,
+                "origin": origin, "step": step, "facets": facets}
 
     def check_tree(self, tokens, m):
         """§8.4: exactly one complete tree in preorder (tokens numbered as in §8.4)."""
