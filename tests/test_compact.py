@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import io
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,7 +16,8 @@ from planefmt.hausdorff import hausdorff
 from planefmt.model import Coding, GroupKind, Header, Quantization
 from planefmt.writer import Writer
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
+from corpus import CORPUS
+
 
 
 def _leb128(x: int) -> bytes:
@@ -112,7 +112,6 @@ def _surface(data: bytes):
     return flatten(codec.decode_scene(io.BytesIO(data)))
 
 
-@pytest.mark.skipif(not CORPUS.is_dir(), reason="shared corpus not available")
 @pytest.mark.parametrize("name, tolerance", [("convex/cylinder.stl", 2e-5), ("convex/test_sphere.stl", 1e-6),
                                              ("cad/20mm-xyz-cube.stl", 2e-5), ("open/test_nm.obj", 1e-6),
                                              ("gltf_scene/simple_pole.glb", 1e-6)])
@@ -158,7 +157,6 @@ def test_a_compact_bsp_group_keeps_its_tree_when_references_are_sorted():
     assert volumes[1] == pytest.approx(m.volume, rel=1e-6)
 
 
-@pytest.mark.skipif(not CORPUS.is_dir(), reason="shared corpus not available")
 def test_the_encoder_narrows_the_widths_below_the_bisections_choice():
     """20mm-xyz-cube.stl at 2.4e-5 (draco-14's measured error on it): the admission screen and the
     bisection stop at 19 bits for the angles; 18 verify too, and the encoder keeps trying narrower

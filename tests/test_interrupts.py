@@ -16,7 +16,8 @@ from pathlib import Path
 import pytest
 import trimesh
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
+from corpus import CORPUS
+
 BUNNY = CORPUS / "smooth_dense" / "bun_zipper.ply"
 PLN = [sys.executable, "-m", "planefmt_converters.cli", "convert"]
 

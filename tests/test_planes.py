@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -17,9 +16,7 @@ from planefmt import planes
 from planefmt.errors import GeometryError
 from planefmt.polygonize import edge_adjacency, polygonize, weld
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
-if not CORPUS.is_dir():
-    CORPUS = Path("/work/shared/corpus")
+from corpus import CORPUS
 
 CUBE_V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
                    [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], dtype=float)
@@ -28,10 +25,7 @@ CUBE_F = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5,
 
 
 def load(rel: str) -> trimesh.Trimesh:
-    path = CORPUS / rel
-    if not path.exists():
-        pytest.skip(f"corpus file {rel} not present")
-    return trimesh.load(path, process=False, force="mesh")
+    return trimesh.load(CORPUS / rel, process=False, force="mesh")
 
 
 # -- planes ------------------------------------------------------------------------------------
