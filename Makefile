@@ -24,7 +24,7 @@ demo: $(STAMP)
 # -n auto: pytest-xdist, one worker per core (the suite takes about 12 minutes on one core)
 test: $(STAMP)
 	$(BIN)/python -m pytest -n auto --dist worksteal
-	$(BIN)/python -m conformance
+	$(BIN)/python -m conformance --level geometry
 
 bench: $(STAMP)
 	$(BIN)/python -m pip install -q -e '.[bench]'
