@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    := out
 
-.PHONY: setup demo test bench benchmarks roundtrip clean
+.PHONY: setup demo test test-slow mutate bench benchmarks roundtrip clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -25,6 +25,11 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest -n auto --dist worksteal
 	$(BIN)/python -m conformance --level geometry
+
+# the tests marked slow: every corpus file's recorded error bound against an independent measure,
+# at 1e-6 and 1e-4 (each encoding may take PLN_ENCODE_BUDGET seconds, default 600, before its case is skipped)
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -n auto --dist worksteal -m slow -rs
 
 bench: $(STAMP)
 	$(BIN)/python -m pip install -q -e '.[bench]'

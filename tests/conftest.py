@@ -18,6 +18,10 @@ settings.load_profile("planefmt")
 configuration.set_hypothesis_home_dir(Path(tempfile.gettempdir()) / "planefmt-hypothesis")
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line("markers", "slow: minutes per case; `make test-slow` runs them, `make test` does not")
+
+
 def pytest_sessionstart(session: pytest.Session) -> None:
     why = corpus.problem()
     if why is not None:
