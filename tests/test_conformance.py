@@ -75,6 +75,54 @@ def test_geometry_is_compared_where_reported():
     assert runner.compare_valid(expected, got, "geometry") == "no geometry"
 
 
+#: A wrong value in every field the runner compares: (case, what, change to the result in place).
+WRONG = [
+    ("cube_float32", "a plane 0.5 off", lambda r: r["planes"][0].__setitem__(2, r["planes"][0][2] + 0.5)),
+    ("gem_q11_13_17", "a quantized plane 1e-9 off", lambda r: r["planes"][3].__setitem__(0, r["planes"][3][0] + 1e-9)),
+    ("cube_float32", "a reference", lambda r: r["groups"][0]["refs"].__setitem__(0, 5)),
+    ("bsp_l", "a tree token", lambda r: r["groups"][0]["tree"].__setitem__(0, r["groups"][0]["tree"][0] + 1)),
+    ("cells_l", "a cell entry", lambda r: r["groups"][0]["cells"][0].__setitem__(0, 1)),
+    ("sealed_cube_v3_1", "a sealed vertex", lambda r: r["groups"][0]["vertex_planes"].__setitem__(0, [0, 2, 5])),
+    ("cube_colours", "a colour", lambda r: r["colours"][0]["rgba"][0].__setitem__(0, 1)),
+    ("scene_hierarchy", "an object's parent", lambda r: r["objects"][1].__setitem__("parent", None)),
+    ("cube_float32", "a header value", lambda r: r["header"].__setitem__("units", 2)),
+    ("cube_float32", "an area", lambda r: r["geometry"]["groups"][0].__setitem__("area", 6.001)),
+    ("bsp_l", "a volume", lambda r: r["geometry"]["groups"][0].__setitem__("volume", 3.001)),
+    ("cube_float32", "a vertex count", lambda r: r["geometry"]["groups"][0].__setitem__("vertices", 9)),
+    ("scene_hierarchy", "the world box", lambda r: r["geometry"]["world_bbox"][1].__setitem__(0, 1e3)),
+]
+
+
+@pytest.mark.parametrize("name, what, change", WRONG, ids=[w[1] for w in WRONG])
+def test_the_runner_fails_an_implementation_that_reports_a_wrong_value(name, what, change):
+    case = next(c for c in CASES if c.path == f"valid/{name}.pln")
+    expected = json.loads((SUITE / case.path).with_suffix(".json").read_text())
+    got = in_process(SUITE / case.path)
+    assert runner.check(case, expected, got, "geometry") is None
+    change(got.result)
+    assert runner.check(case, expected, got, "geometry") is not None, what
+
+
+def test_quantized_planes_are_compared_within_the_precision_of_their_coding():
+    # 1e-13 rad is within the 1e-12 the README allows for another order of evaluation of §7.3.
+    case = next(c for c in CASES if c.path == "valid/gem_q11_13_17.pln")
+    expected = json.loads((SUITE / case.path).with_suffix(".json").read_text())
+    got = in_process(SUITE / case.path)
+    got.result["planes"][3][0] += 1e-13
+    assert runner.check(case, expected, got, "geometry") is None
+
+
+def test_the_runner_fails_a_reader_whose_plane_is_half_a_unit_off(tmp_path):
+    """Through the command-line contract: planefmt's adapter with one h 0.5 too large."""
+    wrong = tmp_path / "wrong.py"
+    wrong.write_text("import json, sys\nfrom conformance.adapter import describe\n"
+                     "r = describe(sys.argv[1])\nr['planes'][0][2] += 0.5\nprint(json.dumps(r))\n")
+    case = next(c for c in CASES if c.path == "valid/cube_float32.pln")
+    expected = json.loads((SUITE / case.path).with_suffix(".json").read_text())
+    problem = runner.check(case, expected, runner.run(f"{sys.executable} {wrong}", SUITE / case.path, 60), "geometry")
+    assert problem == "plane 0: [1.5707963705062866, 0.0, 1.5], expected [1.5707963705062866, 0.0, 1.0]"
+
+
 def test_regenerating_gives_identical_files(tmp_path):
     generate.main([str(tmp_path)])
     made = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file())
