@@ -128,17 +128,26 @@ def _king() -> tuple[np.ndarray, np.ndarray]:
     return mesh.vertices, mesh.faces
 
 
+def _fit(poly) -> float:
+    """The fit recomputed from the planes and the faces: the largest distance of a face's corner
+    from its face's plane (model units)."""
+    on = poly.face_plane >= 0
+    corners = poly.vertices[poly.faces[on]]
+    omega, h = poly.omega[poly.face_plane[on]], poly.h[poly.face_plane[on]]
+    return float(np.abs(np.einsum("mkj,mj->mk", corners, omega) - h[:, None]).max())
+
+
 def test_the_drift_bound_keeps_the_polygon_fit_within_the_tolerance():
     """King_geom.usd's gently curved quads: with the default drift bound (4 coplanarity
-    tolerances) its fitted planes are 1.42e-6 of the diagonal from their vertices; capped at the
-    tolerance, the curved polygons are split and the fit is within it."""
+    tolerances) its fitted planes are more than the tolerance 1e-6 of the diagonal from their
+    vertices (1.42e-6); capped at the tolerance, the curved polygons are split and the fit is within it."""
     from planefmt.polygonize import polygonize
 
     v, f = _king()
     loose = polygonize(v, f, tolerance=5e-7)
     capped = polygonize(v, f, tolerance=5e-7, max_drift=1e-6)
-    assert loose.max_distance > 1.4e-6 * loose.diagonal
-    assert capped.max_distance <= 1e-6 * capped.diagonal and len(capped.h) > len(loose.h)
+    assert loose.max_distance == pytest.approx(_fit(loose), rel=1e-9) and _fit(loose) > 1e-6 * loose.diagonal
+    assert _fit(capped) <= 1e-6 * capped.diagonal and len(capped.h) > len(loose.h)
 
 
 def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkeypatch):
@@ -156,7 +165,8 @@ def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkey
 
     monkeypatch.setattr(codec, "_encode_body", no_body)
     monkeypatch.setattr(codec, "polygonize", uncapped)
-    with pytest.raises(GeometryError, match="fitted polygon planes are 1.42e-06") as err:
+    fit = _fit(polygonize_module.polygonize(v, f, tolerance=5e-7)) / float(np.linalg.norm(np.ptp(v, axis=0)))
+    with pytest.raises(GeometryError, match=f"fitted polygon planes are {fit:.3g} of the diagonal") as err:
         codec.encode_mesh(v, f, tolerance=1e-6)
     assert err.value.code == "TOLERANCE_NOT_MET"
 
@@ -208,7 +218,8 @@ def test_patch_groups_decode_the_same_batched_as_alone():
     assert len(groups) > 100 and {int(g.kind) for g in groups} == {GroupKind.PSEUDO_CONVEX, GroupKind.PSEUDO_CONCAVE}
     alone = [codec.decode_group(g.planes, g, g.index, error) for g in groups]
     batched = codec.decode_groups([(g.planes, g, g.index) for g in groups], error)
-    for a, b in zip(alone, batched):
+    assert len(alone) == len(batched)
+    for a, b in zip(alone, batched, strict=True):
         for field in ("vertices", "triangles", "inc_vertex", "inc_ref", "triangle_ref"):
             assert np.array_equal(getattr(a, field), getattr(b, field))
 

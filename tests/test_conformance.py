@@ -163,6 +163,66 @@ def test_cube_is_the_file_of_spec_section_12():
     assert cases_invalid.CUBE_FILE == dump  # most broken files are this cube with one defect
 
 
+def test_cube_v3_is_the_file_of_spec_3_section_12():
+    """Every byte of cube_v3.pln as spec/pln-3.md §12 lists it: the hex rows (``(xN)`` repeats the
+    bytes before it), each ``(CRC)`` the CRC-32 of its chunk's type and payload (spec 1.0 §4.1),
+    the plane payload the 72 bytes of the version 1.0 cube, the index entries (offset u64, type,
+    ordinal u32) as the row under iNDX names them, followed by the index's CRC."""
+    import zlib
+
+    data = (SUITE / "valid/cube_v3.pln").read_bytes()
+    block = (ROOT / "spec/pln-3.md").read_text(encoding="utf-8").split("## 12.")[1].split("```")[1]
+    v1 = spec_hexdump()
+    at = v1.index(b"PLNS")
+    v1_triplets = v1[at + 8:at + 8 + int.from_bytes(v1[at + 4:at + 8], "little")][-72:]
+
+    pos = chunk = 0  # the next byte to account for, and where the current chunk starts
+
+    def crc_at(offset: int) -> None:
+        payload = data[chunk + 8:offset]
+        assert data[offset:offset + 4] == zlib.crc32(data[chunk:chunk + 4] + payload).to_bytes(4, "little"), \
+            f"CRC at {offset:04x}"
+
+    for line in block.splitlines():
+        m = re.match(r"([0-9a-f]{4}): (.*)", line)
+        entries = re.findall(r"([0-9a-f]+) \.\. ([A-Z]{4}) (\d+)", line)
+        if not m:
+            for offset, tag, ordinal in entries:
+                assert data[pos:pos + 16] == (int(offset, 16).to_bytes(8, "little") + tag.encode()
+                                              + int(ordinal).to_bytes(4, "little")), f"index entry at {pos:04x}"
+                pos += 16
+            continue
+        offset, rest = int(m[1], 16), m[2]
+        if offset == pos + 4:
+            crc_at(pos)  # a chunk whose CRC has no row of its own (the index)
+            pos += 4
+        assert offset == pos, f"row {offset:04x} starts at {pos:04x}"
+        if rest.startswith("(CRC)"):
+            crc_at(pos)
+            pos += 4
+            continue
+        if rest.startswith("(72 bytes"):
+            assert data[pos:pos + 72] == v1_triplets
+            pos += 72
+            continue
+        got = bytearray()
+        group = bytearray()
+        for token in rest.split():
+            if re.fullmatch(r"[0-9a-f]{2}", token):
+                group.append(int(token, 16))
+            elif re.fullmatch(r"\(x\d+\)", token):
+                got += group * int(token[2:-1])
+                group = bytearray()
+            else:
+                break
+        got += group
+        if got[:4].isalpha():
+            chunk = pos
+        assert data[pos:pos + len(got)] == bytes(got), f"row {offset:04x}"
+        pos += len(got)
+    assert pos == len(data) == 281
+
+
 def test_zlib_case_is_compressed_and_suite_is_small():
     data = (SUITE / "valid/sphere200_zlib.pln").read_bytes()
     pos, methods = 8, {}
