@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    := out
 
-.PHONY: setup demo test bench benchmarks roundtrip clean
+.PHONY: setup demo test test-slow mutate bench benchmarks roundtrip clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -24,7 +24,17 @@ demo: $(STAMP)
 # -n auto: pytest-xdist, one worker per core (the suite takes about 12 minutes on one core)
 test: $(STAMP)
 	$(BIN)/python -m pytest -n auto --dist worksteal
-	$(BIN)/python -m conformance
+	$(BIN)/python -m conformance --level geometry
+
+# the tests marked slow: every corpus file's recorded error bound against an independent measure,
+# at 1e-6 and 1e-4 (each encoding may take PLN_ENCODE_BUDGET seconds, default 600, before its case is skipped)
+test-slow: $(STAMP)
+	$(BIN)/python -m pytest -n auto --dist worksteal -m slow -rs
+
+# plants each bug of tools/mutate.py's fixed list in a scratch copy and runs the tests that guard it
+# (about 6 minutes on 2 cores); exit 1 if any bug survives
+mutate: $(STAMP)
+	$(BIN)/python tools/mutate.py
 
 bench: $(STAMP)
 	$(BIN)/python -m pip install -q -e '.[bench]'

@@ -64,6 +64,7 @@ from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
 from .model import (BSP_MAX_SPLIT, Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup,
                     Quantization, Scene, Units)
 from .bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
+from .cells import decode_cells_group
 from .patches import PlaneTable, decode_patch_groups
 from .planes import from_triplets, to_triplets, transform_points
 from .polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize, weld
@@ -354,6 +355,16 @@ def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: Plane
     return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64), t_ref)
 
 
+def decode_cells(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
+    """A ``CELLS`` group: the closed surface of the union of its convex cells (spec §8.3)."""
+    if group.cells is None:
+        raise GeometryError(f"part group {label}: a cells group without cells", code="BAD_GROUP_STRUCTURE")
+    omega, h = from_triplets(planes)
+    v, t, inc_v, inc_r, t_ref = decode_cells_group(omega, h, group.cells, ~np.asarray(group.bounding, dtype=bool),
+                                                   label, error.of(planes), error.merge_limit)
+    return DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64), t_ref)
+
+
 def decode_sealed_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
     """A ``SEALED`` group: its triangles, each corner where its three planes meet (spec 3.1 §8.8)."""
     if group.vertex_planes is None or group.facets is None:
@@ -422,6 +433,7 @@ def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, erro
 #: (m, 3) triplets of ``group.refs`` and ``error`` the coding's :class:`PlaneError`.
 DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], DecodedGroup]] = {
     GroupKind.CONVEX: decode_convex_group,
+    GroupKind.CELLS: decode_cells,
     GroupKind.BSP: decode_bsp,
     GroupKind.PSEUDO_CONVEX: decode_patch,
     GroupKind.PSEUDO_CONCAVE: decode_patch,

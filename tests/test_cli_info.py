@@ -11,6 +11,8 @@ import numpy as np
 import planefmt
 from planefmt.model import Coding, GroupKind, Header
 
+from corpus import CORPUS
+
 PLN = [sys.executable, "-m", "planefmt_converters.cli"]
 
 
@@ -78,11 +80,8 @@ def test_info_exit_1_on_warnings(tmp_path):
 def test_info_planes_per_group_and_bytes_per_source_triangle(tmp_path):
     """A corpus mesh converted, then described against its source: bytes per source triangle."""
     import pytest
-    from pathlib import Path
 
-    src = Path(__file__).resolve().parents[2] / "shared" / "corpus" / "cad" / "angle_block.STL"
-    if not src.exists():
-        pytest.skip(f"no corpus mesh {src}")
+    src = CORPUS / "cad" / "angle_block.STL"
     out = tmp_path / "angle_block.pln"
     # Address space capped: its exact BSP decoding once sent the certified distance to 24 GB
     # (facets 1e-10 across chained perpendicular faces into one coplanar region).

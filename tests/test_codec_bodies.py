@@ -4,7 +4,6 @@ each held to the tolerance and to the source's structure (closed, volume, Euler 
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +17,7 @@ from planefmt.hausdorff import hausdorff
 from planefmt.model import GroupKind
 
 import shapes
+from corpus import CORPUS
 
 TOL = 1e-6
 
@@ -123,26 +123,33 @@ def _king() -> tuple[np.ndarray, np.ndarray]:
     from planefmt_converters import registry
     from planefmt_converters.assemble import flatten
 
-    scene, _ = registry.read("/work/shared/corpus/usd/King_geom.usd")
+    scene, _ = registry.read(str(CORPUS / "usd" / "King_geom.usd"))
     mesh = flatten(scene)
     return mesh.vertices, mesh.faces
 
 
-@pytest.mark.skipif(not Path("/work/shared/corpus/usd/King_geom.usd").is_file(), reason="shared corpus not available")
+def _fit(poly) -> float:
+    """The fit recomputed from the planes and the faces: the largest distance of a face's corner
+    from its face's plane (model units)."""
+    on = poly.face_plane >= 0
+    corners = poly.vertices[poly.faces[on]]
+    omega, h = poly.omega[poly.face_plane[on]], poly.h[poly.face_plane[on]]
+    return float(np.abs(np.einsum("mkj,mj->mk", corners, omega) - h[:, None]).max())
+
+
 def test_the_drift_bound_keeps_the_polygon_fit_within_the_tolerance():
     """King_geom.usd's gently curved quads: with the default drift bound (4 coplanarity
-    tolerances) its fitted planes are 1.42e-6 of the diagonal from their vertices; capped at the
-    tolerance, the curved polygons are split and the fit is within it."""
+    tolerances) its fitted planes are more than the tolerance 1e-6 of the diagonal from their
+    vertices (1.42e-6); capped at the tolerance, the curved polygons are split and the fit is within it."""
     from planefmt.polygonize import polygonize
 
     v, f = _king()
     loose = polygonize(v, f, tolerance=5e-7)
     capped = polygonize(v, f, tolerance=5e-7, max_drift=1e-6)
-    assert loose.max_distance > 1.4e-6 * loose.diagonal
-    assert capped.max_distance <= 1e-6 * capped.diagonal and len(capped.h) > len(loose.h)
+    assert loose.max_distance == pytest.approx(_fit(loose), rel=1e-9) and _fit(loose) > 1e-6 * loose.diagonal
+    assert _fit(capped) <= 1e-6 * capped.diagonal and len(capped.h) > len(loose.h)
 
 
-@pytest.mark.skipif(not Path("/work/shared/corpus/usd/King_geom.usd").is_file(), reason="shared corpus not available")
 def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkeypatch):
     """A fit over the tolerance (King_geom.usd polygonized without the drift cap) is refused after
     polygonizing, not after encoding."""
@@ -158,7 +165,8 @@ def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkey
 
     monkeypatch.setattr(codec, "_encode_body", no_body)
     monkeypatch.setattr(codec, "polygonize", uncapped)
-    with pytest.raises(GeometryError, match="fitted polygon planes are 1.42e-06") as err:
+    fit = _fit(polygonize_module.polygonize(v, f, tolerance=5e-7)) / float(np.linalg.norm(np.ptp(v, axis=0)))
+    with pytest.raises(GeometryError, match=f"fitted polygon planes are {fit:.3g} of the diagonal") as err:
         codec.encode_mesh(v, f, tolerance=1e-6, scheme="paper")
     assert err.value.code == "TOLERANCE_NOT_MET"
 
@@ -192,7 +200,6 @@ def test_a_closed_source_that_decodes_open_is_refused_with_the_reason():
     assert codec.structure_problem(enc.mesh, obj) is None
 
 
-@pytest.mark.skipif(not Path("/work/shared/corpus/open/suzanne.ply").is_file(), reason="shared corpus not available")
 def test_patch_groups_decode_the_same_batched_as_alone():
     """codec.decode_groups intersects an object's patch groups in one batch; each group's result is
     bit for bit the one it gets decoded on its own (own tolerance, own far planes)."""
@@ -201,7 +208,7 @@ def test_patch_groups_decode_the_same_batched_as_alone():
     from planefmt import Reader
     from planefmt.model import Mesh, Node, Scene
 
-    mesh = trimesh.load("/work/shared/corpus/open/suzanne.ply", process=False)
+    mesh = trimesh.load(CORPUS / "open" / "suzanne.ply", process=False)
     buf = io.BytesIO()
     codec.encode_scene(Scene(nodes=(Node("s", mesh=Mesh(np.asarray(mesh.vertices), np.asarray(mesh.faces))),)),
                        buf, compact=True, scheme="paper")
@@ -211,7 +218,8 @@ def test_patch_groups_decode_the_same_batched_as_alone():
     assert len(groups) > 100 and {int(g.kind) for g in groups} == {GroupKind.PSEUDO_CONVEX, GroupKind.PSEUDO_CONCAVE}
     alone = [codec.decode_group(g.planes, g, g.index, error) for g in groups]
     batched = codec.decode_groups([(g.planes, g, g.index) for g in groups], error)
-    for a, b in zip(alone, batched):
+    assert len(alone) == len(batched)
+    for a, b in zip(alone, batched, strict=True):
         for field in ("vertices", "triangles", "inc_vertex", "inc_ref", "triangle_ref"):
             assert np.array_equal(getattr(a, field), getattr(b, field))
 
@@ -339,8 +347,6 @@ def test_a_lossy_tolerance_lets_an_open_surface_s_rim_move():
     assert codec.structure_problem(grown, obj, 1.01 * d) is None
 
 
-@pytest.mark.skipif(not Path("/work/shared/corpus/usd/RoughnessTest.usdz").is_file(),
-                    reason="shared corpus not available")
 def test_open_patches_at_a_lossy_tolerance_are_not_held_to_the_lossless_area(tmp_path):
     """RoughnessTest.usdz's open spheres at 1e-4: their patches cut 1.6e-6 of an area, which the
     lossless area test refused with every coding (TOLERANCE_NOT_MET, while 1e-5 encoded)."""
@@ -350,7 +356,7 @@ def test_open_patches_at_a_lossy_tolerance_are_not_held_to_the_lossless_area(tmp
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        scene, _ = registry.read("/work/shared/corpus/usd/RoughnessTest.usdz")
+        scene, _ = registry.read(str(CORPUS / "usd" / "RoughnessTest.usdz"))
     path = tmp_path / "rough.pln"
     header = codec.encode_scene(scene, path, tolerance=1e-4, compact=True, scheme="paper")
     assert header.error_bound <= 1e-4

@@ -34,9 +34,9 @@ def in_process(path: Path) -> Outcome:
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c.path for c in CASES])
-def test_planefmt_conforms(case: Case):
+def test_planefmt_conforms_at_geometry_level(case: Case):
     expected = json.loads((SUITE / case.path).with_suffix(".json").read_text(encoding="utf-8"))
-    assert runner.check(case, expected, in_process(SUITE / case.path), "container") is None
+    assert runner.check(case, expected, in_process(SUITE / case.path), "geometry") is None
 
 
 def test_adapter_command_line_keeps_the_contract():
@@ -73,6 +73,54 @@ def test_geometry_is_compared_where_reported():
     got["geometry"] = None
     assert runner.compare_valid(expected, got, "container") is None
     assert runner.compare_valid(expected, got, "geometry") == "no geometry"
+
+
+#: A wrong value in every field the runner compares: (case, what, change to the result in place).
+WRONG = [
+    ("cube_float32", "a plane 0.5 off", lambda r: r["planes"][0].__setitem__(2, r["planes"][0][2] + 0.5)),
+    ("gem_q11_13_17", "a quantized plane 1e-9 off", lambda r: r["planes"][3].__setitem__(0, r["planes"][3][0] + 1e-9)),
+    ("cube_float32", "a reference", lambda r: r["groups"][0]["refs"].__setitem__(0, 5)),
+    ("bsp_l", "a tree token", lambda r: r["groups"][0]["tree"].__setitem__(0, r["groups"][0]["tree"][0] + 1)),
+    ("cells_l", "a cell entry", lambda r: r["groups"][0]["cells"][0].__setitem__(0, 1)),
+    ("sealed_cube_v3_1", "a sealed vertex", lambda r: r["groups"][0]["vertex_planes"].__setitem__(0, [0, 2, 5])),
+    ("cube_colours", "a colour", lambda r: r["colours"][0]["rgba"][0].__setitem__(0, 1)),
+    ("scene_hierarchy", "an object's parent", lambda r: r["objects"][1].__setitem__("parent", None)),
+    ("cube_float32", "a header value", lambda r: r["header"].__setitem__("units", 2)),
+    ("cube_float32", "an area", lambda r: r["geometry"]["groups"][0].__setitem__("area", 6.001)),
+    ("bsp_l", "a volume", lambda r: r["geometry"]["groups"][0].__setitem__("volume", 3.001)),
+    ("cube_float32", "a vertex count", lambda r: r["geometry"]["groups"][0].__setitem__("vertices", 9)),
+    ("scene_hierarchy", "the world box", lambda r: r["geometry"]["world_bbox"][1].__setitem__(0, 1e3)),
+]
+
+
+@pytest.mark.parametrize("name, what, change", WRONG, ids=[w[1] for w in WRONG])
+def test_the_runner_fails_an_implementation_that_reports_a_wrong_value(name, what, change):
+    case = next(c for c in CASES if c.path == f"valid/{name}.pln")
+    expected = json.loads((SUITE / case.path).with_suffix(".json").read_text())
+    got = in_process(SUITE / case.path)
+    assert runner.check(case, expected, got, "geometry") is None
+    change(got.result)
+    assert runner.check(case, expected, got, "geometry") is not None, what
+
+
+def test_quantized_planes_are_compared_within_the_precision_of_their_coding():
+    # 1e-13 rad is within the 1e-12 the README allows for another order of evaluation of §7.3.
+    case = next(c for c in CASES if c.path == "valid/gem_q11_13_17.pln")
+    expected = json.loads((SUITE / case.path).with_suffix(".json").read_text())
+    got = in_process(SUITE / case.path)
+    got.result["planes"][3][0] += 1e-13
+    assert runner.check(case, expected, got, "geometry") is None
+
+
+def test_the_runner_fails_a_reader_whose_plane_is_half_a_unit_off(tmp_path):
+    """Through the command-line contract: planefmt's adapter with one h 0.5 too large."""
+    wrong = tmp_path / "wrong.py"
+    wrong.write_text("import json, sys\nfrom conformance.adapter import describe\n"
+                     "r = describe(sys.argv[1])\nr['planes'][0][2] += 0.5\nprint(json.dumps(r))\n")
+    case = next(c for c in CASES if c.path == "valid/cube_float32.pln")
+    expected = json.loads((SUITE / case.path).with_suffix(".json").read_text())
+    problem = runner.check(case, expected, runner.run(f"{sys.executable} {wrong}", SUITE / case.path, 60), "geometry")
+    assert problem == "plane 0: [1.5707963705062866, 0.0, 1.5], expected [1.5707963705062866, 0.0, 1.0]"
 
 
 def test_regenerating_gives_identical_files(tmp_path):
@@ -113,6 +161,66 @@ def test_cube_is_the_file_of_spec_section_12():
     assert len(dump) == 401
     assert (SUITE / "valid/cube_float32.pln").read_bytes() == dump
     assert cases_invalid.CUBE_FILE == dump  # most broken files are this cube with one defect
+
+
+def test_cube_v3_is_the_file_of_spec_3_section_12():
+    """Every byte of cube_v3.pln as spec/pln-3.md §12 lists it: the hex rows (``(xN)`` repeats the
+    bytes before it), each ``(CRC)`` the CRC-32 of its chunk's type and payload (spec 1.0 §4.1),
+    the plane payload the 72 bytes of the version 1.0 cube, the index entries (offset u64, type,
+    ordinal u32) as the row under iNDX names them, followed by the index's CRC."""
+    import zlib
+
+    data = (SUITE / "valid/cube_v3.pln").read_bytes()
+    block = (ROOT / "spec/pln-3.md").read_text(encoding="utf-8").split("## 12.")[1].split("```")[1]
+    v1 = spec_hexdump()
+    at = v1.index(b"PLNS")
+    v1_triplets = v1[at + 8:at + 8 + int.from_bytes(v1[at + 4:at + 8], "little")][-72:]
+
+    pos = chunk = 0  # the next byte to account for, and where the current chunk starts
+
+    def crc_at(offset: int) -> None:
+        payload = data[chunk + 8:offset]
+        assert data[offset:offset + 4] == zlib.crc32(data[chunk:chunk + 4] + payload).to_bytes(4, "little"), \
+            f"CRC at {offset:04x}"
+
+    for line in block.splitlines():
+        m = re.match(r"([0-9a-f]{4}): (.*)", line)
+        entries = re.findall(r"([0-9a-f]+) \.\. ([A-Z]{4}) (\d+)", line)
+        if not m:
+            for offset, tag, ordinal in entries:
+                assert data[pos:pos + 16] == (int(offset, 16).to_bytes(8, "little") + tag.encode()
+                                              + int(ordinal).to_bytes(4, "little")), f"index entry at {pos:04x}"
+                pos += 16
+            continue
+        offset, rest = int(m[1], 16), m[2]
+        if offset == pos + 4:
+            crc_at(pos)  # a chunk whose CRC has no row of its own (the index)
+            pos += 4
+        assert offset == pos, f"row {offset:04x} starts at {pos:04x}"
+        if rest.startswith("(CRC)"):
+            crc_at(pos)
+            pos += 4
+            continue
+        if rest.startswith("(72 bytes"):
+            assert data[pos:pos + 72] == v1_triplets
+            pos += 72
+            continue
+        got = bytearray()
+        group = bytearray()
+        for token in rest.split():
+            if re.fullmatch(r"[0-9a-f]{2}", token):
+                group.append(int(token, 16))
+            elif re.fullmatch(r"\(x\d+\)", token):
+                got += group * int(token[2:-1])
+                group = bytearray()
+            else:
+                break
+        got += group
+        if got[:4].isalpha():
+            chunk = pos
+        assert data[pos:pos + len(got)] == bytes(got), f"row {offset:04x}"
+        pos += len(got)
+    assert pos == len(data) == 281
 
 
 def test_zlib_case_is_compressed_and_suite_is_small():

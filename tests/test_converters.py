@@ -20,13 +20,11 @@ from planefmt_converters.atomic import atomic_paths
 from planefmt_converters.polygons import triangulate
 from planefmt_converters.validators import ValidatorUnavailable, validate_gltf, validate_usd
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
-if not CORPUS.is_dir():
-    CORPUS = Path("/work/shared/corpus")
-CORPUS_FILES = sorted(
-    path for path in CORPUS.glob("*/*")
-    if path.suffix.lower() not in (".md", ".bin"))
-CORPUS_IDS = [f"{path.parent.name}/{path.name}" for path in CORPUS_FILES]
+import corpus
+
+CORPUS_FILES = corpus.files()
+CORPUS_IDS = corpus.ids(CORPUS_FILES)
+CORPUS = corpus.CORPUS
 
 FLAT_FORMATS = [".obj", ".ply", ".stl", ".off"]
 SCENE_FORMATS = [".glb", ".gltf", ".usda", ".usdc", ".usdz"]
@@ -38,8 +36,6 @@ FLOAT32_FORMATS = {".ply", ".stl", ".glb", ".gltf", ".usda", ".usdc", ".usdz"}
 #: The format each corpus extension is detected as, by content.
 EXPECTED_FORMAT = {".stl": "stl", ".obj": "obj", ".ply": "ply", ".off": "off", ".glb": "glb",
                    ".gltf": "gltf", ".usda": "usda", ".usdz": "usdz"}
-
-needs_corpus = pytest.mark.skipif(not CORPUS_FILES, reason=f"no mesh corpus at {CORPUS}")
 
 
 @functools.lru_cache(maxsize=None)
@@ -77,7 +73,6 @@ def leftovers(folder: Path) -> list[str]:
 
 # --------------------------------------------------------------------------- corpus reads
 
-@needs_corpus
 @pytest.mark.parametrize("path", CORPUS_FILES, ids=CORPUS_IDS)
 def test_corpus_file_reads(path: Path) -> None:
     scene, dropped = corpus_scene(path)
@@ -97,7 +92,6 @@ def test_corpus_file_reads(path: Path) -> None:
         assert ((f[:, 0] != f[:, 1]) & (f[:, 1] != f[:, 2]) & (f[:, 0] != f[:, 2])).all()
 
 
-@needs_corpus
 @pytest.mark.parametrize("path", CORPUS_FILES, ids=CORPUS_IDS)
 def test_corpus_format_detected_by_content(path: Path, tmp_path: Path) -> None:
     expected = EXPECTED_FORMAT.get(path.suffix.lower())
@@ -111,8 +105,6 @@ def test_corpus_format_detected_by_content(path: Path, tmp_path: Path) -> None:
 
 def test_usd_prims_from_corpus_keep_hierarchy() -> None:
     path = CORPUS / "usd" / "RoughnessTest.usdz"
-    if not path.exists():
-        pytest.skip("corpus file missing")
     scene, dropped = corpus_scene(path)
     names = [node.name for node in scene.nodes]
     assert names[:4] == ["Roughness", "Tex", "Tex000", "Mesh"]
@@ -125,7 +117,6 @@ def test_usd_prims_from_corpus_keep_hierarchy() -> None:
 
 # --------------------------------------------------------------------------- round trips
 
-@needs_corpus
 @pytest.mark.parametrize("suffix", FLAT_FORMATS + SCENE_FORMATS)
 @pytest.mark.parametrize("path", CORPUS_FILES, ids=CORPUS_IDS)
 def test_round_trip_keeps_geometry(path: Path, suffix: str, out_dir: Path) -> None:
@@ -146,7 +137,6 @@ def test_round_trip_keeps_geometry(path: Path, suffix: str, out_dir: Path) -> No
         assert any(note.startswith("scene hierarchy") for note in notes)
 
 
-@needs_corpus
 @pytest.mark.parametrize("suffix", SCENE_FORMATS)
 @pytest.mark.parametrize("path", CORPUS_FILES, ids=CORPUS_IDS)
 def test_scene_formats_keep_nodes(path: Path, suffix: str, out_dir: Path) -> None:
@@ -184,7 +174,6 @@ def khronos_report(path: Path) -> dict:
         pytest.fail(f"{exc} (tools/install_validators.sh installs it)")
 
 
-@needs_corpus
 @pytest.mark.parametrize("suffix", GLTF_FORMATS)
 @pytest.mark.parametrize("path", CORPUS_FILES, ids=CORPUS_IDS)
 def test_gltf_output_passes_khronos_validator(path: Path, suffix: str, out_dir: Path) -> None:
@@ -195,7 +184,6 @@ def test_gltf_output_passes_khronos_validator(path: Path, suffix: str, out_dir: 
     assert report["info"]["totalVertexCount"] > 0
 
 
-@needs_corpus
 @pytest.mark.parametrize("suffix", USD_FORMATS)
 @pytest.mark.parametrize("path", CORPUS_FILES, ids=CORPUS_IDS)
 def test_usd_output_passes_usd_validation(path: Path, suffix: str, out_dir: Path) -> None:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import io
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -23,10 +22,10 @@ from planefmt.model import Coding, GroupKind, Mesh, Node, Scene, Units
 from planefmt.polygonize import weld
 from planefmt.validate import validate
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
-if not CORPUS.is_dir():
-    CORPUS = Path("/work/shared/corpus")
-CONVEX = sorted(p.name for p in (CORPUS / "convex").glob("*")) if (CORPUS / "convex").is_dir() else []
+import corpus
+from corpus import CORPUS
+
+CONVEX = [p.name for p in corpus.files("convex")]
 
 PAPER_CUBE_DEGREES = [(90, 0, 1), (90, 90, 1), (90, 180, 0), (90, 270, 0), (0, 0, 1), (180, 0, 0)]
 CUBE_V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],

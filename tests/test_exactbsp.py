@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from fractions import Fraction
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -20,8 +19,9 @@ from planefmt.predicates import points, sides
 from planefmt.trianglegeom import TriangleIndex
 
 import shapes
+from corpus import CORPUS
 
-KING = Path("/work/shared/corpus/usd/King_geom.usd")
+KING = CORPUS / "usd" / "King_geom.usd"
 
 
 def _rational_side(omega: np.ndarray, h: np.ndarray, t: np.ndarray, q: int) -> int:
@@ -107,7 +107,6 @@ def test_split_pinches_gives_each_sheet_its_own_vertex():
     assert np.array_equal(nv[nf], v[f])
 
 
-@pytest.mark.skipif(not KING.is_file(), reason="shared corpus not available")
 def test_exact_decoding_closes_what_rounded_decisions_misplace(monkeypatch):
     """King_geom.usd's base (7,392 triangles, fillets of 30 planes within a micrometre): its first
     tree decodes open when sides are decided in float64 and closed, with the source's volume and

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,8 +11,7 @@ import trimesh
 from planefmt.errors import GeometryError
 from planefmt.hausdorff import closest_distance, hausdorff, point_triangle_distance, relative_hausdorff
 
-CORPUS = Path("/work/shared/corpus")
-needs_corpus = pytest.mark.skipif(not CORPUS.is_dir(), reason="shared corpus not available")
+from corpus import CORPUS
 
 
 def load(rel: str) -> tuple[np.ndarray, np.ndarray]:
@@ -248,7 +246,6 @@ def test_relative_hausdorff_divides_by_the_diagonal_of_a():
     assert relative_hausdorff((scaled, f), (moved, f), target=1e-6).lower > 1e-6
 
 
-@needs_corpus
 def test_corpus_cad_part_against_retriangulated_and_perturbed_copies():
     v, f = load("cad/featuretype.STL")
     diag = diagonal(v)
@@ -269,7 +266,6 @@ def test_corpus_cad_part_against_retriangulated_and_perturbed_copies():
     assert r.lower <= 1e-7 * diag * (1 + 1e-9)
 
 
-@needs_corpus
 def test_corpus_subdivided_cube_against_twelve_triangles():
     v, f = load("convex/cube_subd.obj")
     box = trimesh.creation.box(bounds=np.array([v.min(axis=0), v.max(axis=0)]))
@@ -281,7 +277,6 @@ def test_corpus_subdivided_cube_against_twelve_triangles():
     assert r.certified and r.upper <= 1e-3 and r.lower <= 1e-4
 
 
-@needs_corpus
 def test_corpus_faces_with_holes_triangulated_differently():
     # Flipping diagonals inside the planar faces (with holes and pockets) keeps
     # the surface; pieces of one triangulation straddle the other's triangles.

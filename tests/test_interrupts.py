@@ -14,102 +14,121 @@ import time
 from pathlib import Path
 
 import pytest
-import trimesh
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
-BUNNY = CORPUS / "smooth_dense" / "bun_zipper.ply"
-PLN = [sys.executable, "-m", "planefmt_converters.cli", "convert"]
+from corpus import CORPUS
+
+SOURCE = Path(__file__).resolve().parents[1] / "samples" / "cylinder.stl"
+
+# `pln convert` with a pause at each stage of the conversion: the child prints the stage's name and
+# waits for a line on stdin, so a test signals it at that stage exactly, however loaded the machine.
+_STAGED = """
+import os, sys
+
+from planefmt_converters import registry
+from planefmt_converters.cli import main
+
+
+def pause(stage):
+    print(stage, flush=True)
+    sys.stdin.readline()
+
+
+def before(stage, call):
+    def staged(*args, **kwargs):
+        pause(stage)
+        return call(*args, **kwargs)
+    return staged
+
+
+def after(stage, call):
+    def staged(*args, **kwargs):
+        out = call(*args, **kwargs)
+        pause(stage)
+        return out
+    return staged
+
+
+registry.read = before("read", registry.read)  # the input not read yet
+# An empty temporary beside the target, once the atomic writer holds it for removal (it sets the
+# mode after mkstemp: a signal between mkstemp's return and that would leave the file, a window this
+# test does not widen).
+os.chmod = after("temporary", os.chmod)
+os.replace = after("renamed", before("rename", os.replace))  # the temporary written; then renamed
+sys.exit(main(sys.argv[1:]))
+"""
+#: Every stage, in the order a conversion reaches them.
+STAGES = ("read", "temporary", "rename", "renamed")
 
 
 def _digest(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def _full_run(target: Path) -> float:
-    t0 = time.perf_counter()
-    subprocess.run([*PLN, str(BUNNY), str(target)], check=True, capture_output=True)
-    return time.perf_counter() - t0
-
-
-def _signalled(target: Path, sig: signal.Signals, fraction: float, runtime: list[float],
-               left: list[str]) -> tuple[subprocess.Popen, Path] | None:
-    """A conversion to ``target`` sent ``sig`` at ``fraction`` of the runtime; None if every try ended first.
-
-    The runtime is a guess from a timed run, which a loaded machine can make several times too long:
-    a run that ends before its signal shortens it to that run's own duration and the signal is tried
-    again on a fresh run (its whole output, checked, is named in ``left``).
-    """
-    for attempt in range(3):
-        out = target.with_name(f"{target.stem}-{attempt}{target.suffix}")
-        t0 = time.perf_counter()
-        proc = subprocess.Popen([*PLN, str(BUNNY), str(out)], stdout=subprocess.DEVNULL,
-                                stderr=subprocess.PIPE, text=True)
-        try:
-            proc.wait(timeout=fraction * runtime[0])
-        except subprocess.TimeoutExpired:
+def _staged(target: Path, stage: str | None, sig: signal.Signals = signal.SIGKILL) -> tuple[int, str, list[str]]:
+    """A conversion of SOURCE to ``target`` sent ``sig`` at ``stage`` (None: at none): its exit status,
+    its stderr and the stages it reached."""
+    proc = subprocess.Popen([sys.executable, "-c", _STAGED, "convert", str(SOURCE), str(target)],
+                            stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    seen = []
+    for line in proc.stdout:
+        seen.append(line.strip())
+        if seen[-1] == stage:
             proc.send_signal(sig)
-            return proc, out
-        runtime[0] = min(runtime[0], time.perf_counter() - t0)
-        assert proc.returncode == 0, proc.stderr.read() if proc.stderr else ""
-        proc.stderr.close()
-        assert len(trimesh.load(out, force="mesh").faces) > 60_000
-        left.append(out.name)
-    return None
+            break
+        proc.stdin.write("\n")
+        proc.stdin.flush()
+    # Not communicate(): closing stdin would end the pause before the signal is handled.
+    code = proc.wait(timeout=300)
+    err = proc.stderr.read()
+    for stream in (proc.stdin, proc.stdout, proc.stderr):
+        stream.close()
+    return code, err, seen
 
 
-def test_sigkill_at_any_moment_leaves_no_file_under_the_target_name(tmp_path: Path) -> None:
-    before = _digest(BUNNY)
-    runtime = [_full_run(tmp_path / "reference.obj")]
-    left = ["reference.obj"]
-    killed = 0
-    # Kill points spread over the whole conversion, start-up and writing included.
-    for k, fraction in enumerate((0.15, 0.35, 0.55, 0.75, 0.85, 0.95)):
-        run = _signalled(tmp_path / f"out{k}.obj", signal.SIGKILL, fraction, runtime, left)
-        if run is None:
-            continue
-        proc, target = run
-        _, err = proc.communicate(timeout=60)
-        assert proc.returncode in (0, -signal.SIGKILL), err
-        if target.exists():
-            # Only ever the whole output: renamed into place once written (the process may be
-            # killed after that, while it exits).
-            assert len(trimesh.load(target, force="mesh").faces) > 60_000
-            left.append(target.name)
-        else:
-            assert proc.returncode == -signal.SIGKILL
-            killed += 1
-    assert killed >= 3, "the conversion finished before most kill points: the test did not test"
-    # SIGKILL allows no clean-up: besides the whole outputs, only hidden temporaries may stay.
-    strays = [p.name for p in tmp_path.iterdir() if p.name not in left]
+@pytest.mark.parametrize("suffix", [".obj", ".glb"])
+def test_every_stage_is_reached_once_in_order(suffix: str, tmp_path: Path) -> None:
+    # Each stage a test below signals at is one the conversion passes through.
+    code, err, seen = _staged(tmp_path / f"out{suffix}", None)
+    assert code == 0, err
+    assert seen == list(STAGES)
+
+
+@pytest.mark.parametrize("stage", STAGES)
+def test_sigkill_at_any_stage_leaves_no_file_under_the_target_name(stage: str, tmp_path: Path) -> None:
+    before = _digest(SOURCE)
+    reference = tmp_path / "reference.obj"
+    assert _staged(reference, None)[0] == 0
+    target = tmp_path / "out.obj"
+    code, err, seen = _staged(target, stage)
+    assert seen[-1] == stage and code == -signal.SIGKILL, err
+    if stage == "renamed":
+        # Killed after the rename: the whole output, never a part.
+        assert target.read_bytes() == reference.read_bytes()
+    else:
+        assert not target.exists()
+    # SIGKILL allows no clean-up: besides the outputs, only hidden temporaries may stay.
+    strays = [p.name for p in tmp_path.iterdir() if p.name not in ("reference.obj", "out.obj")]
     assert all(n.startswith(".") and ".tmp" in n for n in strays), strays
-    assert _digest(BUNNY) == before
+    assert len(strays) == (1 if stage in ("temporary", "rename") else 0), strays
+    assert _digest(SOURCE) == before
 
 
+@pytest.mark.parametrize("stage", STAGES)
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
-def test_sigterm_and_sigint_clean_up_and_exit_non_zero(sig: signal.Signals, tmp_path: Path) -> None:
-    runtime = [_full_run(tmp_path / "reference.glb")]
-    left = ["reference.glb"]
-    interrupted = 0
-    # Signal early, in the middle and late, and require that one interrupted a conversion. Not
-    # before about 1/5: until `pln` has imported planefmt, Python's own SIGINT handling prints a
-    # traceback (known).
-    for k, fraction in enumerate((0.35, 0.6, 0.85)):
-        run = _signalled(tmp_path / f"out{k}.glb", sig, fraction, runtime, left)
-        if run is None:
-            continue
-        proc, target = run
-        _, err = proc.communicate(timeout=60)
-        assert "Traceback" not in err, err
-        if target.exists():
-            # The signal came after the output was renamed into place: then it is the whole
-            # output, never a part.
-            assert len(trimesh.load(target, force="mesh").faces) > 60_000
-            left.append(target.name)
-        else:
-            assert proc.returncode != 0, "no output and yet exit status 0"
-            interrupted += 1
-        assert sorted(p.name for p in tmp_path.iterdir()) == sorted(left), "temporary files left behind"
-    assert interrupted >= 1, "every conversion finished before its signal: the test did not test"
+def test_sigterm_and_sigint_at_any_stage_clean_up_and_exit_130(sig: signal.Signals, stage: str,
+                                                              tmp_path: Path) -> None:
+    reference = tmp_path / "reference.glb"
+    assert _staged(reference, None)[0] == 0
+    target = tmp_path / "out.glb"
+    code, err, seen = _staged(target, stage, sig)
+    assert seen[-1] == stage
+    assert code == 130 and err.strip() == "pln: interrupted", err
+    if stage == "renamed":
+        # The signal came after the output was renamed into place: the whole output, never a part.
+        assert target.read_bytes() == reference.read_bytes()
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["out.glb", "reference.glb"]
+    else:
+        assert sorted(p.name for p in tmp_path.iterdir()) == ["reference.glb"], "temporary files left behind"
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])

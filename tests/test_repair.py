@@ -3,7 +3,6 @@ Mended, they are stored as solids; what the mending moved is counted in the veri
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -14,7 +13,8 @@ from planefmt.bodies import is_closed_manifold, signed_volume
 from planefmt.model import GroupKind
 from planefmt.repair import merge_close_vertices, split_t_junctions
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
+from corpus import CORPUS
+
 
 
 def unit_cube() -> tuple[np.ndarray, np.ndarray]:

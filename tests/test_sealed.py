@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import io
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -19,9 +18,9 @@ from planefmt.planes import from_triplets, to_triplets
 from planefmt.sealed import corners, decode_sealed, encode_sealed
 
 import shapes
+from corpus import CORPUS
 
 TOL = 1e-6
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
 
 
 @pytest.fixture
@@ -38,13 +37,10 @@ def no_tree(monkeypatch):
 
 
 def _corpus(rel: str) -> tuple[np.ndarray, np.ndarray]:
-    path = CORPUS / rel
-    if not path.exists():
-        pytest.skip(f"no corpus mesh {path}")
     from planefmt_converters import registry
     from planefmt_converters.assemble import flatten
 
-    scene, _ = registry.read(str(path))
+    scene, _ = registry.read(str(CORPUS / rel))
     mesh = flatten(scene)
     return np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,9 +17,9 @@ from planefmt.planes import from_triplets, to_triplets
 from planefmt.solids import decode_tree
 
 import shapes
+from corpus import CORPUS
 
 TOL = 1e-6
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
 
 
 def check_solid(v: np.ndarray, f: np.ndarray, splitters: tuple = solids.STRATEGIES) -> dict:
@@ -162,9 +161,7 @@ def _corpus_node(relative: str, name: str) -> tuple[np.ndarray, np.ndarray]:
 
     from planefmt_converters import registry
 
-    path = Path(__file__).resolve().parents[2] / "shared" / "corpus" / relative
-    if not path.exists():
-        pytest.skip(f"no corpus mesh {path}")
+    path = CORPUS / relative
     scene, _ = registry.read(str(path))
     mesh = next(n.mesh for n in scene.nodes if n.name == name)
     return mesh.vertices, mesh.faces
@@ -195,9 +192,7 @@ def test_smooth_closed_body_uses_exact_planes_and_closes_its_cracks() -> None:
     from planefmt_converters import registry
     from planefmt_converters.assemble import flatten
 
-    path = Path(__file__).resolve().parents[2] / "shared" / "corpus" / "nonconvex_watertight" / "ballA.off"
-    if not path.exists():
-        pytest.skip(f"no corpus mesh {path}")
+    path = CORPUS / "nonconvex_watertight" / "ballA.off"
     scene, _ = registry.read(str(path))
     mesh = flatten(scene)
     out = check_solid(mesh.vertices, mesh.faces)
@@ -211,8 +206,6 @@ def test_merged_planes_that_stray_are_replaced_by_exact_ones_only_there() -> Non
     solid on far fewer faces' own planes. (The hull-first trees decode within the target on the
     merged planes: the first strategy alone keeps this path tested.)"""
     path = CORPUS / "cad" / "angle_block.STL"
-    if not path.exists():
-        pytest.skip(f"no corpus mesh {path}")
     import trimesh
 
     mesh = trimesh.load(path, process=False)
@@ -227,8 +220,6 @@ def test_the_smallest_tree_of_the_splitter_strategies_is_kept() -> None:
     """The 20mm cube (embossed letters): the first strategy alone makes a larger tree than the one
     kept; both are solids that meet the contract."""
     path = CORPUS / "cad" / "20mm-xyz-cube.stl"
-    if not path.exists():
-        pytest.skip(f"no corpus mesh {path}")
     import trimesh
 
     mesh = trimesh.load(path, process=False)
