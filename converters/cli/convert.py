@@ -124,6 +124,7 @@ def run(args: argparse.Namespace) -> int:
             elif len(args.paths) != 2:
                 raise _Usage("give IN OUT, or several inputs with -d OUTDIR --to FORMAT", code="CONVERSION_FAILED")
             else:
+                _refuse_overwriting_input(args.paths[0], args.paths[1])
                 code = _run_single(args.paths[0], args.paths[1], args, opts)
         except PlnError:
             # The error may be what a swallowed KeyboardInterrupt turned into: report the signal.
@@ -131,6 +132,22 @@ def run(args: argparse.Namespace) -> int:
             raise
         interrupts.check()
         return code
+
+
+def _same_file(a: str, b: str) -> bool:
+    """Whether paths ``a`` and ``b`` name one file, also through symbolic or hard links."""
+    try:
+        return os.path.samefile(a, b)
+    except OSError:  # one of them does not exist (yet): compare where they lead
+        return os.path.realpath(a) == os.path.realpath(b)
+
+
+def _refuse_overwriting_input(src: str, dst: str) -> None:
+    # Checked before any work: the atomic rename would replace the input only once the (possibly long)
+    # conversion had read it, so the input would be lost with no error at all.
+    if "-" not in (src, dst) and _same_file(src, dst):
+        raise PlnError(f"the output is the same file as the input {src}; the input is never overwritten: "
+                       "choose another output name", code="OUTPUT_CONFLICT", file=dst)
 
 
 def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int:
