@@ -55,3 +55,28 @@ def test_output_that_is_the_input_is_refused(name: str, link: str, tmp_path: Pat
     assert str(src) in err and str(dst) in err and "same file" in err, err
     assert len(err.splitlines()) == 1
     assert _snapshot(tmp_path) == before
+
+
+def test_batch_inputs_with_one_output_name_are_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                       capsys: pytest.CaptureFixture) -> None:
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    first, second = (str(shutil.copy(src, tmp_path / dst)) for src, dst in ((CUBE, "a/model.obj"), (TET, "b/model.ply")))
+    _forbid_reading(monkeypatch)
+    out = tmp_path / "out"
+    assert main(["convert", first, second, "-d", str(out), "--to", "obj"]) == 2
+    err = capsys.readouterr().err
+    assert first in err and second in err and str(out / "model.obj") in err, err
+    assert len(err.splitlines()) == 1
+    assert not out.exists()
+
+
+def test_batch_output_that_is_an_input_is_refused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                  capsys: pytest.CaptureFixture) -> None:
+    src, other = str(shutil.copy(CUBE, tmp_path / "model.obj")), str(shutil.copy(TET, tmp_path / "tet.ply"))
+    before = _snapshot(tmp_path)
+    _forbid_reading(monkeypatch)
+    assert main(["convert", other, src, "-d", str(tmp_path), "--to", "obj"]) == 2
+    err = capsys.readouterr().err
+    assert src in err and "same file" in err, err
+    assert _snapshot(tmp_path) == before

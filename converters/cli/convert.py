@@ -134,20 +134,36 @@ def run(args: argparse.Namespace) -> int:
         return code
 
 
-def _same_file(a: str, b: str) -> bool:
-    """Whether paths ``a`` and ``b`` name one file, also through symbolic or hard links."""
+def _file_key(path: str) -> tuple:
+    """Equal for two paths to one file, also through symbolic or hard links (device and inode where the
+    file exists, else the resolved path: a file that does not exist yet is no existing file)."""
     try:
-        return os.path.samefile(a, b)
-    except OSError:  # one of them does not exist (yet): compare where they lead
-        return os.path.realpath(a) == os.path.realpath(b)
+        st = os.stat(path)
+    except OSError:
+        return ("path", os.path.realpath(path))
+    return ("inode", st.st_dev, st.st_ino)
 
 
 def _refuse_overwriting_input(src: str, dst: str) -> None:
     # Checked before any work: the atomic rename would replace the input only once the (possibly long)
     # conversion had read it, so the input would be lost with no error at all.
-    if "-" not in (src, dst) and _same_file(src, dst):
+    if "-" not in (src, dst) and _file_key(src) == _file_key(dst):
         raise PlnError(f"the output is the same file as the input {src}; the input is never overwritten: "
                        "choose another output name", code="OUTPUT_CONFLICT", file=dst)
+
+
+def _refuse_clashes(pairs: list[tuple[str, str]]) -> None:
+    """A batch writes each output once and never over one of its inputs; checked before any work."""
+    inputs = {_file_key(src): src for src, _ in pairs}
+    written: dict[tuple, str] = {}
+    for src, dst in pairs:
+        key = _file_key(dst)
+        if key in inputs:
+            _refuse_overwriting_input(inputs[key], dst)
+        if key in written:
+            raise PlnError(f"{written[key]} and {src} would both be written here, one result lost: convert "
+                           "them into different folders or rename one", code="OUTPUT_CONFLICT", file=dst)
+        written[key] = src
 
 
 def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int:
@@ -182,9 +198,10 @@ def _run_batch(args: argparse.Namespace, opts: dict) -> int:
 
     ext = registry.get(args.to).extensions[0]
     outdir = Path(args.outdir)
+    pairs = [(src, str(outdir / (Path(src).stem + ext))) for src in args.paths]
+    _refuse_clashes(pairs)
     outdir.mkdir(parents=True, exist_ok=True)
-    jobs = [(src, str(outdir / (Path(src).stem + ext)), args.to, args.from_, opts, args.salvage)
-            for src in args.paths]
+    jobs = [(src, dst, args.to, args.from_, opts, args.salvage) for src, dst in pairs]
     failed = losses = 0
     progress = _Progress(len(jobs))
     with contextlib.ExitStack() as stack:
