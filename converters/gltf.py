@@ -20,7 +20,7 @@ import json
 import os
 from pathlib import Path
 from typing import Any
-from urllib.parse import quote
+from urllib.parse import quote, unquote, urlsplit
 
 import numpy as np
 
@@ -42,6 +42,27 @@ def sniff_gltf(head: bytes, size: int) -> bool:
     """A JSON object mentioning glTF's required ``asset`` property early on."""
     text = head.lstrip(b"\xef\xbb\xbf \t\r\n")
     return text.startswith(b"{") and b'"asset"' in text
+
+
+def sidecars(path: str | os.PathLike[str]) -> tuple[str, ...]:
+    """The file a ``.gltf`` write of ``path`` creates beside it: its buffer, ``<stem>.bin``."""
+    return (os.fspath(Path(path).with_suffix(".bin")),)
+
+
+def references(path: str | os.PathLike[str]) -> tuple[str, ...]:
+    """The local files (buffers, images) the ``.gltf`` at ``path`` refers to; none if it is no glTF JSON."""
+    try:
+        tree = json.loads(Path(path).read_bytes())
+    except (OSError, ValueError):
+        return ()
+    if not isinstance(tree, dict):
+        return ()
+    items = [item for key in ("buffers", "images") if isinstance(tree.get(key), list)
+             for item in tree[key] if isinstance(item, dict)]
+    uris = [item["uri"] for item in items if isinstance(item.get("uri"), str)]
+    # data: and other URIs with a scheme are not files beside the .gltf
+    return tuple(os.path.join(os.path.dirname(os.fspath(path)), unquote(uri)) for uri in uris
+                 if not urlsplit(uri).scheme)
 
 
 def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:

@@ -80,3 +80,48 @@ def test_batch_output_that_is_an_input_is_refused(tmp_path: Path, monkeypatch: p
     err = capsys.readouterr().err
     assert src in err and "same file" in err, err
     assert _snapshot(tmp_path) == before
+
+
+def test_gltf_sidecar_that_belongs_to_another_file_is_kept(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                           capsys: pytest.CaptureFixture) -> None:
+    unrelated = tmp_path / "model.bin"
+    unrelated.write_bytes(b"someone else's data")
+    with monkeypatch.context() as patched:
+        _forbid_reading(patched)
+        assert main(["convert", str(CUBE), str(tmp_path / "model.gltf")]) == 2
+    err = capsys.readouterr().err
+    assert str(unrelated) in err and "--force" in err, err
+    assert unrelated.read_bytes() == b"someone else's data"
+    assert not (tmp_path / "model.gltf").exists()
+    assert main(["convert", "--force", str(CUBE), str(tmp_path / "model.gltf")]) == 0
+    assert registry.read(tmp_path / "model.gltf")[0].nodes
+    # The .bin now belongs to model.gltf: converting again replaces both, without --force.
+    assert main(["convert", str(TET), str(tmp_path / "model.gltf")]) == 0
+    assert len(registry.read(tmp_path / "model.gltf")[0].nodes[0].mesh.faces) == 4
+
+
+def test_gltf_sidecar_is_never_an_input_buffer(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                               capsys: pytest.CaptureFixture) -> None:
+    # scene.gltf's buffer is TestScene.bin, which writing TestScene.gltf would replace.
+    shutil.copy(CORPUS / "gltf_scene" / "TestScene.bin", tmp_path)
+    src = shutil.copy(CORPUS / "gltf_scene" / "TestScene.gltf", tmp_path / "scene.gltf")
+    before = _snapshot(tmp_path)
+    _forbid_reading(monkeypatch)
+    assert main(["convert", "--force", str(src), str(tmp_path / "TestScene.gltf")]) == 2
+    err = capsys.readouterr().err
+    assert str(tmp_path / "TestScene.bin") in err and str(src) in err, err
+    assert _snapshot(tmp_path) == before
+
+
+def test_library_gltf_write_keeps_an_unrelated_sidecar(tmp_path: Path) -> None:
+    from planefmt.errors import ConversionError
+
+    scene, _ = registry.read(CUBE)
+    (tmp_path / "m.bin").write_bytes(b"other")
+    with pytest.raises(ConversionError) as caught:
+        registry.write(scene, tmp_path / "m.gltf")
+    assert caught.value.code == "OUTPUT_CONFLICT" and caught.value.file == str(tmp_path / "m.bin")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m.bin"]
+    registry.write(scene, tmp_path / "m.gltf", force=True)
+    assert (tmp_path / "m.bin").read_bytes() != b"other"
+    registry.write(scene, tmp_path / "m.gltf")  # its own sidecar now

@@ -19,9 +19,13 @@ import sys
 import tempfile
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from planefmt.errors import PlnError
 from planefmt_converters import interrupts
+
+if TYPE_CHECKING:
+    from planefmt_converters.registry import Format
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -32,6 +36,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--to", help="output format name (glb, gltf, obj, ply, stl, off, usda, usdc, usdz, pln)")
     p.add_argument("--from", dest="from_", help="input format name instead of detecting it")
     p.add_argument("--jobs", type=int, default=1, help="batch: convert this many files at once")
+    p.add_argument("--force", action="store_true",
+                   help="replace a file the output writes beside itself (a .gltf's .bin) even when it "
+                        "belongs to another file")
     p.add_argument("--salvage", action="store_true",
                    help="a damaged .pln input: convert every intact object and part group, list the losses "
                         "on stderr and exit 1")
@@ -94,10 +101,9 @@ def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts:
         dropped: list[str] = []
     else:
         scene, dropped = registry.read(src, from_)
-    fmt = registry.get(to) if to else registry.for_extension(dst, writable=True)
-    if fmt is None:
-        raise _Usage(f"cannot tell the output format from {dst!r}: name it with --to", code="UNKNOWN_FORMAT")
-    notes = registry.write(scene, dst, fmt.name, **(pln_opts if fmt.name == "pln" else {}))
+    fmt = _output_format(dst, to)
+    # Conflicts beside the output were refused before any work, or --force allowed them.
+    notes = registry.write(scene, dst, fmt.name, force=True, **(pln_opts if fmt.name == "pln" else {}))
     warnings = []
     if dropped:
         warnings.append(f"{src}: dropped {'; '.join(dropped)} (not carried into {Path(dst).name})")
@@ -124,7 +130,7 @@ def run(args: argparse.Namespace) -> int:
             elif len(args.paths) != 2:
                 raise _Usage("give IN OUT, or several inputs with -d OUTDIR --to FORMAT", code="CONVERSION_FAILED")
             else:
-                _refuse_overwriting_input(args.paths[0], args.paths[1])
+                _refuse_conflicts([(args.paths[0], args.paths[1])], args)
                 code = _run_single(args.paths[0], args.paths[1], args, opts)
         except PlnError:
             # The error may be what a swallowed KeyboardInterrupt turned into: report the signal.
@@ -134,36 +140,48 @@ def run(args: argparse.Namespace) -> int:
         return code
 
 
-def _file_key(path: str) -> tuple:
-    """Equal for two paths to one file, also through symbolic or hard links (device and inode where the
-    file exists, else the resolved path: a file that does not exist yet is no existing file)."""
-    try:
-        st = os.stat(path)
-    except OSError:
-        return ("path", os.path.realpath(path))
-    return ("inode", st.st_dev, st.st_ino)
+def _refuse_conflicts(pairs: list[tuple[str, str]], args: argparse.Namespace) -> None:
+    """Before any work: no output (sidecars included) replaces an input or a file an input uses, none is
+    written twice, and none replaces a file beside its target that the target does not use (without
+    ``--force``). The atomic rename would otherwise lose that file only after a possibly long run."""
+    from planefmt_converters import registry
 
-
-def _refuse_overwriting_input(src: str, dst: str) -> None:
-    # Checked before any work: the atomic rename would replace the input only once the (possibly long)
-    # conversion had read it, so the input would be lost with no error at all.
-    if "-" not in (src, dst) and _file_key(src) == _file_key(dst):
-        raise PlnError(f"the output is the same file as the input {src}; the input is never overwritten: "
-                       "choose another output name", code="OUTPUT_CONFLICT", file=dst)
-
-
-def _refuse_clashes(pairs: list[tuple[str, str]]) -> None:
-    """A batch writes each output once and never over one of its inputs; checked before any work."""
-    inputs = {_file_key(src): src for src, _ in pairs}
+    inputs: dict[tuple, str] = {}  # file identity: how the message names it
+    for src, _ in pairs:
+        if src == "-":
+            continue
+        fmt_in = registry.get(args.from_) if args.from_ else registry.detect(src)
+        for used in fmt_in.references(src) if fmt_in.references else ():
+            inputs[registry.file_identity(used)] = f"a file the input {src} uses"
+        inputs[registry.file_identity(src)] = f"the input {src}"
     written: dict[tuple, str] = {}
     for src, dst in pairs:
-        key = _file_key(dst)
-        if key in inputs:
-            _refuse_overwriting_input(inputs[key], dst)
-        if key in written:
-            raise PlnError(f"{written[key]} and {src} would both be written here, one result lost: convert "
-                           "them into different folders or rename one", code="OUTPUT_CONFLICT", file=dst)
-        written[key] = src
+        if dst == "-":
+            continue
+        fmt = _output_format(dst, args.to)
+        for out in (dst, *(fmt.sidecars(dst) if fmt.sidecars else ())):
+            key = registry.file_identity(out)
+            if key in inputs:
+                raise PlnError(f"this output is the same file as {inputs[key]}; inputs are never overwritten: "
+                               "choose another output name", code="OUTPUT_CONFLICT", file=out)
+            if key in written:
+                raise PlnError(f"{written[key]} and {src} would both be written here, one result lost: "
+                               "convert them into different folders or rename one", code="OUTPUT_CONFLICT",
+                               file=out)
+            written[key] = src
+        unclaimed = [] if args.force else registry.unclaimed_sidecars(dst, fmt)
+        if unclaimed:
+            raise PlnError(f"writing {dst} would replace this file, which {dst} does not use: move it, or "
+                           "add --force to replace it", code="OUTPUT_CONFLICT", file=unclaimed[0])
+
+
+def _output_format(dst: str, to: str | None) -> Format:
+    from planefmt_converters import registry
+
+    fmt = registry.get(to) if to else registry.for_extension(dst, writable=True)
+    if fmt is None:
+        raise _Usage(f"cannot tell the output format from {dst!r}: name it with --to", code="UNKNOWN_FORMAT")
+    return fmt
 
 
 def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int:
@@ -199,7 +217,7 @@ def _run_batch(args: argparse.Namespace, opts: dict) -> int:
     ext = registry.get(args.to).extensions[0]
     outdir = Path(args.outdir)
     pairs = [(src, str(outdir / (Path(src).stem + ext))) for src in args.paths]
-    _refuse_clashes(pairs)
+    _refuse_conflicts(pairs, args)
     outdir.mkdir(parents=True, exist_ok=True)
     jobs = [(src, dst, args.to, args.from_, opts, args.salvage) for src, dst in pairs]
     failed = losses = 0
