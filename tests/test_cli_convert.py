@@ -7,6 +7,7 @@ import os
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from planefmt_converters import registry
@@ -125,3 +126,40 @@ def test_library_gltf_write_keeps_an_unrelated_sidecar(tmp_path: Path) -> None:
     registry.write(scene, tmp_path / "m.gltf", force=True)
     assert (tmp_path / "m.bin").read_bytes() != b"other"
     registry.write(scene, tmp_path / "m.gltf")  # its own sidecar now
+
+
+# A unit cube whose top is one pentagon with a vertex in the middle of an edge: trimesh fans it from its
+# first corner, which makes one zero-area triangle (as polygon triangulations often do).
+PENTAGON_TOP_CUBE = """\
+v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 0.5 0 1
+f 1 4 3 2\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\nf 5 9 6 7 8
+"""
+TETRA_FACES = "f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+
+
+def test_zero_area_triangles_are_dropped_with_a_warning(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    src = tmp_path / "pentagon.obj"
+    src.write_text(PENTAGON_TOP_CUBE)
+    assert len(registry.read(src)[0].nodes[0].mesh.faces) == 13
+    assert main(["convert", str(src), str(tmp_path / "cube.pln")]) == 0
+    err = capsys.readouterr().err
+    assert "1 zero-area triangle" in err, err
+    decoded = registry.read(tmp_path / "cube.pln")[0].nodes[0].mesh
+    assert len(decoded.faces) == 12
+    assert np.allclose([decoded.vertices.min(axis=0), decoded.vertices.max(axis=0)], [[0, 0, 0], [1, 1, 1]],
+                       atol=1e-9)
+
+
+@pytest.mark.parametrize("text,reason", [
+    ("v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n", "zero area"),
+    ("v 0 0 0\nv 1e300 0 0\nv 0 1 0\nv 0 0 1\n" + TETRA_FACES, "float32"),
+], ids=["all-degenerate", "1e300"])
+def test_meshes_planes_cannot_hold_get_a_clear_error(text: str, reason: str, tmp_path: Path,
+                                                     capsys: pytest.CaptureFixture) -> None:
+    src = tmp_path / "bad.obj"
+    src.write_text(text)
+    assert main(["convert", str(src), str(tmp_path / "bad.pln")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith(f"pln: {src}: ") and reason in err and "Error" not in err, err
+    assert len(err.splitlines()) == 1
+    assert not (tmp_path / "bad.pln").exists()

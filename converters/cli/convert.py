@@ -103,7 +103,12 @@ def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts:
         scene, dropped = registry.read(src, from_)
     fmt = _output_format(dst, to)
     # Conflicts beside the output were refused before any work, or --force allowed them.
-    notes = registry.write(scene, dst, fmt.name, force=True, **(pln_opts if fmt.name == "pln" else {}))
+    try:
+        notes = registry.write(scene, dst, fmt.name, force=True, **(pln_opts if fmt.name == "pln" else {}))
+    except PlnError as exc:
+        if exc.code == "DEGENERATE_GEOMETRY":
+            exc.file = src  # what the input holds, not the output
+        raise
     warnings = []
     if dropped:
         warnings.append(f"{src}: dropped {'; '.join(dropped)} (not carried into {Path(dst).name})")
