@@ -28,6 +28,7 @@ from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
 from .atomic import atomic_paths, write_bytes
+from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
 
 _GLB_MAGIC = b"glTF"
@@ -140,5 +141,5 @@ def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:
     except ConversionError as exc:
         raise exc.located(file=file)
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything
-        raise ConversionError(f"cannot write glTF: {type(exc).__name__}: {exc}", file=file) from exc
+        raise ConversionError(f"cannot write glTF: {describe(exc)}", file=file) from exc
     return result, notes

@@ -59,6 +59,11 @@ ZERO_AREA = 1e-12
 #: The header's bounding box is float32 (spec §5): a coordinate beyond this cannot be recorded.
 FLOAT32_MAX = float(np.finfo(np.float32).max)
 
+#: The codec's plane arithmetic squares cross products of edges (edge length to the fourth power), which
+#: underflows float64 below about 1e-77; this leaves room for triangles smaller than their mesh (a
+#: tetrahedron 1e-60 across encodes, one 1e-100 across does not).
+SMALLEST_DIAGONAL = 1e-60
+
 
 def without_zero_area(scene: Scene) -> tuple[Scene, int]:
     """``scene`` without its zero-area triangles (which have no plane), and how many were dropped.
@@ -72,10 +77,15 @@ def without_zero_area(scene: Scene) -> tuple[Scene, int]:
         mesh = node.mesh
         if mesh is None:
             continue
-        placed = np.abs(mesh.vertices @ world[:3, :3].T + world[:3, 3]).max(initial=0.0)
-        if not placed <= FLOAT32_MAX:
-            raise GeometryError(f"coordinates up to {placed:.3g} are beyond the float32 "
+        placed = mesh.vertices @ world[:3, :3].T + world[:3, 3]
+        largest = np.abs(placed).max(initial=0.0)
+        if not largest <= FLOAT32_MAX:
+            raise GeometryError(f"coordinates up to {largest:.3g} are beyond the float32 "
                                 f"range (±{FLOAT32_MAX:.3g}) of a .pln bounding box", code="DEGENERATE_GEOMETRY")
+        diagonal = float(np.linalg.norm(np.ptp(placed, axis=0))) if len(placed) else 0.0
+        if 0 < diagonal < SMALLEST_DIAGONAL:
+            raise GeometryError(f"a mesh {diagonal:.3g} across is too small for the plane arithmetic (at least "
+                                f"{SMALLEST_DIAGONAL:g}): scale it up", code="DEGENERATE_GEOMETRY")
         if id(mesh) not in cleaned:
             keep = _with_area(mesh)
             dropped += int(len(keep) - np.count_nonzero(keep))

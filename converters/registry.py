@@ -48,6 +48,7 @@ from planefmt.errors import ConversionError, PlnError
 from planefmt.model import Scene
 
 from . import gltf, obj, off, pln, ply, stl, usd
+from .failures import describe
 
 ENTRY_POINT_GROUP = "planefmt.converters"
 
@@ -170,6 +171,8 @@ def detect(path: str | os.PathLike[str]) -> Format:
             size = os.fstat(handle.fileno()).st_size
     except OSError as exc:
         raise ConversionError(f"cannot open: {exc.strerror or exc}", file=file) from exc
+    if size == 0:
+        raise ConversionError("the file is empty", file=file)
     for fmt in formats():
         if fmt.sniff is not None and fmt.read is not None and _sniffs(fmt.sniff, head, size):
             return fmt
@@ -277,6 +280,5 @@ def _guarded(fmt: Format, action: str, file: str, call: Callable[[], Any]) -> An
     except PlnError as exc:
         raise exc.located(file=file)
     except Exception as exc:  # noqa: BLE001
-        raise ConversionError(f"{fmt.name} {action} failed: {type(exc).__name__}: {exc}",
-                              file=file) from exc
+        raise ConversionError(f"cannot {action} {fmt.name}: {describe(exc)}", file=file) from exc
 

@@ -4,12 +4,16 @@ the user did not name."""
 from __future__ import annotations
 
 import os
+import re
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from planefmt.model import Units
 from planefmt_converters import registry
 from planefmt_converters.cli import main
 
@@ -163,3 +167,98 @@ def test_meshes_planes_cannot_hold_get_a_clear_error(text: str, reason: str, tmp
     assert err.startswith(f"pln: {src}: ") and reason in err and "Error" not in err, err
     assert len(err.splitlines()) == 1
     assert not (tmp_path / "bad.pln").exists()
+
+
+# --------------------------------------------------------------------------- messages
+
+PLN = [sys.executable, "-m", "planefmt_converters.cli"]
+
+#: Internals a message must not show: exception class names, temporary files, raw warnings, tracebacks.
+LEAKS = re.compile(r"\b[A-Z]\w*(Error|Exception|Warning)\b|\.tmp|/tmp/|Traceback")
+
+
+def _bad_inputs(cube: bytes) -> dict[str, bytes]:
+    crc = bytearray(cube)
+    crc[cube.index(b"PLNS") + 8] ^= 0xFF  # a byte of the plane table's payload
+    return {
+        "empty.glb": b"",
+        "header-only.glb": b"glTF\x02\x00\x00\x00\x0c\x00\x00\x00",
+        "missing-vertex.obj": b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n",
+        "truncated.pln": cube[: len(cube) // 2],
+        "corrupt.pln": bytes(crc),
+        "wrong.ply": b"hello world\n",
+        "binary.obj": bytes(range(256)) * 4,
+        "text.glb": b"this is not a binary glTF file\n",
+        "all-degenerate.obj": b"v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n",
+        "huge.obj": ("v 0 0 0\nv 1e300 0 0\nv 0 1 0\nv 0 0 1\n" + TETRA_FACES).encode(),
+        "tiny.obj": ("v 0 0 0\nv 1e-150 0 0\nv 0 1e-150 0\nv 0 0 1e-150\n" + TETRA_FACES).encode(),
+        "nan.obj": b"v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n",
+    }
+
+
+@pytest.fixture(scope="module")
+def cube_bytes(tmp_path_factory: pytest.TempPathFactory) -> bytes:
+    out = tmp_path_factory.mktemp("cube") / "cube.pln"
+    assert main(["convert", str(CUBE), str(out)]) == 0
+    return out.read_bytes()
+
+
+BAD_NAMES = ["empty.glb", "header-only.glb", "missing-vertex.obj", "truncated.pln", "corrupt.pln", "wrong.ply",
+             "binary.obj", "text.glb", "all-degenerate.obj", "huge.obj", "tiny.obj", "nan.obj"]
+
+
+@pytest.mark.parametrize("how", ["file", "stdin"])
+@pytest.mark.parametrize("name", BAD_NAMES)
+def test_bad_input_messages_are_one_plain_line(name: str, how: str, tmp_path: Path, cube_bytes: bytes) -> None:
+    (tmp_path / name).write_bytes(_bad_inputs(cube_bytes)[name])
+    out = "out.obj" if name.endswith(".pln") else "out.pln"
+    args = [name, out] if how == "file" else ["-", out]
+    with open(tmp_path / name, "rb") as stdin:
+        run = subprocess.run([*PLN, "convert", *args], cwd=tmp_path, stdin=stdin, capture_output=True, text=True)
+    assert run.returncode == 2, run.stderr
+    assert len(run.stderr.splitlines()) == 1, run.stderr
+    assert not LEAKS.search(run.stderr), run.stderr
+    assert run.stderr.startswith(f"pln: {name if how == 'file' else '<stdin>'}: "), run.stderr
+    if name in ("truncated.pln", "corrupt.pln"):
+        assert "--salvage" in run.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == [name]
+
+
+def test_missing_output_folder_is_named_without_temporaries(tmp_path: Path) -> None:
+    run = subprocess.run([*PLN, "convert", str(CUBE), "nowhere/out.pln"], cwd=tmp_path, capture_output=True,
+                         text=True)
+    assert run.returncode == 2
+    assert run.stderr.startswith("pln: nowhere/out.pln: ") and not LEAKS.search(run.stderr), run.stderr
+
+
+_NOISY = """
+import sys, numpy
+from planefmt.model import Units
+from planefmt_converters import registry
+from planefmt_converters.cli import main
+read = registry.read
+def noisy(*args, **kwargs):
+    numpy.float64(1e308) * 10  # what numpy says on an overflow: RuntimeWarning
+    return read(*args, **kwargs)
+registry.read = noisy
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+def test_numpy_warnings_stay_off_stderr(tmp_path: Path) -> None:
+    run = subprocess.run([sys.executable, "-c", _NOISY, "convert", str(CUBE), "out.pln"], cwd=tmp_path,
+                         capture_output=True, text=True)
+    assert run.returncode == 0 and run.stderr == "", run.stderr
+
+
+def test_dropped_notes_say_each_thing_once(tmp_path: Path) -> None:
+    from planefmt_converters.trimesh_bridge import scene_from_trimesh
+    import trimesh
+
+    textured = trimesh.creation.box()
+    textured.visual = trimesh.visual.TextureVisuals(uv=np.zeros((8, 2)))
+    plain = trimesh.creation.box()
+    plain.visual = trimesh.visual.TextureVisuals(
+        material=trimesh.visual.material.PBRMaterial(baseColorFactor=[255, 0, 0, 255]))
+    _, notes = scene_from_trimesh(trimesh.Scene([textured, plain]), Units.METRE, None)
+    assert notes == ["UVs", "materials (base colour kept as face colour)", "textures"], notes

@@ -17,12 +17,14 @@ import os
 import shutil
 import sys
 import tempfile
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from planefmt.errors import PlnError
+from planefmt.errors import GeometryError, PlnError
 from planefmt_converters import interrupts
+from planefmt_converters.cli import quiet_library_warnings
 
 if TYPE_CHECKING:
     from planefmt_converters.registry import Format
@@ -83,18 +85,32 @@ def _pln_options(args: argparse.Namespace) -> dict:
 
 
 def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict,
-                salvage: bool = False) -> tuple[list[str], list[str]]:
+                salvage: bool = False, *, src_name: str | None = None,
+                dst_name: str | None = None) -> tuple[list[str], list[str]]:
     """Convert one file; returns warning lines (what was dropped) and, with ``salvage``, what was lost.
 
-    Raises PlnError on bad input.
+    ``src_name`` and ``dst_name`` are what messages call ``src`` and ``dst`` (``<stdin>`` for a
+    temporary copy of standard input). Raises PlnError on bad input.
     """
+    names = {src: src_name or src, dst: dst_name or dst}
+    try:
+        warnings, lost = _convert(src, dst, to, from_, pln_opts, salvage, names[src], names[dst])
+    except PlnError as exc:
+        exc.file = names.get(exc.file, exc.file)
+        raise
+    return warnings, lost
+
+
+def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict, salvage: bool,
+             src_name: str, dst_name: str) -> tuple[list[str], list[str]]:
     from planefmt_converters import registry
 
     lost: list[str] = []
     if salvage:
         fmt_in = registry.get(from_) if from_ else registry.detect(src)
         if fmt_in.name != "pln":
-            raise _Usage(f"--salvage reads damaged .pln files; {src} is {fmt_in.name}", code="UNKNOWN_FORMAT")
+            raise _Usage(f"--salvage reads damaged .pln files; {src_name} is {fmt_in.name}",
+                         code="UNKNOWN_FORMAT")
         from planefmt import codec
 
         scene, lost = codec.salvage_scene(src)
@@ -105,16 +121,15 @@ def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts:
     # Conflicts beside the output were refused before any work, or --force allowed them.
     try:
         notes = registry.write(scene, dst, fmt.name, force=True, **(pln_opts if fmt.name == "pln" else {}))
-    except PlnError as exc:
-        if exc.code == "DEGENERATE_GEOMETRY":
-            exc.file = src  # what the input holds, not the output
+    except GeometryError as exc:
+        exc.file = src  # what the input holds (or a tolerance it cannot meet), not the output
         raise
     warnings = []
     if dropped:
-        warnings.append(f"{src}: dropped {'; '.join(dropped)} (not carried into {Path(dst).name})")
+        warnings.append(f"{src_name}: dropped {'; '.join(dropped)} (not carried into {Path(dst_name).name})")
     if notes:
-        warnings.append(f"{dst}: not kept by {fmt.name}: {', '.join(notes)}")
-    return warnings, [f"{src}: {line}" for line in lost]
+        warnings.append(f"{dst_name}: not kept by {fmt.name}: {', '.join(notes)}")
+    return warnings, [f"{src_name}: {line}" for line in lost]
 
 
 def _batch_job(job: tuple) -> tuple[str, list[str] | None, bool, str | None]:
@@ -190,9 +205,10 @@ def _output_format(dst: str, to: str | None) -> Format:
 
 
 def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int:
-    with tempfile.TemporaryDirectory(prefix="pln-") as tmp:
+    with contextlib.ExitStack() as stack:
+        src_name = dst_name = None
         if src == "-":
-            src = os.path.join(tmp, "stdin")
+            src, src_name = stack.enter_context(_temporary("")), "<stdin>"
             with open(src, "wb") as f:
                 shutil.copyfileobj(sys.stdin.buffer, f)
         to_stdout = dst == "-"
@@ -201,8 +217,11 @@ def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int
                 raise _Usage("writing to standard output needs --to FORMAT", code="UNKNOWN_FORMAT")
             from planefmt_converters import registry
 
-            dst = os.path.join(tmp, "stdout" + registry.get(args.to).extensions[0])
-        warnings, lost = convert_one(src, dst, args.to, args.from_, opts, args.salvage)
+            dst, dst_name = stack.enter_context(_temporary(registry.get(args.to).extensions[0])), "<stdout>"
+        elif not os.path.isdir(os.path.dirname(dst) or "."):
+            raise _Usage(f"the folder {os.path.dirname(dst)} does not exist", code="CONVERSION_FAILED", file=dst)
+        warnings, lost = convert_one(src, dst, args.to, args.from_, opts, args.salvage,
+                                     src_name=src_name, dst_name=dst_name)
         for line in warnings:
             print(f"pln: warning: {line}", file=sys.stderr)
         for line in lost:
@@ -212,6 +231,22 @@ def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int
                 shutil.copyfileobj(f, sys.stdout.buffer)
             sys.stdout.buffer.flush()
     return 1 if lost else 0
+
+
+@contextlib.contextmanager
+def _temporary(suffix: str) -> Iterator[str]:
+    """A temporary file standing for standard input or output, since readers and writers take paths.
+
+    Only these conversions make one, and a file rather than a folder: a SIGKILL, which allows no clean-up,
+    leaves at most this one file in the system's temporary folder.
+    """
+    fd, name = tempfile.mkstemp(prefix="pln-", suffix=suffix)
+    os.close(fd)
+    try:
+        yield name
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(name)
 
 
 def _run_batch(args: argparse.Namespace, opts: dict) -> int:
@@ -228,7 +263,8 @@ def _run_batch(args: argparse.Namespace, opts: dict) -> int:
     failed = losses = 0
     progress = _Progress(len(jobs))
     with contextlib.ExitStack() as stack:
-        pool = stack.enter_context(ProcessPoolExecutor(args.jobs)) if args.jobs > 1 else None
+        pool = stack.enter_context(ProcessPoolExecutor(args.jobs, initializer=quiet_library_warnings)) \
+            if args.jobs > 1 else None
         for result in (pool.map if pool else map)(_batch_job, jobs):
             failed += _report(result, progress)
             losses += result[2]
