@@ -74,7 +74,27 @@ def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
 
 def read_gltf(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.gltf`` file (and the buffers and images it refers to) into ``(scene, dropped)``."""
-    return read_scene(path, "gltf", "glTF", units=Units.METRE, reversed_siblings=True)
+    return read_scene(path, "gltf", "glTF", units=Units.METRE, reversed_siblings=True,
+                      resolver=_uri_resolver(path))
+
+
+def _uri_resolver(path: str | os.PathLike[str]) -> Any:
+    """A trimesh resolver for the files beside ``path`` that decodes percent-encoded URIs.
+
+    glTF URIs are URI references (RFC 3986): ``back 1.bin`` is written ``back%201.bin`` (this
+    module's writer does so) and trimesh 5.2 looks for the encoded name. The name as written is
+    still tried, for writers that did not encode it.
+    """
+    resolvers = require_trimesh("glTF").resolvers
+
+    class Decoding(resolvers.FilePathResolver):
+        def get(self, name: str) -> bytes:
+            try:
+                return super().get(unquote(name))
+            except FileNotFoundError:
+                return super().get(name)
+
+    return Decoding(os.fspath(path))
 
 
 def write_glb(scene: Scene, path: str | os.PathLike[str]) -> list[str]:

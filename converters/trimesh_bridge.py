@@ -40,20 +40,21 @@ def require_trimesh(what: str) -> ModuleType:
 
 def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
                units: Units = Units.UNSPECIFIED,
-               reversed_siblings: bool = False) -> tuple[Scene, list[str]]:
+               reversed_siblings: bool = False, resolver: Any = None) -> tuple[Scene, list[str]]:
     """Read ``path`` as ``file_type`` through trimesh into ``(scene, dropped)``.
 
     ``what`` names the format in messages ("binary glTF"). Any trimesh
     failure becomes a :class:`ConversionError`; so does a file with no
     triangle. ``reversed_siblings``: trimesh's graph lists each node's
-    children in reverse file order (see :func:`scene_from_trimesh`).
+    children in reverse file order (see :func:`scene_from_trimesh`). ``resolver``:
+    how trimesh finds the files ``path`` refers to (default: by name beside it).
     """
     tm = require_trimesh(what)
     file = os.fspath(path)
     try:
         # process=False: trimesh would merge vertices by position *and*
         # attributes (UV seams stay split); build_mesh merges by position only.
-        loaded = tm.load_scene(file, file_type=file_type, process=False)
+        loaded = tm.load_scene(file, file_type=file_type, resolver=resolver, process=False)
     except MemoryError:
         raise  # not a property of the file
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input

@@ -262,3 +262,12 @@ def test_dropped_notes_say_each_thing_once(tmp_path: Path) -> None:
         material=trimesh.visual.material.PBRMaterial(baseColorFactor=[255, 0, 0, 255]))
     _, notes = scene_from_trimesh(trimesh.Scene([textured, plain]), Units.METRE, None)
     assert notes == ["UVs", "materials (base colour kept as face colour)", "textures"], notes
+
+
+@pytest.mark.parametrize("stem", ["back 1", "modèle", "100%"])
+def test_gltf_with_spaces_or_non_ascii_names_reads_back(stem: str, tmp_path: Path) -> None:
+    target = tmp_path / f"{stem}.gltf"
+    assert main(["convert", str(CUBE), str(target)]) == 0
+    assert (tmp_path / f"{stem}.bin").exists()
+    scene, _ = registry.read(target)
+    assert len(scene.nodes[0].mesh.faces) == len(registry.read(CUBE)[0].nodes[0].mesh.faces)
