@@ -45,9 +45,13 @@ def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6
     scene, dropped = without_zero_area(scene)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PlnWarning)
-        codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta, tau=tau,
-                           compress=compress, compact=compact, watertight=watertight)
+        header = codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta,
+                                    tau=tau, compress=compress, compact=compact, watertight=watertight)
     notes = [f"{dropped} zero-area triangle{'s' if dropped > 1 else ''} (no plane to store)"] if dropped else []
+    if header.error_bound > header.tolerance:
+        # Only a forced coding gets here: the codec refuses any other that misses the tolerance.
+        notes.append(f"the tolerance {header.tolerance:g} (the forced coding measured {header.error_bound:.3g} of "
+                     "the diagonal; the file is marked lossy)")
     return notes + [str(w) for w in _pln_warnings(caught)]
 
 

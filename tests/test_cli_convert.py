@@ -271,3 +271,27 @@ def test_gltf_with_spaces_or_non_ascii_names_reads_back(stem: str, tmp_path: Pat
     assert (tmp_path / f"{stem}.bin").exists()
     scene, _ = registry.read(target)
     assert len(scene.nodes[0].mesh.faces) == len(registry.read(CUBE)[0].nodes[0].mesh.faces)
+
+
+@pytest.mark.parametrize("tolerance", ["5", "0.5", "0", "-1e-6", "nan"])
+def test_tolerance_outside_its_range_is_refused(tolerance: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                                capsys: pytest.CaptureFixture) -> None:
+    _forbid_reading(monkeypatch)
+    assert main(["convert", f"--tolerance={tolerance}", str(CUBE), str(tmp_path / "c.pln")]) == 2
+    err = capsys.readouterr().err
+    assert "--tolerance" in err and "0.1" in err and len(err.splitlines()) == 1, err
+
+
+def test_forced_coding_beyond_the_tolerance_is_marked_lossy_with_a_warning(
+        tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    import planefmt
+
+    out = tmp_path / "coarse.pln"
+    assert main(["convert", "--bits", "4", str(CORPUS / "cad" / "box.STL"), str(out)]) == 0
+    err = capsys.readouterr().err
+    with planefmt.open(out) as f:
+        header = f.header
+    assert header.error_bound > header.tolerance and header.lossy
+    assert "warning" in err and f"{header.error_bound:.3g}" in err and "lossy" in err, err
+    assert main(["info", str(out)]) in (0, 1)
+    assert "lossless" not in capsys.readouterr().out

@@ -68,9 +68,17 @@ class _Usage(PlnError):
     """A usage mistake: reported like bad input (one line, exit 2)."""
 
 
+#: Largest --tolerance: a tenth of the diagonal. Beyond it the decoded surface may be another shape, which
+#: a file marked lossless "within its tolerance" would misrepresent.
+MAX_TOLERANCE = 0.1
+
+
 def _pln_options(args: argparse.Namespace) -> dict:
     if (args.delta is not None or args.tau is not None) and not args.lossy:
         raise _Usage("--delta and --tau change the geometry: add --lossy to allow it", code="CONVERSION_FAILED")
+    if not 0 < args.tolerance <= MAX_TOLERANCE:
+        raise _Usage(f"--tolerance {args.tolerance:g} is outside (0, {MAX_TOLERANCE:g}]: it is a fraction of the "
+                     "bounding-box diagonal (default 1e-6)", code="CONVERSION_FAILED")
     from planefmt.model import Coding
 
     opts = {"tolerance": args.tolerance, "compress": args.compress, "compact": args.compact,
