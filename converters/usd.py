@@ -348,7 +348,9 @@ def write(scene: Scene, path: str | os.PathLike[str], *, up_axis: str = "Y") -> 
 
 def _package_usdz(pxr: SimpleNamespace, layer: Any, stem: str, temp: Path) -> None:
     """Export ``layer`` as a crate file and package it alone into the usdz ``temp``."""
-    with tempfile.TemporaryDirectory(prefix="planefmt-usdz-") as folder:
+    # Beside the output, hidden and named as its temporaries are: a SIGKILL, which allows no clean-up,
+    # leaves it where the output was going, not in the system's temporary folder.
+    with tempfile.TemporaryDirectory(prefix=f"{temp.stem}.", suffix=".tmp", dir=temp.parent) as folder:
         inner = Path(folder) / f"{pxr.Tf.MakeValidIdentifier(stem)}.usdc"
         if not layer.Export(str(inner)):
             raise ConversionError("usd-core could not export the layer")

@@ -295,3 +295,56 @@ def test_forced_coding_beyond_the_tolerance_is_marked_lossy_with_a_warning(
     assert "warning" in err and f"{header.error_bound:.3g}" in err and "lossy" in err, err
     assert main(["info", str(out)]) in (0, 1)
     assert "lossless" not in capsys.readouterr().out
+
+
+_KILLED = """
+import os, signal, sys
+from pxr import UsdUtils
+from planefmt_converters import registry
+from planefmt_converters.cli import main
+write = registry.write
+def killed(scene, path, *args, **kwargs):
+    os.kill(os.getpid(), signal.SIGKILL)
+def killed_packaging(*args):
+    os.kill(os.getpid(), signal.SIGKILL)
+if sys.argv[-1].endswith(".usdz"):
+    UsdUtils.CreateNewUsdzPackage = killed_packaging  # while the package's parts are being written
+else:
+    registry.write = killed
+sys.exit(main(sys.argv[1:]))
+"""
+
+
+@pytest.mark.parametrize("out", ["out.obj", "out.usdz"])
+def test_sigkill_leaves_nothing_in_the_temporary_folder(out: str, tmp_path: Path) -> None:
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    run = subprocess.run([sys.executable, "-c", _KILLED, "convert", str(CUBE), out], cwd=tmp_path,
+                         env={**os.environ, "TMPDIR": str(temp)}, capture_output=True, text=True)
+    assert run.returncode == -9, run.stderr
+    assert list(temp.iterdir()) == []
+    assert not (tmp_path / out).exists()
+
+
+def test_version(capsys: pytest.CaptureFixture) -> None:
+    import planefmt
+
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"pln {planefmt.__version__}"
+
+
+@pytest.mark.parametrize("to,name", [("glb", "x.pln"), ("obj", "x.ply"), ("pln", "x.glb")])
+def test_output_extension_that_contradicts_to_is_refused(to: str, name: str, tmp_path: Path,
+                                                         monkeypatch: pytest.MonkeyPatch,
+                                                         capsys: pytest.CaptureFixture) -> None:
+    _forbid_reading(monkeypatch)
+    assert main(["convert", "--to", to, str(CUBE), str(tmp_path / name)]) == 2
+    err = capsys.readouterr().err
+    assert name in err and to in err and len(err.splitlines()) == 1, err
+    assert not (tmp_path / name).exists()
+
+
+@pytest.mark.parametrize("to,name", [("usdc", "x.usd"), ("usda", "x.usd"), ("obj", "x.mesh"), ("ply", "noext")])
+def test_output_extension_that_fits_to_or_no_format_is_kept(to: str, name: str, tmp_path: Path) -> None:
+    assert main(["convert", "--to", to, str(CUBE), str(tmp_path / name)]) == 0
+    assert registry.read(tmp_path / name, to)[0].nodes

@@ -21,7 +21,10 @@ EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from planefmt import __version__
+
     parser = argparse.ArgumentParser(prog="pln", description="Read, write and convert .pln plane meshes.")
+    parser.add_argument("--version", action="version", version=f"pln {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in SUBCOMMANDS:
         try:

@@ -204,11 +204,20 @@ def _refuse_conflicts(pairs: list[tuple[str, str]], args: argparse.Namespace) ->
 
 
 def _output_format(dst: str, to: str | None) -> Format:
+    """The format ``dst`` is written in: ``--to``, else by extension. An extension of another format than
+    ``--to`` names is refused (GLB bytes in ``x.pln`` mislead every later reader); one of no format is the
+    user's choice."""
     from planefmt_converters import registry
 
-    fmt = registry.get(to) if to else registry.for_extension(dst, writable=True)
+    by_extension = registry.for_extension(dst, writable=True)
+    fmt = registry.get(to) if to else by_extension
     if fmt is None:
         raise _Usage(f"cannot tell the output format from {dst!r}: name it with --to", code="UNKNOWN_FORMAT")
+    suffix = Path(dst).suffix.lower()
+    if by_extension is not None and suffix not in fmt.extensions:
+        raise _Usage(f"--to {fmt.name} writes {fmt.name}, but {suffix} is the extension of {by_extension.name}: "
+                     f"name the output {Path(dst).stem}{fmt.extensions[0]} or drop --to", code="UNKNOWN_FORMAT",
+                     file=dst)
     return fmt
 
 
