@@ -33,8 +33,8 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
 
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
-          delta: float | None = None, tau: float | None = None, compress: bool = False,
-          compact: bool = False, watertight: bool = True) -> list[str]:
+          delta: float | None = None, tau: float | None = None, compress: bool = True,
+          compact: bool = True, watertight: bool = True) -> list[str]:
     """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane.
 
     Returns what the encoder gave up (its :class:`PlnWarning` lines): with
