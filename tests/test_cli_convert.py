@@ -348,3 +348,22 @@ def test_output_extension_that_contradicts_to_is_refused(to: str, name: str, tmp
 def test_output_extension_that_fits_to_or_no_format_is_kept(to: str, name: str, tmp_path: Path) -> None:
     assert main(["convert", "--to", to, str(CUBE), str(tmp_path / name)]) == 0
     assert registry.read(tmp_path / name, to)[0].nodes
+
+
+def test_readme_cube_figures_are_what_pln_convert_writes(tmp_path: Path) -> None:
+    readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    claim = re.search(r"`convex/cube_subd\.obj` \(six planes\) takes (\d+)\s+bytes, (\d+) as version 1\.0", readme)
+    assert claim, "README no longer states the cube's sizes"
+    sizes = []
+    for options in ([], ["--no-compact"]):
+        out = tmp_path / f"cube{len(options)}.pln"
+        assert main(["convert", *options, str(CUBE), str(out)]) == 0
+        sizes.append(out.stat().st_size)
+    assert sizes == [int(claim[1]), int(claim[2])]
+    assert "version\n2.0" not in readme and "version 2.0 (`pln convert`" not in readme
+
+
+def test_compact_help_names_the_default(capsys: pytest.CaptureFixture) -> None:
+    assert main(["convert", "--help"]) == 0
+    text = " ".join(capsys.readouterr().out.split())
+    assert "(spec/pln-3.md; the default)" in text and "--no-compact writes version 1.0" in text
