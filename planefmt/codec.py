@@ -57,7 +57,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError
 
-from . import quantize, records
+from . import progress, quantize, records
 from .errors import CODES, FormatError, GeometryError, PlnError, PlnWarning, SkippedGroupsWarning
 from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
@@ -926,8 +926,13 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
     def named(k: int) -> str:
         return f"object {k}" + (f" ({objects[k].name!r})" if objects[k].name else "")
 
+    tried = [0]
+
     def attempt(cod: Coding, q: Quantization | None, pieces: int | None = None, key: int = -1) -> _Choice | None:
         """The choice of this coding if its decoding keeps the structure and verifies; None if not."""
+        # How many codings a search verifies is not known beforehand: a count, not a fraction.
+        progress.report("verifying codings", tried[0])
+        tried[0] += 1
         if cod == Coding.FLOAT64:
             meshes = base_meshes
         else:
@@ -1222,7 +1227,10 @@ def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: floa
     kept (a set whose objects meet no coding is passed over). At 1e-6 the hull-first files were
     never the larger on the corpus meshes measured (six), and CAD encodes take minutes.
     """
-    objects = [prepare(k) for k in range(count)]
+    objects = []
+    for k in range(count):
+        progress.report("encoding objects", k, count)
+        objects.append(prepare(k))
     forced = coding is not None or bits is not None
     hull = [k for k, o in enumerate(objects) if any(g.splitter and g.splitter[2] for g in o.groups)]
     if not hull or forced or tolerance <= LOSSLESS_TOLERANCE:

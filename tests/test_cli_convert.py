@@ -3,6 +3,8 @@ the user did not name."""
 
 from __future__ import annotations
 
+import contextlib
+import io
 import os
 import re
 import shutil
@@ -367,3 +369,52 @@ def test_compact_help_names_the_default(capsys: pytest.CaptureFixture) -> None:
     assert main(["convert", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
     assert "(spec/pln-3.md; the default)" in text and "--no-compact writes version 1.0" in text
+
+
+# --------------------------------------------------------------------------- progress and summary
+
+class _Terminal(io.StringIO):
+    def isatty(self) -> bool:
+        return True
+
+
+def test_progress_on_a_terminal_shows_stage_percent_and_elapsed(tmp_path: Path,
+                                                                monkeypatch: pytest.MonkeyPatch) -> None:
+    from planefmt_converters.cli import progress
+
+    monkeypatch.setattr(progress, "DELAY", 0.0)
+    monkeypatch.setattr(progress, "INTERVAL", 0.005)
+    terminal = _Terminal()
+    monkeypatch.setattr(sys, "stderr", terminal)
+    assert main(["convert", str(CUBE), str(tmp_path / "cube.pln")]) == 0
+    lines = terminal.getvalue().split("\r")
+    assert any(re.fullmatch(r"pln: encoding objects 0/1 \(0%\), \d+ s *", line) for line in lines), lines
+    assert any(re.fullmatch(r"pln: verifying codings \(\d+ so far\), \d+ s *", line) for line in lines), lines
+    *_, last = terminal.getvalue().splitlines()
+    size = (tmp_path / "cube.pln").stat().st_size
+    assert re.fullmatch(rf"pln: {re.escape(str(CUBE))} -> {re.escape(str(tmp_path / 'cube.pln'))}: "
+                        rf"{CUBE.stat().st_size:,} B in, {size:,} B out, error at most \S+ of the diagonal, "
+                        r"\d+\.\d s", last), last
+
+
+def test_summary_on_a_pseudo_terminal_and_nothing_on_a_pipe(tmp_path: Path) -> None:
+    import pty
+
+    main_fd, sub_fd = pty.openpty()
+    run = subprocess.run([*PLN, "convert", str(TET), "tet.obj"], cwd=tmp_path, stderr=sub_fd,
+                         stdout=subprocess.DEVNULL)
+    os.close(sub_fd)
+    seen = b""
+    with contextlib.suppress(OSError):  # EIO once the terminal's other end is closed and drained
+        while chunk := os.read(main_fd, 4096):
+            seen += chunk
+    os.close(main_fd)
+    assert run.returncode == 0
+    assert re.search(rb"pln: \S+tet\.ply -> tet\.obj: \d+ B in, \d+ B out, \d+\.\d s", seen), seen
+    piped = subprocess.run([*PLN, "convert", str(TET), "tet2.obj"], cwd=tmp_path, capture_output=True, text=True)
+    assert piped.returncode == 0 and piped.stderr == ""
+    verbose = subprocess.run([*PLN, "convert", "-v", str(TET), "tet.pln"], cwd=tmp_path, capture_output=True,
+                             text=True)
+    assert verbose.returncode == 0 and "\r" not in verbose.stderr
+    assert re.fullmatch(r"pln: \S+tet\.ply -> tet\.pln: \d+ B in, \d+ B out, error at most \S+ of the diagonal, "
+                        r"\d+\.\d s\n", verbose.stderr), verbose.stderr

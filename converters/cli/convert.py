@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 from planefmt.errors import GeometryError, PlnError
 from planefmt_converters import interrupts
 from planefmt_converters.cli import quiet_library_warnings
+from planefmt_converters.cli.progress import Status, summary
 
 if TYPE_CHECKING:
     from planefmt_converters.registry import Format
@@ -38,6 +39,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--to", help="output format name (glb, gltf, obj, ply, stl, off, usda, usdc, usdz, pln)")
     p.add_argument("--from", dest="from_", help="input format name instead of detecting it")
     p.add_argument("--jobs", type=int, default=1, help="batch: convert this many files at once")
+    p.add_argument("-v", "--verbose", action="store_true",
+                   help="end with a summary line (bytes in and out, error bound, seconds) also when stderr is "
+                        "not a terminal")
     p.add_argument("--force", action="store_true",
                    help="replace a file the output writes beside itself (a .gltf's .bin) even when it "
                         "belongs to another file")
@@ -93,16 +97,17 @@ def _pln_options(args: argparse.Namespace) -> dict:
 
 
 def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict,
-                salvage: bool = False, *, src_name: str | None = None,
-                dst_name: str | None = None) -> tuple[list[str], list[str]]:
+                salvage: bool = False, *, src_name: str | None = None, dst_name: str | None = None,
+                status: Status | None = None) -> tuple[list[str], list[str]]:
     """Convert one file; returns warning lines (what was dropped) and, with ``salvage``, what was lost.
 
     ``src_name`` and ``dst_name`` are what messages call ``src`` and ``dst`` (``<stdin>`` for a
-    temporary copy of standard input). Raises PlnError on bad input.
+    temporary copy of standard input); ``status`` is told the stages. Raises PlnError on bad input.
     """
     names = {src: src_name or src, dst: dst_name or dst}
     try:
-        warnings, lost = _convert(src, dst, to, from_, pln_opts, salvage, names[src], names[dst])
+        warnings, lost = _convert(src, dst, to, from_, pln_opts, salvage, names[src], names[dst],
+                                  status or Status(sys.stderr, enabled=False))
     except PlnError as exc:
         exc.file = names.get(exc.file, exc.file)
         raise
@@ -110,10 +115,12 @@ def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts:
 
 
 def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict, salvage: bool,
-             src_name: str, dst_name: str) -> tuple[list[str], list[str]]:
+             src_name: str, dst_name: str, status: Status) -> tuple[list[str], list[str]]:
+    from planefmt import progress
     from planefmt_converters import registry
 
     lost: list[str] = []
+    status.update(f"reading {src_name}")
     if salvage:
         fmt_in = registry.get(from_) if from_ else registry.detect(src)
         if fmt_in.name != "pln":
@@ -127,8 +134,10 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
         scene, dropped = registry.read(src, from_)
     fmt = _output_format(dst, to)
     # Conflicts beside the output were refused before any work, or --force allowed them.
+    status.update("encoding" if fmt.name == "pln" else f"writing {dst_name}")
     try:
-        notes = registry.write(scene, dst, fmt.name, force=True, **(pln_opts if fmt.name == "pln" else {}))
+        with progress.reporting(status.update):
+            notes = registry.write(scene, dst, fmt.name, force=True, **(pln_opts if fmt.name == "pln" else {}))
     except GeometryError as exc:
         exc.file = src  # what the input holds (or a tolerance it cannot meet), not the output
         raise
@@ -237,8 +246,14 @@ def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int
             dst, dst_name = stack.enter_context(_temporary(registry.get(args.to).extensions[0])), "<stdout>"
         elif not os.path.isdir(os.path.dirname(dst) or "."):
             raise _Usage(f"the folder {os.path.dirname(dst)} does not exist", code="CONVERSION_FAILED", file=dst)
-        warnings, lost = convert_one(src, dst, args.to, args.from_, opts, args.salvage,
-                                     src_name=src_name, dst_name=dst_name)
+        status = Status(sys.stderr, enabled=sys.stderr.isatty())
+        try:
+            warnings, lost = convert_one(src, dst, args.to, args.from_, opts, args.salvage,
+                                         src_name=src_name, dst_name=dst_name, status=status)
+        finally:
+            status.close()  # before any message, so that it starts on a clean line
+        if status.enabled or args.verbose:
+            print(_summary(src, dst, src_name or src, dst_name or dst, args, status.elapsed), file=sys.stderr)
         for line in warnings:
             print(f"pln: warning: {line}", file=sys.stderr)
         for line in lost:
@@ -248,6 +263,27 @@ def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int
                 shutil.copyfileobj(f, sys.stdout.buffer)
             sys.stdout.buffer.flush()
     return 1 if lost else 0
+
+
+def _summary(src: str, dst: str, src_name: str, dst_name: str, args: argparse.Namespace, seconds: float) -> str:
+    """The line a conversion ends with; the error bound is the output's, else the one its .pln input
+    records (what it was decoded within)."""
+    import planefmt
+    from planefmt_converters import registry
+
+    fmt = registry.get(args.to) if args.to else registry.for_extension(dst, writable=True)
+    written = [dst, *(fmt.sidecars(dst) if fmt.sidecars else ())]
+    bytes_out = sum(os.path.getsize(path) for path in written if os.path.exists(path))
+    pln_in = (args.from_ or registry.detect(src).name) == "pln"
+    error = None
+    if fmt.name == "pln" or pln_in:
+        try:
+            with planefmt.open(dst if fmt.name == "pln" else src) as f:
+                error = f.header.error_bound
+        except planefmt.PlnError:  # a damaged input, converted with --salvage: no bound to quote
+            pass
+    return summary(src_name, dst_name, os.path.getsize(src), bytes_out, error, seconds,
+                   recorded_in_input=fmt.name != "pln")
 
 
 @contextlib.contextmanager
