@@ -418,3 +418,9 @@ def test_summary_on_a_pseudo_terminal_and_nothing_on_a_pipe(tmp_path: Path) -> N
     assert verbose.returncode == 0 and "\r" not in verbose.stderr
     assert re.fullmatch(r"pln: \S+tet\.ply -> tet\.pln: \d+ B in, \d+ B out, error at most \S+ of the diagonal, "
                         r"\d+\.\d s\n", verbose.stderr), verbose.stderr
+
+
+def test_batch_with_a_missing_input_converts_the_others(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    assert main(["convert", str(tmp_path / "absent.obj"), str(TET), "-d", str(tmp_path / "out"), "--to", "obj"]) == 2
+    assert "absent.obj" in capsys.readouterr().err
+    assert (tmp_path / "out" / "tet.obj").exists()

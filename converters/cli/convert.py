@@ -1,12 +1,14 @@
 """``pln convert``: between any two supported formats, .pln on either side.
 
-    pln convert IN OUT [--tolerance T] [--bits N] [--allow-open] [--lossy --delta D --tau A]
+    pln convert IN OUT [--tolerance T] [--bits N] [--allow-open] [--lossy --delta D --tau A] [-v] [--force]
     pln convert A B C -d OUTDIR --to glb [--jobs N]
 
 ``-`` reads standard input (format detected from the content) or writes
 standard output (``--to`` names the format). Outputs are written atomically:
 an error, Ctrl-C or SIGTERM leaves nothing under the target name, and the
-input is never touched.
+input is never touched: an output that is an input, two inputs with one
+output name, or a file beside the output it does not own (a .gltf's .bin,
+without --force) are refused before any work.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "on stderr and exit 1")
     g = p.add_argument_group(".pln output")
     g.add_argument("--tolerance", type=float, default=1e-6,
-                   help="largest error allowed, a fraction of the bbox diagonal (default 1e-6)")
+                   help="largest error allowed, a fraction of the bbox diagonal, at most 0.1 (default 1e-6)")
     g.add_argument("--bits", type=int, help="force quantized coding with this many bits per component")
     g.add_argument("--coding", choices=["float32", "float64", "quantized"], help="force a triplet coding")
     g.add_argument("--compress", action=argparse.BooleanOptionalAction, default=True,
@@ -187,10 +189,13 @@ def _refuse_conflicts(pairs: list[tuple[str, str]], args: argparse.Namespace) ->
     for src, _ in pairs:
         if src == "-":
             continue
-        fmt_in = registry.get(args.from_) if args.from_ else registry.detect(src)
-        for used in fmt_in.references(src) if fmt_in.references else ():
-            inputs[registry.file_identity(used)] = f"a file the input {src} uses"
         inputs[registry.file_identity(src)] = f"the input {src}"
+        try:
+            fmt_in = registry.get(args.from_) if args.from_ else registry.detect(src)
+        except PlnError:
+            continue  # unreadable: its own conversion reports it, the others of a batch go on
+        for used in fmt_in.references(src) if fmt_in.references else ():
+            inputs.setdefault(registry.file_identity(used), f"a file the input {src} uses")
     written: dict[tuple, str] = {}
     for src, dst in pairs:
         if dst == "-":
