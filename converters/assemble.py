@@ -27,7 +27,7 @@ def build_mesh(
     faces: np.ndarray,
     face_colours: np.ndarray | None = None,
     *,
-    what: str = "mesh",
+    what: str | None = "mesh",
     file: str | None = None,
 ) -> tuple[Mesh | None, int]:
     """Clean raw triangles into a :class:`Mesh`.
@@ -36,23 +36,24 @@ def build_mesh(
     uint8 or None. Returns ``(mesh, degenerate)`` where ``degenerate`` counts
     the faces removed because they repeat a vertex after merging, and
     ``mesh`` is None when no face is left. ``what`` names the mesh (node or
-    prim path) in error messages.
+    prim path) in error messages; None where the file name says enough.
 
     Raises :class:`ConversionError` for non-finite coordinates or face indices
     outside the vertex array.
     """
     vertices = np.asarray(vertices, dtype=np.float64).reshape(-1, 3)
     faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    prefix = f"{what}: " if what else ""
     if not np.isfinite(vertices).all():
-        raise ConversionError(f"{what}: vertex coordinates are NaN or infinite", file=file)
+        raise ConversionError(f"{prefix}vertex coordinates are NaN or infinite", file=file)
     if len(faces) and (faces.min() < 0 or faces.max() >= len(vertices)):
         raise ConversionError(
-            f"{what}: face index outside the {len(vertices)} vertices", file=file)
+            f"{prefix}face index outside the {len(vertices)} vertices", file=file)
     if face_colours is not None:
         face_colours = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)
         if len(face_colours) != len(faces):
             raise ConversionError(
-                f"{what}: {len(face_colours)} face colours for {len(faces)} faces", file=file)
+                f"{prefix}{len(face_colours)} face colours for {len(faces)} faces", file=file)
 
     # Adding 0.0 turns -0.0 into +0.0, so that the two zeros merge.
     merged, remap = _merge_exact(vertices + 0.0)

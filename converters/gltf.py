@@ -20,7 +20,7 @@ import json
 import os
 from pathlib import Path
 from typing import Any
-from urllib.parse import quote
+from urllib.parse import quote, unquote, urlsplit
 
 import numpy as np
 
@@ -28,6 +28,7 @@ from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
 from .atomic import atomic_paths, write_bytes
+from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
 
 _GLB_MAGIC = b"glTF"
@@ -44,6 +45,27 @@ def sniff_gltf(head: bytes, size: int) -> bool:
     return text.startswith(b"{") and b'"asset"' in text
 
 
+def sidecars(path: str | os.PathLike[str]) -> tuple[str, ...]:
+    """The file a ``.gltf`` write of ``path`` creates beside it: its buffer, ``<stem>.bin``."""
+    return (os.fspath(Path(path).with_suffix(".bin")),)
+
+
+def references(path: str | os.PathLike[str]) -> tuple[str, ...]:
+    """The local files (buffers, images) the ``.gltf`` at ``path`` refers to; none if it is no glTF JSON."""
+    try:
+        tree = json.loads(Path(path).read_bytes())
+    except (OSError, ValueError):
+        return ()
+    if not isinstance(tree, dict):
+        return ()
+    items = [item for key in ("buffers", "images") if isinstance(tree.get(key), list)
+             for item in tree[key] if isinstance(item, dict)]
+    uris = [item["uri"] for item in items if isinstance(item.get("uri"), str)]
+    # data: and other URIs with a scheme are not files beside the .gltf
+    return tuple(os.path.join(os.path.dirname(os.fspath(path)), unquote(uri)) for uri in uris
+                 if not urlsplit(uri).scheme)
+
+
 def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.glb`` file into ``(scene, dropped)``."""
     return read_scene(path, "glb", "binary glTF", units=Units.METRE,
@@ -52,7 +74,27 @@ def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
 
 def read_gltf(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.gltf`` file (and the buffers and images it refers to) into ``(scene, dropped)``."""
-    return read_scene(path, "gltf", "glTF", units=Units.METRE, reversed_siblings=True)
+    return read_scene(path, "gltf", "glTF", units=Units.METRE, reversed_siblings=True,
+                      resolver=_uri_resolver(path))
+
+
+def _uri_resolver(path: str | os.PathLike[str]) -> Any:
+    """A trimesh resolver for the files beside ``path`` that decodes percent-encoded URIs.
+
+    glTF URIs are URI references (RFC 3986): ``back 1.bin`` is written ``back%201.bin`` (this
+    module's writer does so) and trimesh 5.2 looks for the encoded name. The name as written is
+    still tried, for writers that did not encode it.
+    """
+    resolvers = require_trimesh("glTF").resolvers
+
+    class Decoding(resolvers.FilePathResolver):
+        def get(self, name: str) -> bytes:
+            try:
+                return super().get(unquote(name))
+            except FileNotFoundError:
+                return super().get(name)
+
+    return Decoding(os.fspath(path))
 
 
 def write_glb(scene: Scene, path: str | os.PathLike[str]) -> list[str]:
@@ -119,5 +161,5 @@ def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:
     except ConversionError as exc:
         raise exc.located(file=file)
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything
-        raise ConversionError(f"cannot write glTF: {type(exc).__name__}: {exc}", file=file) from exc
+        raise ConversionError(f"cannot write glTF: {describe(exc)}", file=file) from exc
     return result, notes

@@ -9,9 +9,11 @@ decimals, enough to round-trip float64 at model scales.
 
 from __future__ import annotations
 
+import codecs
 import os
 from functools import partial
 
+from planefmt.errors import ConversionError
 from planefmt.model import Scene
 
 from .trimesh_bridge import read_scene, require_trimesh, write_flat
@@ -43,7 +45,18 @@ def sniff(head: bytes, size: int) -> bool:
 
 def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read an OBJ file into ``(scene, dropped)``."""
-    return read_scene(path, "obj", "OBJ")
+    file = os.fspath(path)
+    try:
+        with open(file, "rb") as handle:
+            head = handle.read(65536)
+        # Final=False: the block may end inside a character. trimesh would guess another encoding
+        # through an optional module and report that module missing, not that the file is no text.
+        codecs.getincrementaldecoder("utf-8")().decode(head, final=False)
+    except UnicodeDecodeError as exc:
+        raise ConversionError(f"not OBJ text: byte {exc.start} is not UTF-8 text", file=file) from exc
+    except OSError as exc:
+        raise ConversionError(f"cannot open: {exc.strerror or exc}", file=file) from exc
+    return read_scene(file, "obj", "OBJ")
 
 
 def write(scene: Scene, path: str | os.PathLike[str]) -> list[str]:

@@ -4,9 +4,14 @@ from __future__ import annotations
 
 import os
 import warnings
+from dataclasses import replace
 
-from planefmt.errors import PlnWarning, SkippedGroupsWarning
-from planefmt.model import Scene
+import numpy as np
+
+from planefmt.errors import GeometryError, PlnWarning, SkippedGroupsWarning
+from planefmt.model import Mesh, Scene
+
+from .assemble import build_mesh, world_transforms
 
 SIGNATURE_TAIL = b"PLN"
 
@@ -28,8 +33,8 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
 
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
-          delta: float | None = None, tau: float | None = None, compress: bool = False,
-          compact: bool = False, watertight: bool = True, scheme: str = "shell") -> list[str]:
+          delta: float | None = None, tau: float | None = None, compress: bool = True,
+          compact: bool = True, watertight: bool = True, scheme: str = "shell") -> list[str]:
     """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane.
 
     Returns what the encoder gave up (its :class:`PlnWarning` lines): with
@@ -37,11 +42,82 @@ def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6
     """
     from planefmt import codec
 
+    scene, dropped = without_zero_area(scene)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PlnWarning)
-        codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta, tau=tau,
-                           compress=compress, compact=compact, watertight=watertight, scheme=scheme)
-    return [str(w) for w in _pln_warnings(caught)]
+        header = codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta,
+                                    tau=tau, compress=compress, compact=compact, watertight=watertight,
+                                    scheme=scheme)
+    notes = [f"{dropped} zero-area triangle{'s' if dropped > 1 else ''} (no plane to store)"] if dropped else []
+    if header.error_bound > header.tolerance:
+        # Only a forced coding gets here: the codec refuses any other that misses the tolerance.
+        notes.append(f"the tolerance {header.tolerance:g} (the forced coding measured {header.error_bound:.3g} of "
+                     "the diagonal; the file is marked lossy)")
+    return notes + [str(w) for w in _pln_warnings(caught)]
+
+
+#: A triangle whose height is at most this fraction of its mesh's bounding-box diagonal has no plane:
+#: collinear corners in float64 give heights about 1e-16 of the diagonal, and dropping the triangle moves
+#: the surface by its height, far under any tolerance the codec accepts.
+ZERO_AREA = 1e-12
+
+#: The header's bounding box is float32 (spec §5): a coordinate beyond this cannot be recorded.
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+#: The codec's plane arithmetic squares cross products of edges (edge length to the fourth power), which
+#: underflows float64 below about 1e-77; this leaves room for triangles smaller than their mesh (a
+#: tetrahedron 1e-60 across encodes, one 1e-100 across does not).
+SMALLEST_DIAGONAL = 1e-60
+
+
+def without_zero_area(scene: Scene) -> tuple[Scene, int]:
+    """``scene`` without its zero-area triangles (which have no plane), and how many were dropped.
+
+    Raises :class:`GeometryError` (``DEGENERATE_GEOMETRY``) when no triangle is left, and
+    for coordinates a .pln header cannot record.
+    """
+    cleaned: dict[int, Mesh | None] = {}
+    dropped = 0
+    for node, world in zip(scene.nodes, world_transforms(scene)):
+        mesh = node.mesh
+        if mesh is None:
+            continue
+        placed = mesh.vertices @ world[:3, :3].T + world[:3, 3]
+        largest = np.abs(placed).max(initial=0.0)
+        if not largest <= FLOAT32_MAX:
+            raise GeometryError(f"coordinates up to {largest:.3g} are beyond the float32 "
+                                f"range (±{FLOAT32_MAX:.3g}) of a .pln bounding box", code="DEGENERATE_GEOMETRY")
+        diagonal = float(np.linalg.norm(np.ptp(placed, axis=0))) if len(placed) else 0.0
+        if 0 < diagonal < SMALLEST_DIAGONAL:
+            raise GeometryError(f"a mesh {diagonal:.3g} across is too small for the plane arithmetic (at least "
+                                f"{SMALLEST_DIAGONAL:g}): scale it up", code="DEGENERATE_GEOMETRY")
+        if id(mesh) not in cleaned:
+            keep = _with_area(mesh)
+            dropped += int(len(keep) - np.count_nonzero(keep))
+            cleaned[id(mesh)] = mesh if keep.all() else build_mesh(
+                mesh.vertices, mesh.faces[keep],
+                None if mesh.face_colours is None else mesh.face_colours[keep], what=node.name)[0]
+    if not any(kept is not None for kept in cleaned.values()):
+        raise GeometryError("every triangle has zero area (its corners are collinear): no plane to store",
+                            code="DEGENERATE_GEOMETRY")
+    if not dropped:
+        return scene, 0
+    nodes = tuple(replace(node, mesh=None if node.mesh is None else cleaned[id(node.mesh)]) for node in scene.nodes)
+    return replace(scene, nodes=nodes), dropped
+
+
+def _with_area(mesh: Mesh) -> np.ndarray:
+    """Per face: whether it is taller than ZERO_AREA of the mesh's diagonal."""
+    v = mesh.vertices - mesh.vertices.min(axis=0)
+    diagonal = float(np.linalg.norm(v.max(axis=0)))
+    if not diagonal > 0:
+        return np.zeros(len(mesh.faces), dtype=bool)
+    # In units of the diagonal, so that products neither overflow nor underflow at extreme scales.
+    corners = (v / diagonal)[mesh.faces]
+    edges = corners[:, [1, 2, 0]] - corners
+    longest = np.linalg.norm(edges, axis=2).max(axis=1)
+    twice_area = np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
+    return twice_area > ZERO_AREA * longest
 
 
 def _pln_warnings(caught: list[warnings.WarningMessage]) -> list[PlnWarning]:

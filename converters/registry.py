@@ -6,6 +6,8 @@ function over the file's first bytes, a ``read`` and a ``write`` function::
     read(path) -> (Scene, dropped)            # dropped: list[str], what the model could not hold
     write(scene, path, **options) -> notes    # notes: list[str], what the format could not hold
     sniff(head: bytes, size: int) -> bool     # head: the first SNIFF_BYTES bytes; size: file size
+    sidecars(path) -> paths                   # the other files a write of path creates beside it
+    references(path) -> paths                 # the other files the existing file at path uses
 
 Readers and writers raise :class:`planefmt.errors.ConversionError` for bad
 input and write atomically (:mod:`.atomic`). Detection tries every format's
@@ -46,6 +48,7 @@ from planefmt.errors import ConversionError, PlnError
 from planefmt.model import Scene
 
 from . import gltf, obj, off, pln, ply, stl, usd
+from .failures import describe
 
 ENTRY_POINT_GROUP = "planefmt.converters"
 
@@ -62,7 +65,8 @@ class Format:
     """One mesh format: ``extensions`` are lower case with the dot (``".obj"``).
 
     ``sniff``, ``read`` or ``write`` may be None when the format cannot be
-    recognised by content, read, or written.
+    recognised by content, read, or written; ``sidecars`` and ``references``
+    are None for a format stored in one file.
     """
 
     name: str
@@ -71,6 +75,8 @@ class Format:
     read: Reader | None = None
     write: Writer | None = None
     description: str = ""
+    sidecars: Callable[[str], tuple[str, ...]] | None = None
+    references: Callable[[str], tuple[str, ...]] | None = None
 
 
 #: The built-in formats, in detection order.
@@ -82,7 +88,7 @@ BUILTIN: tuple[Format, ...] = (
     Format("usda", (".usda", ".usd"), usd.sniff_usda, usd.read, usd.write, "USD text"),
     Format("ply", (".ply",), ply.sniff, ply.read, ply.write, "Stanford PLY"),
     Format("gltf", (".gltf",), gltf.sniff_gltf, gltf.read_gltf, gltf.write_gltf,
-           "glTF 2.0 JSON with a .bin buffer"),
+           "glTF 2.0 JSON with a .bin buffer", gltf.sidecars, gltf.references),
     Format("off", (".off",), off.sniff, off.read, off.write, "Object File Format"),
     Format("stl", (".stl",), stl.sniff, stl.read, stl.write, "STL, binary or ASCII"),
     Format("obj", (".obj",), obj.sniff, obj.read, obj.write, "Wavefront OBJ"),
@@ -165,6 +171,8 @@ def detect(path: str | os.PathLike[str]) -> Format:
             size = os.fstat(handle.fileno()).st_size
     except OSError as exc:
         raise ConversionError(f"cannot open: {exc.strerror or exc}", file=file) from exc
+    if size == 0:
+        raise ConversionError("the file is empty", file=file)
     for fmt in formats():
         if fmt.sniff is not None and fmt.read is not None and _sniffs(fmt.sniff, head, size):
             return fmt
@@ -197,14 +205,33 @@ def read(path: str | os.PathLike[str], format: str | None = None) -> tuple[Scene
     return _guarded(fmt, "read", file, lambda: fmt.read(file))
 
 
-def write(scene: Scene, path: str | os.PathLike[str], format: str | None = None,
-          **options: Any) -> list[str]:
+def write(scene: Scene, path: str | os.PathLike[str], format: str | None = None, *,
+          force: bool = False, **options: Any) -> list[str]:
     """Write ``scene`` to ``path`` atomically; returns what the format could not hold.
 
     The format comes from ``format`` or else from the extension of ``path``.
     ``options`` go to the format's writer (``ascii=True`` for PLY and STL,
-    ``up_axis="Z"`` for USD); an option the writer lacks is an error.
+    ``up_axis="Z"`` for USD); an option the writer lacks is an error. A file
+    beside ``path`` that the write would replace (a ``.gltf``'s ``.bin``) is
+    an ``OUTPUT_CONFLICT`` error unless the file now at ``path`` uses it or
+    ``force`` is set (see :func:`unclaimed_sidecars`).
     """
+    file = os.fspath(path)
+    fmt = writer_for(file, format)
+    unclaimed = [] if force else unclaimed_sidecars(file, fmt)
+    if unclaimed:
+        raise ConversionError(f"writing {file} would replace this file, which {file} does not use: "
+                              "move it, or pass force=True", code="OUTPUT_CONFLICT", file=unclaimed[0])
+    try:
+        inspect.signature(fmt.write).bind(scene, file, **options)
+    except TypeError as exc:
+        raise ConversionError(f"format {fmt.name} does not take these options: {exc}",
+                              file=file) from exc
+    return _guarded(fmt, "write", file, lambda: fmt.write(scene, file, **options))
+
+
+def writer_for(path: str | os.PathLike[str], format: str | None = None) -> Format:
+    """The format that writes ``path``: ``format`` if given, else by extension."""
     file = os.fspath(path)
     fmt = get(format) if format else for_extension(file, writable=True)
     if fmt is None:
@@ -213,12 +240,32 @@ def write(scene: Scene, path: str | os.PathLike[str], format: str | None = None,
     if fmt.write is None:
         raise ConversionError(f"format {fmt.name} cannot be written", code="UNKNOWN_FORMAT",
                               file=file)
+    return fmt
+
+
+def unclaimed_sidecars(path: str | os.PathLike[str], fmt: Format) -> list[str]:
+    """Existing files a write of ``path`` as ``fmt`` would replace besides ``path`` itself and that
+    the file now at ``path`` does not use: replacing them would lose a file nobody named."""
+    file = os.fspath(path)
+    if fmt.sidecars is None:
+        return []
+    present = [sidecar for sidecar in fmt.sidecars(file) if os.path.lexists(sidecar)]
+    if not present:
+        return []
+    used = set()
+    if fmt.references is not None and os.path.exists(file):
+        used = {file_identity(ref) for ref in fmt.references(file)}
+    return [sidecar for sidecar in present if file_identity(sidecar) not in used]
+
+
+def file_identity(path: str) -> tuple:
+    """Equal for two paths to one file, also through symbolic or hard links: device and inode where
+    the file exists, else the resolved path (a file that does not exist yet is no existing file)."""
     try:
-        inspect.signature(fmt.write).bind(scene, file, **options)
-    except TypeError as exc:
-        raise ConversionError(f"format {fmt.name} does not take these options: {exc}",
-                              file=file) from exc
-    return _guarded(fmt, "write", file, lambda: fmt.write(scene, file, **options))
+        st = os.stat(path)
+    except OSError:
+        return ("path", os.path.realpath(path))
+    return ("inode", st.st_dev, st.st_ino)
 
 
 def _guarded(fmt: Format, action: str, file: str, call: Callable[[], Any]) -> Any:
@@ -233,6 +280,5 @@ def _guarded(fmt: Format, action: str, file: str, call: Callable[[], Any]) -> An
     except PlnError as exc:
         raise exc.located(file=file)
     except Exception as exc:  # noqa: BLE001
-        raise ConversionError(f"{fmt.name} {action} failed: {type(exc).__name__}: {exc}",
-                              file=file) from exc
+        raise ConversionError(f"cannot {action} {fmt.name}: {describe(exc)}", file=file) from exc
 

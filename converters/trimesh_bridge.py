@@ -23,6 +23,7 @@ from planefmt.model import Mesh, Node, Scene, Units
 
 from .assemble import build_mesh, flatten
 from .atomic import write_bytes
+from .failures import describe
 
 if TYPE_CHECKING:
     import trimesh
@@ -39,34 +40,29 @@ def require_trimesh(what: str) -> ModuleType:
 
 def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
                units: Units = Units.UNSPECIFIED,
-               reversed_siblings: bool = False) -> tuple[Scene, list[str]]:
+               reversed_siblings: bool = False, resolver: Any = None) -> tuple[Scene, list[str]]:
     """Read ``path`` as ``file_type`` through trimesh into ``(scene, dropped)``.
 
     ``what`` names the format in messages ("binary glTF"). Any trimesh
     failure becomes a :class:`ConversionError`; so does a file with no
     triangle. ``reversed_siblings``: trimesh's graph lists each node's
-    children in reverse file order (see :func:`scene_from_trimesh`).
+    children in reverse file order (see :func:`scene_from_trimesh`). ``resolver``:
+    how trimesh finds the files ``path`` refers to (default: by name beside it).
     """
     tm = require_trimesh(what)
     file = os.fspath(path)
     try:
         # process=False: trimesh would merge vertices by position *and*
         # attributes (UV seams stay split); build_mesh merges by position only.
-        loaded = tm.load_scene(file, file_type=file_type, process=False)
+        loaded = tm.load_scene(file, file_type=file_type, resolver=resolver, process=False)
     except MemoryError:
         raise  # not a property of the file
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input
-        raise ConversionError(f"cannot read as {what}: {_describe(exc)}", file=file) from exc
+        raise ConversionError(f"cannot read as {what}: {describe(exc)}", file=file) from exc
     scene, dropped = scene_from_trimesh(loaded, units, file, reversed_siblings)
     if not any(node.mesh is not None for node in scene.nodes):
         raise ConversionError(f"no triangle mesh found in this {what} file", file=file)
     return scene, dropped
-
-
-def _describe(exc: BaseException) -> str:
-    """A one-line reason for a third-party exception."""
-    text = str(exc).strip().splitlines()
-    return f"{type(exc).__name__}: {text[0]}" if text else type(exc).__name__
 
 
 def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
@@ -100,8 +96,9 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
         mesh = None
         if geometry_name is not None:
             if geometry_name not in meshes:
-                mesh, notes, removed = mesh_from_trimesh(
-                    loaded.geometry[geometry_name], what=name, file=file)
+                # trimesh names a file's only node after the file, which the message names already
+                what = None if file is not None and name == os.path.basename(file) else name
+                mesh, notes, removed = mesh_from_trimesh(loaded.geometry[geometry_name], what=what, file=file)
                 meshes[geometry_name] = mesh
                 dropped.update(notes)
                 degenerate += removed
@@ -112,13 +109,14 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
                           mesh=mesh))
         index = len(nodes) - 1
         stack.extend((child, name, index) for child in pushed_order(name))
-    notes = sorted(dropped)
+    # "materials" beside "materials (base colour kept as face colour)" would say the same thing twice
+    notes = sorted(note for note in dropped if not any(other.startswith(f"{note} (") for other in dropped))
     if degenerate:
         notes.append(f"{degenerate} degenerate faces")
     return Scene(nodes=tuple(nodes), units=units), notes
 
 
-def mesh_from_trimesh(geometry: Any, *, what: str,
+def mesh_from_trimesh(geometry: Any, *, what: str | None,
                       file: str | None) -> tuple[Mesh | None, set[str], int]:
     """Convert one trimesh geometry: ``(mesh or None, dropped notes, degenerate faces)``."""
     if not hasattr(geometry, "faces") or len(geometry.faces) == 0:
@@ -254,7 +252,7 @@ def write_flat(scene: Scene, path: str | os.PathLike[str], *, what: str,
     try:
         data = export(to_trimesh(mesh))
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything
-        raise ConversionError(f"cannot write {what}: {_describe(exc)}", file=file) from exc
+        raise ConversionError(f"cannot write {what}: {describe(exc)}", file=file) from exc
     try:
         write_bytes(file, data.encode("utf-8") if isinstance(data, str) else data)
     except OSError as exc:

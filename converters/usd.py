@@ -43,6 +43,7 @@ from planefmt.model import Mesh, Node, Scene, Units
 
 from .assemble import build_mesh
 from .atomic import atomic_path
+from .failures import describe
 from .polygons import triangulate
 
 #: metersPerUnit of each unit the model knows.
@@ -99,7 +100,7 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     try:
         stage = pxr.Usd.Stage.Open(file)
     except Exception as exc:  # noqa: BLE001 - Tf.ErrorException and friends
-        raise ConversionError(f"cannot open as USD: {_first_line(exc)}", file=file) from exc
+        raise ConversionError(f"cannot open as USD: {describe(exc)}", file=file) from exc
     if stage is None:
         raise ConversionError("cannot open as USD", file=file)
     try:
@@ -107,12 +108,7 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     except ConversionError:
         raise
     except Exception as exc:  # noqa: BLE001 - malformed values surface as anything
-        raise ConversionError(f"cannot read USD stage: {_first_line(exc)}", file=file) from exc
-
-
-def _first_line(exc: BaseException) -> str:
-    lines = str(exc).strip().splitlines()
-    return lines[0] if lines else type(exc).__name__
+        raise ConversionError(f"cannot read USD stage: {describe(exc)}", file=file) from exc
 
 
 class _StageReader:
@@ -346,13 +342,15 @@ def write(scene: Scene, path: str | os.PathLike[str], *, up_axis: str = "Y") -> 
     except ConversionError as exc:
         raise exc.located(file=str(target))
     except Exception as exc:  # noqa: BLE001 - Tf.ErrorException, OSError
-        raise ConversionError(f"cannot write USD: {_first_line(exc)}", file=str(target)) from exc
+        raise ConversionError(f"cannot write USD: {describe(exc)}", file=str(target)) from exc
     return notes
 
 
 def _package_usdz(pxr: SimpleNamespace, layer: Any, stem: str, temp: Path) -> None:
     """Export ``layer`` as a crate file and package it alone into the usdz ``temp``."""
-    with tempfile.TemporaryDirectory(prefix="planefmt-usdz-") as folder:
+    # Beside the output, hidden and named as its temporaries are: a SIGKILL, which allows no clean-up,
+    # leaves it where the output was going, not in the system's temporary folder.
+    with tempfile.TemporaryDirectory(prefix=f"{temp.stem}.", suffix=".tmp", dir=temp.parent) as folder:
         inner = Path(folder) / f"{pxr.Tf.MakeValidIdentifier(stem)}.usdc"
         if not layer.Export(str(inner)):
             raise ConversionError("usd-core could not export the layer")

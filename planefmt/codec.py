@@ -57,7 +57,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError
 
-from . import quantize, records
+from . import progress, quantize, records
 from .errors import CODES, FormatError, GeometryError, PlnError, PlnWarning, SkippedGroupsWarning
 from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
@@ -543,27 +543,54 @@ def decode_groups(items: Sequence[tuple[np.ndarray, GroupLike, object]],
             for d, (planes, g, label) in zip(out, items)]
 
 
-def decode_mesh(source: Encoded | np.ndarray, groups: Iterable[GroupLike] | None = None, *,
-                header: Header | None = None) -> Mesh:
-    """Triangles of part groups: ``decode_mesh(triplets, groups, header=...)`` or ``decode_mesh(encoded)``.
+def decode_mesh(source: Encoded | np.ndarray | str | os.PathLike | BinaryIO,
+                groups: Iterable[GroupLike] | None = None, *, header: Header | None = None) -> Mesh:
+    """Triangles: of a .pln file (``decode_mesh("model.pln")``, a path or binary stream: every object in
+    world coordinates, as one mesh), or of part groups (``decode_mesh(triplets, groups, header=...)`` or
+    ``decode_mesh(encoded)``).
 
     ``triplets`` (n, 3) is the plane table the groups' ``refs`` index, as a
     reader returns it; ``header`` (its coding) sets the plane error the
     decoder allows for (exact planes without it). For an :class:`Encoded`,
     its planes go through the coding first, so the result is what a reader
     of its file decodes. Raises ``GeometryError`` (e.g. ``EMPTY_POLYTOPE``,
-    ``UNBOUNDED_POLYTOPE``) naming the group.
+    ``UNBOUNDED_POLYTOPE``) naming the group, and for a file whatever
+    :func:`decode_scene` raises.
     """
+    if isinstance(source, (str, os.PathLike)) or hasattr(source, "read"):
+        return _world_mesh(decode_scene(source))
     if isinstance(source, Encoded):
         table = quantize.roundtrip(source.triplets, source.coding, source.quantization)
         groups = source.groups
         error = plane_error(source.coding, source.quantization, source.tolerance,
                             float(np.linalg.norm(source.bbox[1] - source.bbox[0])))
     else:
-        table = np.asarray(source, dtype=np.float64).reshape(-1, 3)
+        try:
+            table = np.asarray(source, dtype=np.float64).reshape(-1, 3)
+        except (TypeError, ValueError) as exc:
+            raise PlnError(f"decode_mesh takes a .pln path or stream, an Encoded, or an (n, 3) plane table, "
+                           f"not {type(source).__name__}") from exc
         error = EXACT if header is None else header_plane_error(header)
     return _concatenate(decode_groups([(table[np.asarray(g.refs, dtype=np.int64)], g, i)
                                        for i, g in enumerate(groups or ())], error))
+
+
+def _world_mesh(scene: Scene) -> Mesh:
+    """Every mesh of ``scene`` in world coordinates, as one; a mirroring transform's faces reversed so that
+    they stay wound outward. Face colours where every mesh has them."""
+    placed = []
+    for node, world in zip(scene.nodes, _world_transforms(scene.nodes)):
+        if node.mesh is not None:
+            faces = node.mesh.faces[:, ::-1] if np.linalg.det(world[:3, :3]) < 0 else node.mesh.faces
+            placed.append((transform_points(node.mesh.vertices, world), faces, node.mesh.face_colours))
+    if not placed:
+        return Mesh(np.empty((0, 3)), np.empty((0, 3), dtype=np.int64))
+    offsets = np.cumsum([0] + [len(v) for v, _, _ in placed[:-1]])
+    colours = None
+    if all(c is not None for _, _, c in placed):
+        colours = np.concatenate([c for _, _, c in placed])
+    return Mesh(np.concatenate([v for v, _, _ in placed]),
+                np.concatenate([f + o for (_, f, _), o in zip(placed, offsets)]).astype(np.int64), colours)
 
 
 def _concatenate(parts: Sequence[DecodedGroup]) -> Mesh:
@@ -1016,8 +1043,13 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
     def named(k: int) -> str:
         return f"object {k}" + (f" ({objects[k].name!r})" if objects[k].name else "")
 
+    tried = [0]
+
     def attempt(cod: Coding, q: Quantization | None, pieces: int | None = None, key: int = -1) -> _Choice | None:
         """The choice of this coding if its decoding keeps the structure and verifies; None if not."""
+        # How many codings a search verifies is not known beforehand: a count, not a fraction.
+        progress.report("verifying codings", tried[0])
+        tried[0] += 1
         if cod == Coding.FLOAT64:
             meshes = base_meshes
         else:
@@ -1290,7 +1322,8 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
         variants.append((freed, candidates[:1]))
     trials = [(objs, cod, q) for objs, cands in variants for cod, q in cands]
     plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants}
-    for objs, cod, q in trials:
+    for k, (objs, cod, q) in enumerate(trials):
+        progress.report("choosing a coding", k, len(trials))
         rt = quantize.roundtrip(table, cod, q)
         budget = tolerance * diag_src / (1.0 + 2.0 * tolerance)
         for _ in range(_SHELL_TIGHTENINGS):
@@ -1426,8 +1459,8 @@ def _measure(mesh: Mesh, obj: _Object, target: float) -> float:
 
 def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, tolerance: float = 1e-6,
                  coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
-                 delta: float | None = None, tau: float | None = None, compress: bool = False,
-                 compact: bool = False, watertight: bool = True, scheme: str = "shell") -> Header:
+                 delta: float | None = None, tau: float | None = None, compress: bool = True,
+                 compact: bool = True, watertight: bool = True, scheme: str = "shell") -> Header:
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
     One object per node, keeping name, parent and transform; each node's
@@ -1438,7 +1471,9 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     group that uses them: in first-use order, or with ``compact`` sorted
     within each object's block. Options as for :func:`encode_mesh`.
 
-    ``compact``: a version 3.0 file (spec/pln-3.md): quantized planes in
+    ``compress`` (the default, as ``pln convert``): payloads deflated where
+    that saves bytes. ``compact`` (the default, as ``pln convert``; False
+    writes version 1.0): a version 3.0 file (spec/pln-3.md): quantized planes in
     whichever of the bit-packed and the predicted coding takes fewer bytes,
     group references, cells and trees as varints, chunk heads as varints. The
     planes and the decoded surface are those of the version 1 file. A scene
@@ -1483,7 +1518,10 @@ def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: floa
     kept (a set whose objects meet no coding is passed over). At 1e-6 the hull-first files were
     never the larger on the corpus meshes measured (six), and CAD encodes take minutes.
     """
-    objects = [prepare(k) for k in range(count)]
+    objects = []
+    for k in range(count):
+        progress.report("encoding objects", k, count)
+        objects.append(prepare(k))
     if scheme == "shell":
         return _choose_shells(objects, tolerance, coding, bits, size)
     forced = coding is not None or bits is not None

@@ -68,6 +68,7 @@ _CATALOGUE = [
     # converters and CLI
     Code("UNKNOWN_FORMAT", "error", "the input format could not be detected"),
     Code("CONVERSION_FAILED", "error", "a converter could not read or write the mesh"),
+    Code("OUTPUT_CONFLICT", "error", "an output would replace an input, another output or a file not named"),
 ]
 
 CODES: dict[str, Code] = {c.code: c for c in _CATALOGUE}

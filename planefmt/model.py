@@ -188,7 +188,7 @@ class PartGroup:
 
     index: int
     object: int
-    kind: int
+    kind: GroupKind | int  # an int for a kind of a newer minor version, which this reader does not know
     refs: np.ndarray  # (m,) uint32
     bounding: np.ndarray  # (m,) bool
     cells: tuple[np.ndarray, ...] | None = None
@@ -198,6 +198,10 @@ class PartGroup:
     facets: np.ndarray | None = None  # (T, 4) uint32, SEALED groups
     shell: Shell | None = None  # SHELL groups
     planes: np.ndarray | None = field(default=None, compare=False)
+
+    def __repr__(self) -> str:
+        kind = self.kind.name if isinstance(self.kind, GroupKind) else self.kind
+        return f"PartGroup({self.index}, object={self.object}, kind={kind}, {len(self.refs)} refs)"
 
 
 @dataclass(frozen=True)
@@ -233,6 +237,11 @@ class Mesh:
     faces: np.ndarray
     face_colours: np.ndarray | None = None
 
+    # Short reprs: the default one prints whole arrays (a million vertices in a traceback or a REPL).
+    def __repr__(self) -> str:
+        colours = "" if self.face_colours is None else ", face colours"
+        return f"Mesh({len(self.vertices)} vertices, {len(self.faces)} faces{colours})"
+
 
 @dataclass(frozen=True)
 class Node:
@@ -243,6 +252,10 @@ class Node:
     transform: np.ndarray | None = None  # (4, 4) float64, local -> parent
     mesh: Mesh | None = None
 
+    def __repr__(self) -> str:
+        transform = "" if self.transform is None else ", transform"
+        return f"Node({self.name!r}, parent={self.parent}{transform}, mesh={self.mesh!r})"
+
 
 @dataclass(frozen=True)
 class Scene:
@@ -250,3 +263,7 @@ class Scene:
 
     nodes: tuple[Node, ...]
     units: Units = Units.UNSPECIFIED
+
+    def __repr__(self) -> str:
+        meshes = {id(node.mesh) for node in self.nodes if node.mesh is not None}
+        return f"Scene({len(self.nodes)} nodes, {len(meshes)} meshes, units={self.units.name})"

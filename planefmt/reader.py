@@ -88,13 +88,27 @@ class Reader:
         """The plane table read so far: ``(n, 3)`` triplets (empty unless ``retain_planes``)."""
         return self._table[: self._plane_count] if self.retain_planes else self._table
 
+    # Counts: the header's where it records them (a file whose chunks disagree fails with COUNT_MISMATCH
+    # when read to its end), else what was read so far (a stream's writer may not have known them).
+
     @property
     def plane_count(self) -> int:
-        return self._plane_count
+        """Planes in the file's table: the header's count, else those read so far."""
+        recorded = self.header.plane_count
+        return self._plane_count if recorded is None else max(recorded, self._plane_count)
 
     @property
     def group_count(self) -> int:
-        return self._group_count
+        """Part groups in the file: the header's count, else those read so far."""
+        recorded = self.header.group_count
+        return self._group_count if recorded is None else max(recorded, self._group_count)
+
+    @property
+    def object_count(self) -> int:
+        """Objects in the file: the header's count, else those read so far (``objects`` holds the records
+        read so far: object records follow the header, so they are known only once read)."""
+        recorded = self.header.object_count
+        return len(self.objects) if recorded is None else max(recorded, len(self.objects))
 
     def __iter__(self) -> Iterator[Record]:
         if self._started:

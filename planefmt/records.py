@@ -28,6 +28,11 @@ KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2)}
 
 
+def _kind(value: int) -> GroupKind | int:
+    """A kind this reader knows as its :class:`GroupKind`; one of a newer minor version stays an int."""
+    return GroupKind(value) if value in GroupKind._value2member_map_ else value
+
+
 def kinds_of(major: int, minor: int) -> frozenset[int]:
     """The part-group kinds a file of version ``major.minor`` may hold (as far as this reader knows)."""
     return frozenset(k for k in KNOWN_KINDS
@@ -397,7 +402,7 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
         extra = b""
     elif head.kind in kinds and extra:
         raise FormatError(f"{len(extra)} unexpected bytes after the role bits", code="BAD_PAYLOAD")
-    group = PartGroup(index=head.index, object=head.object, kind=head.kind, refs=refs, bounding=bounding,
+    group = PartGroup(index=head.index, object=head.object, kind=_kind(head.kind), refs=refs, bounding=bounding,
                       cells=cells, tree=tree, extra=extra)
     return group, findings
 
@@ -443,7 +448,7 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
         vertex_planes, facets = _decode_sealed(rest, bounding)
     elif len(rest):
         raise FormatError(f"{len(rest)} unexpected bytes after the role bits", code="BAD_PAYLOAD")
-    return PartGroup(index=head.index, object=head.object, kind=head.kind, refs=refs.astype(np.uint32),
+    return PartGroup(index=head.index, object=head.object, kind=_kind(head.kind), refs=refs.astype(np.uint32),
                      bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
                      facets=facets, shell=shell)
 

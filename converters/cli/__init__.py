@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import sys
+import warnings
 
 from .. import interrupts
 
@@ -20,7 +21,10 @@ EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from planefmt import __version__
+
     parser = argparse.ArgumentParser(prog="pln", description="Read, write and convert .pln plane meshes.")
+    parser.add_argument("--version", action="version", version=f"pln {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in SUBCOMMANDS:
         try:
@@ -31,6 +35,20 @@ def build_parser() -> argparse.ArgumentParser:
             continue
         module.add_parser(sub)
     return parser
+
+
+def quiet_library_warnings() -> None:
+    """Keep numpy's and the libraries' own warnings (RuntimeWarning: overflow, invalid value...) off
+    stderr: they name no file and are not the user's to act on. What a conversion gave up is reported
+    as ``pln: warning:`` lines (:class:`planefmt.PlnWarning`), which this leaves alone."""
+    warnings.filterwarnings("ignore", category=RuntimeWarning)
+
+
+def _hint(exc: Exception, args: argparse.Namespace) -> str:
+    """What to try next, for errors a user can do something about."""
+    if exc.code in ("TRUNCATED", "CRC_MISMATCH", "BAD_CHUNK_TYPE") and getattr(args, "salvage", True) is False:
+        return f"; pln {args.command} --salvage reads what is intact"
+    return ""
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -49,10 +67,11 @@ def main(argv: list[str] | None = None) -> int:
         args = parser.parse_args(argv)
     except SystemExit as exc:
         return EXIT_OK if exc.code in (0, None) else EXIT_BAD_INPUT
+    quiet_library_warnings()
     try:
         return args.func(args)
     except PlnError as exc:
-        print(f"pln: {exc}", file=sys.stderr)
+        print(f"pln: {exc}{_hint(exc, args)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
         print("pln: interrupted", file=sys.stderr)

@@ -1,12 +1,15 @@
 """``pln convert``: between any two supported formats, .pln on either side.
 
     pln convert IN OUT [--tolerance T] [--bits N] [--scheme shell|paper] [--allow-open] [--lossy --delta D --tau A]
+        [-v] [--force]
     pln convert A B C -d OUTDIR --to glb [--jobs N]
 
 ``-`` reads standard input (format detected from the content) or writes
 standard output (``--to`` names the format). Outputs are written atomically:
 an error, Ctrl-C or SIGTERM leaves nothing under the target name, and the
-input is never touched.
+input is never touched: an output that is an input, two inputs with one
+output name, or a file beside the output it does not own (a .gltf's .bin,
+without --force) are refused before any work.
 """
 
 from __future__ import annotations
@@ -17,11 +20,18 @@ import os
 import shutil
 import sys
 import tempfile
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from planefmt.errors import PlnError
+from planefmt.errors import GeometryError, PlnError
 from planefmt_converters import interrupts
+from planefmt_converters.cli import quiet_library_warnings
+from planefmt_converters.cli.progress import Status, summary
+
+if TYPE_CHECKING:
+    from planefmt_converters.registry import Format
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -32,20 +42,26 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--to", help="output format name (glb, gltf, obj, ply, stl, off, usda, usdc, usdz, pln)")
     p.add_argument("--from", dest="from_", help="input format name instead of detecting it")
     p.add_argument("--jobs", type=int, default=1, help="batch: convert this many files at once")
+    p.add_argument("-v", "--verbose", action="store_true",
+                   help="end with a summary line (bytes in and out, error bound, seconds) also when stderr is "
+                        "not a terminal")
+    p.add_argument("--force", action="store_true",
+                   help="replace a file the output writes beside itself (a .gltf's .bin) even when it "
+                        "belongs to another file")
     p.add_argument("--salvage", action="store_true",
                    help="a damaged .pln input: convert every intact object and part group, list the losses "
                         "on stderr and exit 1")
     g = p.add_argument_group(".pln output")
     g.add_argument("--tolerance", type=float, default=1e-6,
-                   help="largest error allowed, a fraction of the bbox diagonal (default 1e-6)")
+                   help="largest error allowed, a fraction of the bbox diagonal, at most 0.1 (default 1e-6)")
     g.add_argument("--bits", type=int, help="force quantized coding with this many bits per component")
     g.add_argument("--coding", choices=["float32", "float64", "quantized"], help="force a triplet coding")
     g.add_argument("--compress", action=argparse.BooleanOptionalAction, default=True,
                    help="deflate plane and group payloads where that saves bytes (spec §6; the default)")
     g.add_argument("--compact", action=argparse.BooleanOptionalAction, default=True,
-                   help="write version 3.0 (spec/pln-3.md): bit-packed or predicted plane codes, whichever is "
-                        "smaller, varint group bodies and chunk heads; the default (--no-compact: version 1.0, "
-                        "for readers of 1.x only)")
+                   help="write version 3.0 (spec/pln-3.md; the default): bit-packed or predicted plane codes, "
+                        "whichever is smaller, varint group bodies and chunk heads. --no-compact writes version "
+                        "1.0, for readers of 1.x only")
     g.add_argument("--allow-open", action="store_true",
                    help="store a closed mesh that planes cannot close as an open surface (distance and area "
                         "kept, not watertight; marked lossy) instead of failing")
@@ -63,9 +79,17 @@ class _Usage(PlnError):
     """A usage mistake: reported like bad input (one line, exit 2)."""
 
 
+#: Largest --tolerance: a tenth of the diagonal. Beyond it the decoded surface may be another shape, which
+#: a file marked lossless "within its tolerance" would misrepresent.
+MAX_TOLERANCE = 0.1
+
+
 def _pln_options(args: argparse.Namespace) -> dict:
     if (args.delta is not None or args.tau is not None) and not args.lossy:
         raise _Usage("--delta and --tau change the geometry: add --lossy to allow it", code="CONVERSION_FAILED")
+    if not 0 < args.tolerance <= MAX_TOLERANCE:
+        raise _Usage(f"--tolerance {args.tolerance:g} is outside (0, {MAX_TOLERANCE:g}]: it is a fraction of the "
+                     "bounding-box diagonal (default 1e-6)", code="CONVERSION_FAILED")
     from planefmt.model import Coding
 
     opts = {"tolerance": args.tolerance, "compress": args.compress, "compact": args.compact,
@@ -80,34 +104,56 @@ def _pln_options(args: argparse.Namespace) -> dict:
 
 
 def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict,
-                salvage: bool = False) -> tuple[list[str], list[str]]:
+                salvage: bool = False, *, src_name: str | None = None, dst_name: str | None = None,
+                status: Status | None = None) -> tuple[list[str], list[str]]:
     """Convert one file; returns warning lines (what was dropped) and, with ``salvage``, what was lost.
 
-    Raises PlnError on bad input.
+    ``src_name`` and ``dst_name`` are what messages call ``src`` and ``dst`` (``<stdin>`` for a
+    temporary copy of standard input); ``status`` is told the stages. Raises PlnError on bad input.
     """
+    names = {src: src_name or src, dst: dst_name or dst}
+    try:
+        warnings, lost = _convert(src, dst, to, from_, pln_opts, salvage, names[src], names[dst],
+                                  status or Status(sys.stderr, enabled=False))
+    except PlnError as exc:
+        exc.file = names.get(exc.file, exc.file)
+        raise
+    return warnings, lost
+
+
+def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict, salvage: bool,
+             src_name: str, dst_name: str, status: Status) -> tuple[list[str], list[str]]:
+    from planefmt import progress
     from planefmt_converters import registry
 
     lost: list[str] = []
+    status.update(f"reading {src_name}")
     if salvage:
         fmt_in = registry.get(from_) if from_ else registry.detect(src)
         if fmt_in.name != "pln":
-            raise _Usage(f"--salvage reads damaged .pln files; {src} is {fmt_in.name}", code="UNKNOWN_FORMAT")
+            raise _Usage(f"--salvage reads damaged .pln files; {src_name} is {fmt_in.name}",
+                         code="UNKNOWN_FORMAT")
         from planefmt import codec
 
         scene, lost = codec.salvage_scene(src)
         dropped: list[str] = []
     else:
         scene, dropped = registry.read(src, from_)
-    fmt = registry.get(to) if to else registry.for_extension(dst, writable=True)
-    if fmt is None:
-        raise _Usage(f"cannot tell the output format from {dst!r}: name it with --to", code="UNKNOWN_FORMAT")
-    notes = registry.write(scene, dst, fmt.name, **(pln_opts if fmt.name == "pln" else {}))
+    fmt = _output_format(dst, to)
+    # Conflicts beside the output were refused before any work, or --force allowed them.
+    status.update("encoding" if fmt.name == "pln" else f"writing {dst_name}")
+    try:
+        with progress.reporting(status.update):
+            notes = registry.write(scene, dst, fmt.name, force=True, **(pln_opts if fmt.name == "pln" else {}))
+    except GeometryError as exc:
+        exc.file = src  # what the input holds (or a tolerance it cannot meet), not the output
+        raise
     warnings = []
     if dropped:
-        warnings.append(f"{src}: dropped {'; '.join(dropped)} (not carried into {Path(dst).name})")
+        warnings.append(f"{src_name}: dropped {'; '.join(dropped)} (not carried into {Path(dst_name).name})")
     if notes:
-        warnings.append(f"{dst}: not kept by {fmt.name}: {', '.join(notes)}")
-    return warnings, [f"{src}: {line}" for line in lost]
+        warnings.append(f"{dst_name}: not kept by {fmt.name}: {', '.join(notes)}")
+    return warnings, [f"{src_name}: {line}" for line in lost]
 
 
 def _batch_job(job: tuple) -> tuple[str, list[str] | None, bool, str | None]:
@@ -128,6 +174,7 @@ def run(args: argparse.Namespace) -> int:
             elif len(args.paths) != 2:
                 raise _Usage("give IN OUT, or several inputs with -d OUTDIR --to FORMAT", code="CONVERSION_FAILED")
             else:
+                _refuse_conflicts([(args.paths[0], args.paths[1])], args)
                 code = _run_single(args.paths[0], args.paths[1], args, opts)
         except PlnError:
             # The error may be what a swallowed KeyboardInterrupt turned into: report the signal.
@@ -137,10 +184,67 @@ def run(args: argparse.Namespace) -> int:
         return code
 
 
-def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int:
-    with tempfile.TemporaryDirectory(prefix="pln-") as tmp:
+def _refuse_conflicts(pairs: list[tuple[str, str]], args: argparse.Namespace) -> None:
+    """Before any work: no output (sidecars included) replaces an input or a file an input uses, none is
+    written twice, and none replaces a file beside its target that the target does not use (without
+    ``--force``). The atomic rename would otherwise lose that file only after a possibly long run."""
+    from planefmt_converters import registry
+
+    inputs: dict[tuple, str] = {}  # file identity: how the message names it
+    for src, _ in pairs:
         if src == "-":
-            src = os.path.join(tmp, "stdin")
+            continue
+        inputs[registry.file_identity(src)] = f"the input {src}"
+        try:
+            fmt_in = registry.get(args.from_) if args.from_ else registry.detect(src)
+        except PlnError:
+            continue  # unreadable: its own conversion reports it, the others of a batch go on
+        for used in fmt_in.references(src) if fmt_in.references else ():
+            inputs.setdefault(registry.file_identity(used), f"a file the input {src} uses")
+    written: dict[tuple, str] = {}
+    for src, dst in pairs:
+        if dst == "-":
+            continue
+        fmt = _output_format(dst, args.to)
+        for out in (dst, *(fmt.sidecars(dst) if fmt.sidecars else ())):
+            key = registry.file_identity(out)
+            if key in inputs:
+                raise PlnError(f"this output is the same file as {inputs[key]}; inputs are never overwritten: "
+                               "choose another output name", code="OUTPUT_CONFLICT", file=out)
+            if key in written:
+                raise PlnError(f"{written[key]} and {src} would both be written here, one result lost: "
+                               "convert them into different folders or rename one", code="OUTPUT_CONFLICT",
+                               file=out)
+            written[key] = src
+        unclaimed = [] if args.force else registry.unclaimed_sidecars(dst, fmt)
+        if unclaimed:
+            raise PlnError(f"writing {dst} would replace this file, which {dst} does not use: move it, or "
+                           "add --force to replace it", code="OUTPUT_CONFLICT", file=unclaimed[0])
+
+
+def _output_format(dst: str, to: str | None) -> Format:
+    """The format ``dst`` is written in: ``--to``, else by extension. An extension of another format than
+    ``--to`` names is refused (GLB bytes in ``x.pln`` mislead every later reader); one of no format is the
+    user's choice."""
+    from planefmt_converters import registry
+
+    by_extension = registry.for_extension(dst, writable=True)
+    fmt = registry.get(to) if to else by_extension
+    if fmt is None:
+        raise _Usage(f"cannot tell the output format from {dst!r}: name it with --to", code="UNKNOWN_FORMAT")
+    suffix = Path(dst).suffix.lower()
+    if by_extension is not None and suffix not in fmt.extensions:
+        raise _Usage(f"--to {fmt.name} writes {fmt.name}, but {suffix} is the extension of {by_extension.name}: "
+                     f"name the output {Path(dst).stem}{fmt.extensions[0]} or drop --to", code="UNKNOWN_FORMAT",
+                     file=dst)
+    return fmt
+
+
+def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int:
+    with contextlib.ExitStack() as stack:
+        src_name = dst_name = None
+        if src == "-":
+            src, src_name = stack.enter_context(_temporary("")), "<stdin>"
             with open(src, "wb") as f:
                 shutil.copyfileobj(sys.stdin.buffer, f)
         to_stdout = dst == "-"
@@ -149,8 +253,17 @@ def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int
                 raise _Usage("writing to standard output needs --to FORMAT", code="UNKNOWN_FORMAT")
             from planefmt_converters import registry
 
-            dst = os.path.join(tmp, "stdout" + registry.get(args.to).extensions[0])
-        warnings, lost = convert_one(src, dst, args.to, args.from_, opts, args.salvage)
+            dst, dst_name = stack.enter_context(_temporary(registry.get(args.to).extensions[0])), "<stdout>"
+        elif not os.path.isdir(os.path.dirname(dst) or "."):
+            raise _Usage(f"the folder {os.path.dirname(dst)} does not exist", code="CONVERSION_FAILED", file=dst)
+        status = Status(sys.stderr, enabled=sys.stderr.isatty())
+        try:
+            warnings, lost = convert_one(src, dst, args.to, args.from_, opts, args.salvage,
+                                         src_name=src_name, dst_name=dst_name, status=status)
+        finally:
+            status.close()  # before any message, so that it starts on a clean line
+        if status.enabled or args.verbose:
+            print(_summary(src, dst, src_name or src, dst_name or dst, args, status.elapsed), file=sys.stderr)
         for line in warnings:
             print(f"pln: warning: {line}", file=sys.stderr)
         for line in lost:
@@ -162,6 +275,43 @@ def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int
     return 1 if lost else 0
 
 
+def _summary(src: str, dst: str, src_name: str, dst_name: str, args: argparse.Namespace, seconds: float) -> str:
+    """The line a conversion ends with; the error bound is the output's, else the one its .pln input
+    records (what it was decoded within)."""
+    import planefmt
+    from planefmt_converters import registry
+
+    fmt = registry.get(args.to) if args.to else registry.for_extension(dst, writable=True)
+    written = [dst, *(fmt.sidecars(dst) if fmt.sidecars else ())]
+    bytes_out = sum(os.path.getsize(path) for path in written if os.path.exists(path))
+    pln_in = (args.from_ or registry.detect(src).name) == "pln"
+    error = None
+    if fmt.name == "pln" or pln_in:
+        try:
+            with planefmt.open(dst if fmt.name == "pln" else src) as f:
+                error = f.header.error_bound
+        except planefmt.PlnError:  # a damaged input, converted with --salvage: no bound to quote
+            pass
+    return summary(src_name, dst_name, os.path.getsize(src), bytes_out, error, seconds,
+                   recorded_in_input=fmt.name != "pln")
+
+
+@contextlib.contextmanager
+def _temporary(suffix: str) -> Iterator[str]:
+    """A temporary file standing for standard input or output, since readers and writers take paths.
+
+    Only these conversions make one, and a file rather than a folder: a SIGKILL, which allows no clean-up,
+    leaves at most this one file in the system's temporary folder.
+    """
+    fd, name = tempfile.mkstemp(prefix="pln-", suffix=suffix)
+    os.close(fd)
+    try:
+        yield name
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            os.unlink(name)
+
+
 def _run_batch(args: argparse.Namespace, opts: dict) -> int:
     if not args.to:
         raise _Usage("batch conversion needs --to FORMAT", code="UNKNOWN_FORMAT")
@@ -169,13 +319,15 @@ def _run_batch(args: argparse.Namespace, opts: dict) -> int:
 
     ext = registry.get(args.to).extensions[0]
     outdir = Path(args.outdir)
+    pairs = [(src, str(outdir / (Path(src).stem + ext))) for src in args.paths]
+    _refuse_conflicts(pairs, args)
     outdir.mkdir(parents=True, exist_ok=True)
-    jobs = [(src, str(outdir / (Path(src).stem + ext)), args.to, args.from_, opts, args.salvage)
-            for src in args.paths]
+    jobs = [(src, dst, args.to, args.from_, opts, args.salvage) for src, dst in pairs]
     failed = losses = 0
     progress = _Progress(len(jobs))
     with contextlib.ExitStack() as stack:
-        pool = stack.enter_context(ProcessPoolExecutor(args.jobs)) if args.jobs > 1 else None
+        pool = stack.enter_context(ProcessPoolExecutor(args.jobs, initializer=quiet_library_warnings)) \
+            if args.jobs > 1 else None
         for result in (pool.map if pool else map)(_batch_job, jobs):
             failed += _report(result, progress)
             losses += result[2]

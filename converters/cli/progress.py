@@ -1,0 +1,85 @@
+"""What a long conversion shows on a terminal: one status line while it runs, one summary line at the end.
+
+The status line (stage, percent where the stage knows its total, elapsed seconds) is redrawn in place on
+stderr, only when stderr is a terminal and only once the conversion has run for :data:`DELAY` seconds,
+so quick conversions and pipes or logs see nothing of it. The library reports its stages through
+:mod:`planefmt.progress`; a thread redraws the line, so the elapsed time moves while a stage runs.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import TextIO
+
+#: Seconds before the status line appears: a conversion quicker than that shows none.
+DELAY = 0.5
+#: Seconds between redraws.
+INTERVAL = 0.2
+
+
+class Status:
+    """The status line of one conversion on ``stream``; inert unless ``enabled``."""
+
+    def __init__(self, stream: TextIO, enabled: bool) -> None:
+        self.stream = stream
+        self.enabled = enabled
+        self.start = time.monotonic()
+        self._stage, self._done, self._total = "starting", 0, None
+        self._width = 0
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread = None
+        if enabled:
+            self._thread = threading.Thread(target=self._run, name="pln-status", daemon=True)
+            self._thread.start()
+
+    @property
+    def elapsed(self) -> float:
+        return time.monotonic() - self.start
+
+    def update(self, stage: str, done: int = 0, total: int | None = None) -> None:
+        """The conversion is at ``stage``, ``done`` of ``total`` steps (None: a count with no known end)."""
+        with self._lock:
+            self._stage, self._done, self._total = stage, done, total
+
+    def close(self) -> None:
+        """Stop redrawing and clear the line, so that what is printed next starts at its beginning."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join()
+        with self._lock:
+            if self._width:
+                self.stream.write("\r" + " " * self._width + "\r")
+                self.stream.flush()
+                self._width = 0
+
+    def _run(self) -> None:
+        while not self._stop.wait(INTERVAL):
+            if self.elapsed >= DELAY:
+                self._draw()
+
+    def _draw(self) -> None:
+        with self._lock:
+            if self._stop.is_set():
+                return
+            if self._total:
+                where = f" {self._done}/{self._total} ({100 * self._done // self._total}%)"
+            elif self._done:
+                where = f" ({self._done} so far)"
+            else:
+                where = ""
+            text = f"pln: {self._stage}{where}, {self.elapsed:.0f} s"
+            self.stream.write("\r" + text.ljust(self._width))
+            self.stream.flush()
+            self._width = max(self._width, len(text))
+
+
+def summary(src: str, dst: str, bytes_in: int, bytes_out: int, error: float | None, seconds: float,
+            recorded_in_input: bool = False) -> str:
+    """The one line a conversion ends with: what went in and out, the error bound, how long it took."""
+    bound = ""
+    if error is not None:
+        bound = f", error at most {error:.3g} of the diagonal" + (" (recorded in the input)" if recorded_in_input
+                                                                  else "")
+    return f"pln: {src} -> {dst}: {bytes_in:,} B in, {bytes_out:,} B out{bound}, {seconds:.1f} s"
