@@ -32,7 +32,7 @@ test-slow: $(STAMP)
 	$(BIN)/python -m pytest -n auto --dist worksteal -m slow -rs
 
 # plants each bug of tools/mutate.py's fixed list in a scratch copy and runs the tests that guard it
-# (about 6 minutes on 2 cores); exit 1 if any bug survives
+# (5-6 minutes on 2 busy cores); exit 1 if any bug survives
 mutate: $(STAMP)
 	$(BIN)/python tools/mutate.py
 

@@ -58,7 +58,7 @@ def decode_cells_group(omega: np.ndarray, h: np.ndarray, cells: Sequence[np.ndar
                          plane_error=plane_error, merge_limit=merge_limit)
         corners.append(poly.vertices)
         volumes.append(_volume(poly.vertices, poly.triangles))
-    tokens = _tree(omega, h, entries, corners)
+    tokens = _tree(omega, h, entries, corners, where)
     v, t, inc_v, inc_r, t_ref = decode_bsp_group(omega, h, tokens, face)
     union, total = _volume(v, t), float(sum(volumes))
     if union < total * (1 - OVERLAP_TOLERANCE):
@@ -72,7 +72,8 @@ def _volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
     return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6
 
 
-def _tree(omega: np.ndarray, h: np.ndarray, entries: list[np.ndarray], corners: list[np.ndarray]) -> np.ndarray:
+def _tree(omega: np.ndarray, h: np.ndarray, entries: list[np.ndarray], corners: list[np.ndarray],
+          where: str = "planes") -> np.ndarray:
     """Preorder tokens (spec §8.4) of a tree whose IN leaves are the cells, as the module says.
 
     Built with an explicit stack: a chain has as many levels as its cell has entries, beyond
@@ -107,8 +108,8 @@ def _tree(omega: np.ndarray, h: np.ndarray, entries: list[np.ndarray], corners: 
     stack: list[tuple[np.ndarray, int, int, frozenset[int]]] = [(np.arange(len(entries)), -1, 0, frozenset())]
     while stack:
         if len(tokens) > limit:
-            raise GeometryError(f"the cells make a tree of more than {limit:,} nodes: they are not separated "
-                                f"by their own planes", code="LIMIT_EXCEEDED")
+            raise GeometryError(f"{where}: the cells make a tree of more than {limit:,.0f} nodes (cells that "
+                                f"their own planes do not separate)", code="LIMIT_EXCEEDED")
         candidates, cell, passed, path = stack.pop()
         if cell < 0:
             if len(candidates) == 0:

@@ -84,9 +84,8 @@ def test_the_bound_of_a_lossy_box_union_is_not_below_the_measured_distance():
     assert measured > 7.66e-4  # the check has teeth: the measure reaches past the verifier's lower bound
 
 
-@pytest.mark.parametrize("make, tolerance", [(shapes.cube, 1e-6), (shapes.ring, 1e-4), (shapes.plate_with_holes, 1e-4),
-                                             (shapes.hemisphere, 1e-4)],
-                         ids=["cube 1e-6", "ring 1e-4", "plate 1e-4", "hemisphere 1e-4"])
+@pytest.mark.parametrize("make, tolerance", [(shapes.cube, 1e-6), (shapes.ring, 1e-4), (shapes.hemisphere, 1e-4)],
+                         ids=["cube 1e-6", "ring 1e-4", "hemisphere 1e-4"])
 def test_the_bound_written_in_the_header_is_not_below_the_measured_distance(make, tolerance):
     from planefmt.model import Mesh, Node, Scene
 

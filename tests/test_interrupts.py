@@ -85,20 +85,26 @@ def _staged(target: Path, stage: str | None, sig: signal.Signals = signal.SIGKIL
     return code, err, seen
 
 
-@pytest.mark.parametrize("suffix", [".obj", ".glb"])
-def test_every_stage_is_reached_once_in_order(suffix: str, tmp_path: Path) -> None:
-    # Each stage a test below signals at is one the conversion passes through.
-    code, err, seen = _staged(tmp_path / f"out{suffix}", None)
+@pytest.fixture(scope="module", params=[".obj", ".glb"])
+def reference(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """An uninterrupted conversion's output, once per output format."""
+    out = tmp_path_factory.mktemp("reference") / f"reference{request.param}"
+    code, err, seen = _staged(out, None)
     assert code == 0, err
+    # Each stage a test below signals at is one the conversion passes through.
     assert seen == list(STAGES)
+    return out
+
+
+def test_every_stage_is_reached_once_in_order(reference: Path) -> None:
+    assert reference.stat().st_size > 0
 
 
 @pytest.mark.parametrize("stage", STAGES)
-def test_sigkill_at_any_stage_leaves_no_file_under_the_target_name(stage: str, tmp_path: Path) -> None:
+def test_sigkill_at_any_stage_leaves_no_file_under_the_target_name(stage: str, reference: Path,
+                                                                  tmp_path: Path) -> None:
     before = _digest(SOURCE)
-    reference = tmp_path / "reference.obj"
-    assert _staged(reference, None)[0] == 0
-    target = tmp_path / "out.obj"
+    target = tmp_path / f"out{reference.suffix}"
     code, err, seen = _staged(target, stage)
     assert seen[-1] == stage and code == -signal.SIGKILL, err
     if stage == "renamed":
@@ -107,7 +113,7 @@ def test_sigkill_at_any_stage_leaves_no_file_under_the_target_name(stage: str, t
     else:
         assert not target.exists()
     # SIGKILL allows no clean-up: besides the outputs, only hidden temporaries may stay.
-    strays = [p.name for p in tmp_path.iterdir() if p.name not in ("reference.obj", "out.obj")]
+    strays = [p.name for p in tmp_path.iterdir() if p.name != target.name]
     assert all(n.startswith(".") and ".tmp" in n for n in strays), strays
     assert len(strays) == (1 if stage in ("temporary", "rename") else 0), strays
     assert _digest(SOURCE) == before
@@ -115,20 +121,18 @@ def test_sigkill_at_any_stage_leaves_no_file_under_the_target_name(stage: str, t
 
 @pytest.mark.parametrize("stage", STAGES)
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
-def test_sigterm_and_sigint_at_any_stage_clean_up_and_exit_130(sig: signal.Signals, stage: str,
+def test_sigterm_and_sigint_at_any_stage_clean_up_and_exit_130(sig: signal.Signals, stage: str, reference: Path,
                                                               tmp_path: Path) -> None:
-    reference = tmp_path / "reference.glb"
-    assert _staged(reference, None)[0] == 0
-    target = tmp_path / "out.glb"
+    target = tmp_path / f"out{reference.suffix}"
     code, err, seen = _staged(target, stage, sig)
     assert seen[-1] == stage
     assert code == 130 and err.strip() == "pln: interrupted", err
     if stage == "renamed":
         # The signal came after the output was renamed into place: the whole output, never a part.
         assert target.read_bytes() == reference.read_bytes()
-        assert sorted(p.name for p in tmp_path.iterdir()) == ["out.glb", "reference.glb"]
+        assert [p.name for p in tmp_path.iterdir()] == [target.name]
     else:
-        assert sorted(p.name for p in tmp_path.iterdir()) == ["reference.glb"], "temporary files left behind"
+        assert list(tmp_path.iterdir()) == [], "temporary files left behind"
 
 
 @pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
