@@ -814,14 +814,15 @@ def structure_kept(mesh: Mesh, obj: _Object, distance: float = 0.0) -> bool:
     return structure_problem(mesh, obj, distance) is None
 
 
-def structure_problem(mesh: Mesh, obj: _Object, distance: float = 0.0) -> str | None:
-    """How a decoding fails :func:`structure_kept`, in words; None if it keeps the structure."""
+def structure_problem(mesh: Mesh, obj: _Object, distance: float = 0.0, topology: bool = True) -> str | None:
+    """How a decoding fails :func:`structure_kept`, in words; None if it keeps the structure. Without
+    ``topology``, closedness and the Euler characteristic are taken as kept (they are by construction)."""
     if obj.closed:
-        if not is_closed_manifold(mesh.faces, len(mesh.vertices)):
+        if topology and not is_closed_manifold(mesh.faces, len(mesh.vertices)):
             sides = np.sort(np.column_stack([mesh.faces.reshape(-1), mesh.faces[:, [1, 2, 0]].reshape(-1)]), axis=1)
             _, count = np.unique(sides, axis=0, return_counts=True)
             return f"a closed source decodes open ({int((count != 2).sum())} edges not on exactly two triangles)"
-        if euler_characteristic(mesh.faces) != obj.euler:
+        if topology and euler_characteristic(mesh.faces) != obj.euler:
             return f"Euler characteristic {euler_characteristic(mesh.faces)}, the source's {obj.euler}"
         allowed = max(STRUCTURE_TOLERANCE * abs(obj.volume), 2.0 * obj.area * distance)
         off = abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume)
@@ -1228,20 +1229,6 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
     return replace(obj, groups=tuple(groups)), moved
 
 
-def _shell_structure_problem(mesh: Mesh, obj: _Object, distance: float) -> str | None:
-    """:func:`structure_problem` where a decoding's topology is the source's by construction (shells
-    alone): only the volume or area can move."""
-    if any(g.kind != GroupKind.SHELL for g in obj.groups):
-        return structure_problem(mesh, obj, distance)
-    if obj.closed:
-        allowed = max(STRUCTURE_TOLERANCE * abs(obj.volume), 2.0 * obj.area * distance)
-        off = abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume)
-        return None if off <= allowed else f"volume off by {off / abs(obj.volume):.2g} (relative)"
-    off = abs(_area(mesh.vertices, mesh.faces) - obj.area)
-    allowed = max(STRUCTURE_TOLERANCE * obj.area, obj.rim * distance)
-    return None if off <= allowed else f"area off by {off / obj.area:.2g} (relative)"
-
-
 def _planeless(obj: _Object) -> _Object | None:
     """``obj`` with its shells stripped of their planes, or None where that changes it (it has
     convex groups, or colours that ride on planes)."""
@@ -1332,7 +1319,9 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
             error = plane_error(cod, q, tolerance, diag_src)
             meshes = [_concatenate(_decode_object(rt[a:b], o, error))
                       for o, a, b in zip(built, offsets[:-1], offsets[1:])]
-            problems = [_shell_structure_problem(m, o, band * diag_src / sc)
+            # Shells alone keep the source's topology by construction: only volume or area can move.
+            problems = [structure_problem(m, o, band * diag_src / sc,
+                                          topology=any(g.kind != GroupKind.SHELL for g in o.groups))
                         for m, o, sc in zip(meshes, built, scale)]
             problems = [p for p in problems if p is not None]
             if not problems:

@@ -425,15 +425,8 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
     if refs[-1] >= planes:
         raise FormatError(f"group {head.index} references plane {int(refs[-1])}, only {planes} defined",
                           code="BAD_PLANE_REFERENCE")
-    nroles = (count + 7) // 8
-    if len(raw) < pos + nroles:
-        raise FormatError("group body ends inside its role bits", code="BAD_PAYLOAD")
-    role_bits = np.unpackbits(raw[pos:pos + nroles], bitorder="little")
-    pos += nroles
-    if role_bits[count:].any():
-        raise FormatError("non-zero padding bits after the role bits", code="BAD_PAYLOAD")
+    bounding, pos = _bit_field(raw, pos, count, "group body", "role bits")
     rest = raw[pos:]
-    bounding = role_bits[:count].astype(bool)
     cells = tree = vertex_planes = facets = shell = None
     extra = b""
     if head.kind not in kinds:
@@ -451,6 +444,18 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
     return PartGroup(index=head.index, object=head.object, kind=_kind(head.kind), refs=refs.astype(np.uint32),
                      bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
                      facets=facets, shell=shell)
+
+
+def _bit_field(raw: np.ndarray, pos: int, count: int, body: str, what: str) -> tuple[np.ndarray, int]:
+    """``count`` bits packed least significant first from ``raw[pos:]`` as bools, and the position
+    after their bytes; ``BAD_PAYLOAD`` where ``body`` ends inside them or a padding bit is set."""
+    size = (count + 7) // 8
+    if len(raw) < pos + size:
+        raise FormatError(f"{body} ends inside its {what}", code="BAD_PAYLOAD")
+    bits = np.unpackbits(raw[pos:pos + size], bitorder="little")
+    if bits[count:].any():
+        raise FormatError(f"non-zero padding bits after the {what}", code="BAD_PAYLOAD")
+    return bits[:count].astype(bool), pos + size
 
 
 def _decode_counted(raw: np.ndarray, what: str, limit: int) -> tuple[np.ndarray, int]:
@@ -729,14 +734,7 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
     if not (3 <= v <= 8 * left and 1 <= t <= left // 3 and u <= t):
         raise FormatError(f"shell group: {v} corners, {t} triangles, {u} free: outside the ranges the body "
                           f"allows", code="BAD_GROUP_STRUCTURE")
-    nflags = (v + 7) // 8
-    if len(raw) < pos + nflags:
-        raise FormatError("shell group: the body ends inside its corner flags", code="BAD_PAYLOAD")
-    bits = np.unpackbits(raw[pos:pos + nflags], bitorder="little")
-    pos += nflags
-    if bits[v:].any():
-        raise FormatError("shell group: non-zero padding bits after the corner flags", code="BAD_PAYLOAD")
-    explicit = bits[:v].astype(bool)
+    explicit, pos = _bit_field(raw, pos, v, "shell group: the body", "corner flags")
     e = int(explicit.sum())
     if 3 * (v - e) + 3 * e + 3 * t > len(raw) - pos:
         raise FormatError("shell group: more corners and triangles declared than the body holds",
