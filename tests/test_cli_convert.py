@@ -289,7 +289,7 @@ def test_forced_coding_beyond_the_tolerance_is_marked_lossy_with_a_warning(
     import planefmt
 
     out = tmp_path / "coarse.pln"
-    assert main(["convert", "--bits", "4", str(CORPUS / "cad" / "box.STL"), str(out)]) == 0
+    assert main(["convert", "--scheme", "paper", "--bits", "4", str(CORPUS / "cad" / "box.STL"), str(out)]) == 0
     err = capsys.readouterr().err
     with planefmt.open(out) as f:
         header = f.header
@@ -297,6 +297,21 @@ def test_forced_coding_beyond_the_tolerance_is_marked_lossy_with_a_warning(
     assert "warning" in err and f"{header.error_bound:.3g}" in err and "lossy" in err, err
     assert main(["info", str(out)]) in (0, 1)
     assert "lossless" not in capsys.readouterr().out
+
+
+def test_forced_coding_of_shells_still_meets_the_tolerance(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    """A shell names a corner by its planes only where they put it within the tolerance: coarse
+    planes (--bits 4) make its corners explicit, not the file lossy."""
+    import planefmt
+
+    out = tmp_path / "coarse.pln"
+    assert main(["convert", "--bits", "4", str(CORPUS / "cad" / "box.STL"), str(out)]) == 0
+    with planefmt.open(out) as f:
+        header = f.header
+        kinds = {g.kind for g in f.part_groups()}
+    assert kinds == {planefmt.GroupKind.SHELL}
+    assert header.error_bound <= header.tolerance and not header.lossy
+    assert "warning" not in capsys.readouterr().err
 
 
 _KILLED = """
