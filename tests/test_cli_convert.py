@@ -19,7 +19,8 @@ from planefmt.model import Units
 from planefmt_converters import registry
 from planefmt_converters.cli import main
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
+from corpus import CORPUS
+
 CUBE = CORPUS / "convex" / "cube_subd.obj"
 TET = CORPUS / "convex" / "tet.ply"
 

@@ -14,7 +14,8 @@ from planefmt import GroupKind, Mesh, Node, Scene, Units
 from planefmt_converters import registry
 from planefmt_converters.cli import main
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
+from corpus import CORPUS
+
 CUBE = CORPUS / "convex" / "cube_subd.obj"
 
 

@@ -4,8 +4,6 @@ small convex one, its error bound by construction, and its structure kept."""
 from __future__ import annotations
 
 import io
-from pathlib import Path
-
 import numpy as np
 import pytest
 import planefmt
@@ -17,8 +15,7 @@ from planefmt.shells import decode_shell
 from planefmt_converters import registry
 
 import shapes
-
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
+from corpus import CORPUS
 
 
 def wall_with_hole() -> tuple[np.ndarray, np.ndarray]:
