@@ -414,7 +414,7 @@ def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: Pla
 def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
     """A ``SHELL`` group: its triangles over its corners, named by three planes or explicit (spec 3.2
     §8.9). Linear time: one batched 3×3 solve."""
-    shell = getattr(group, "shell", None)
+    shell = group.shell
     if shell is None:
         raise GeometryError(f"part group {label}: shell groups are kind 6 only from version 3.2 on",
                             code="UNKNOWN_GROUP_KIND")

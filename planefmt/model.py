@@ -152,8 +152,7 @@ class Shell:
     corner order, at ``origin + step * grid`` (model units); ``facets`` (T, 4)
     each triangle's face reference (:data:`FREE` for none) and its three
     corners, planar triangles in non-decreasing face order, then free ones;
-    corners numbered in order of first use. ``error`` is the largest corner
-    displacement from the source (model units), 0 when not measured.
+    corners numbered in order of first use.
     """
 
     explicit: np.ndarray
@@ -162,7 +161,6 @@ class Shell:
     origin: np.ndarray
     step: float
     facets: np.ndarray
-    error: float = 0.0
 
     def __repr__(self) -> str:
         return (f"Shell({len(self.explicit)} corners, {len(self.vertex_planes)} named, "

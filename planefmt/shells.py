@@ -95,11 +95,10 @@ def corner_triples(points: np.ndarray, triangles: np.ndarray, face: np.ndarray,
 @dataclass(frozen=True)
 class ShellPlan:
     """What of a shell does not depend on its planes' coding: triangles sorted by face, corners
-    numbered by first use (``points`` (V, 3) in that order, ``source`` their indices in the input),
+    numbered by first use (``points`` (V, 3) in that order),
     and each corner's triple of planes with ``|det|`` of their exact normals."""
 
     points: np.ndarray
-    source: np.ndarray
     facets: np.ndarray
     triple: np.ndarray
     det: np.ndarray
@@ -126,7 +125,7 @@ def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omeg
     tri = rank[triangles]
     p = points[source]
     triple, det = corner_triples(p, tri, face, omega)
-    return ShellPlan(points=p, source=source, facets=np.column_stack([face, tri]), triple=triple, det=det)
+    return ShellPlan(points=p, facets=np.column_stack([face, tri]), triple=triple, det=det)
 
 
 def walk_order(triangles: np.ndarray, count: int) -> np.ndarray:
@@ -156,7 +155,7 @@ def encode_shell(plan: ShellPlan, omega: np.ndarray, h: np.ndarray, budget: floa
     Every corner is named by its best triple where that puts it within
     ``budget`` (model units) of where it is, and is explicit otherwise, on a
     grid of step ``2 * budget / sqrt(3)`` (half a cell's diagonal is the
-    budget). ``error`` is the largest displacement, measured.
+    budget).
     """
     if not (math.isfinite(budget) and budget > 0):
         raise GeometryError(f"a shell needs a positive error budget, not {budget}")
@@ -166,11 +165,9 @@ def encode_shell(plan: ShellPlan, omega: np.ndarray, h: np.ndarray, budget: floa
         # Coarsely coded normals can make a well-conditioned triple dependent.
         k = np.flatnonzero(named)
         named[k[~(np.abs(np.linalg.det(omega[triple[k]])) >= MIN_DETERMINANT)]] = False
-    moved = np.zeros(len(p))
     if named.any():
-        x = corners(omega, h, triple[named])
-        moved[named] = np.linalg.norm(x - p[named], axis=1)
-        named[np.flatnonzero(named)[~(moved[named] <= budget)]] = False
+        k = np.flatnonzero(named)
+        named[k[~(np.linalg.norm(corners(omega, h, triple[k]) - p[k], axis=1) <= budget)]] = False
     explicit = ~named
     step = 2.0 * budget / math.sqrt(3.0)
     origin = np.zeros(3)
@@ -183,9 +180,8 @@ def encode_shell(plan: ShellPlan, omega: np.ndarray, h: np.ndarray, budget: floa
             raise GeometryError(f"a shell spans {span:g} model units, more than {MAX_GRID:.3g} steps of "
                                 f"{step:g} (the budget)", code="DEGENERATE_GEOMETRY")
         grid = np.rint((q - origin) / step).astype(np.int64)
-        moved[explicit] = np.linalg.norm(origin + step * grid.astype(np.float64) - q, axis=1)
     return Shell(explicit=explicit, vertex_planes=triple[named], grid=grid, origin=origin, step=step,
-                 facets=plan.facets, error=float(moved.max(initial=0.0)))
+                 facets=plan.facets)
 
 
 def reordered(shell: Shell, local: np.ndarray) -> Shell:
@@ -207,5 +203,4 @@ def reordered(shell: Shell, local: np.ndarray) -> Shell:
     vertex_planes = local[np.asarray(shell.vertex_planes, dtype=np.int64)[named_row[back[~new_explicit]]]]
     grid = np.asarray(shell.grid, dtype=np.int64)[grid_row[back[new_explicit]]]
     return Shell(explicit=new_explicit, vertex_planes=vertex_planes.reshape(-1, 3), grid=grid.reshape(-1, 3),
-                 origin=shell.origin, step=shell.step, facets=np.column_stack([face[order], rank[tri]]),
-                 error=shell.error)
+                 origin=shell.origin, step=shell.step, facets=np.column_stack([face[order], rank[tri]]))
