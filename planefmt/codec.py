@@ -63,6 +63,7 @@ from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
 from .model import (BSP_MAX_SPLIT, Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup,
                     Quantization, Scene, Units)
+from .convexbound import convex_hausdorff
 from .bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
 from .cells import decode_cells_group
 from .patches import PlaneTable, decode_patch_groups
@@ -1052,17 +1053,18 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
         progress.report("verifying codings", tried[0])
         tried[0] += 1
         if cod == Coding.FLOAT64:
-            meshes = base_meshes
+            decoded = base
         else:
             rt = quantize.roundtrip(table, cod, q)
             try:
                 error = plane_error(cod, q, tolerance, diag_src)
-                meshes = [_concatenate(_decode_object(rt[a:b], o, error)) for (a, b), o in zip(spans, objects)]
+                decoded = [_decode_object(rt[a:b], o, error) for (a, b), o in zip(spans, objects)]
             except GeometryError:
                 # Coarse planes can lose a face or the solid altogether: not this coding.
                 if forced:
                     raise
                 return None
+        meshes = base_meshes if decoded is base else [_concatenate(d) for d in decoded]
         if not forced and not simplified:
             problems = [(k, structure_problem(m, o, band * diag_src / sc))
                         for k, (m, o, sc) in enumerate(zip(meshes, objects, scale))]
@@ -1078,7 +1080,7 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
             # Float64 is the finest coding, with no next one to certify sooner: it gets the full budget.
             if pieces is None:
                 pieces = DEFAULT_MAX_PIECES if cod == Coding.FLOAT64 else _VERIFY_PIECES
-            checks = [_verify(m, o, bound, pieces) for m, o in zip(meshes, objects)]
+            checks = [_verify(m, o, bound, pieces, d) for m, o, d in zip(meshes, objects, decoded)]
             errors = [c[0] for c in checks]
             if max(errors) > bound:
                 if all(c[1] <= bound for c in checks):
@@ -1406,16 +1408,51 @@ class _Incidences:
         return out, _peak(offset[wild])
 
 
-def _verify(mesh: Mesh, obj: _Object, target: float, pieces: int) -> tuple[float, float]:
+def _verify(mesh: Mesh, obj: _Object, target: float, pieces: int,
+            decoded: list[DecodedGroup] | None = None) -> tuple[float, float]:
     """``(upper, lower)``: certified bounds (world model units) of the two-sided Hausdorff distance to
     the source, refined until ``upper <= target`` or the decision is made; ``upper`` is infinity
-    when it is not at most ``target``."""
-    a = transform_points(mesh.vertices, obj.world)
-    b = transform_points(obj.vertices, obj.world)
+    when it is not at most ``target``.
+
+    Convex groups over convex source bodies (``decoded`` given) are bounded from their corners
+    (:func:`planefmt.convexbound.convex_hausdorff`), group by group, without a search.
+    """
     shift = _mended(obj)
-    r = hausdorff(a, mesh.faces, b, obj.faces, target=target - shift, max_pieces=pieces)
-    upper = float(r.upper) + shift
-    return (upper if upper <= target else math.inf), max(float(r.lower) - shift, 0.0)
+    convex = _convex_bounds(decoded, obj) if decoded is not None else None
+    if convex is not None:
+        upper, lower = convex
+    else:
+        a = transform_points(mesh.vertices, obj.world)
+        b = transform_points(obj.vertices, obj.world)
+        r = hausdorff(a, mesh.faces, b, obj.faces, target=target - shift, max_pieces=pieces)
+        upper, lower = float(r.upper), float(r.lower)
+    upper += shift
+    return (upper if upper <= target else math.inf), max(lower - shift, 0.0)
+
+
+def _convex_bounds(decoded: list[DecodedGroup], obj: _Object) -> tuple[float, float] | None:
+    """``(upper, lower)`` of the two-sided Hausdorff distance (world model units) of an object made
+    of convex groups, each against its source body, or None where a group or body is not convex.
+
+    The distance between the unions is at most the largest between a body and its own group's
+    decoding: each is part of its union's surface."""
+    groups = obj.groups
+    if not groups or any(g.kind != GroupKind.CONVEX for g in groups):
+        return None
+    if len(groups) == 1 and groups[0].faces is None:
+        sources = [obj.faces]
+    elif all(g.faces is not None for g in groups):
+        sources = [obj.faces[g.faces] for g in groups]
+    else:
+        return None
+    upper = lower = 0.0
+    b = transform_points(obj.vertices, obj.world)
+    for d, faces in zip(decoded, sources):
+        found = convex_hausdorff(transform_points(d.vertices, obj.world), d.triangles, b, faces)
+        if found is None:
+            return None
+        upper, lower = max(upper, found[0]), max(lower, found[1])
+    return upper, lower
 
 
 def _mended(obj: _Object) -> float:
