@@ -1608,8 +1608,8 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                     plane_count=len(rows), object_count=len(scene.nodes),
                     group_count=sum(len(o.groups) for o in objects))
     by_node = {i: (o, a) for i, o, a in zip(meshes, objects, offsets)}
-    # An index of one group gives no random access a streaming read lacks: compact files skip it.
-    index = not compact or sum(len(o.groups) for o in objects) > 1
+    # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
+    index = True if not compact else None
     with _writer(target, header, compress, index) as w:
         for i, node in enumerate(scene.nodes):
             obj_index = w.add_object(node.name, node.parent, node.transform)
@@ -1673,7 +1673,7 @@ def _scene_diagonal(scene: Scene, worlds: list[np.ndarray], meshes: list[int]) -
     return d if math.isfinite(d) else None
 
 
-def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool = True) -> Writer:
+def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True) -> Writer:
     return Writer(target, header, compress=compress, index=index)
 
 
