@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planefmt import records, schema, varint
+from planefmt.chunks import chunk_bytes
 from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization, Units
 
 from . import reference
@@ -1157,3 +1158,127 @@ def _():
                "cell interiors must be disjoint")
 def _():
     return l_file(grup(range(9), kind=1, bounding=L_ROLES, cells=(L_CELLS[0], L_CELLS[0])))
+
+
+# -- rules spec/pln.md decides (issue 32): one code each where older documents allowed two --------
+
+@case("xcrc_and_payload", "CRC_MISMATCH", "a PHDR with coding 7 and a wrong CRC: framing is checked before the "
+      "payload (spec/pln.md §4.1, §12.1)")
+def _():
+    return patched(CUBE_FILE, PHDR_AT + 8 + 4, b"\x07")  # the coding byte, after the CRC was computed
+
+
+@case("xorder_after_index_bad_payload", "CHUNK_ORDER", "an OBJT of 3 bytes (its own payload too short) between "
+      "iNDX and PEND: a chunk's place is checked before its payload (spec/pln.md §12.1)")
+def _():
+    return CUBE_FILE[:PEND_AT] + chunk_bytes(b"OBJT", b"\x01\x00\x00") + CUBE_FILE[PEND_AT:]
+
+
+@case("xchunk_too_long_max", "CHUNK_TOO_LONG", "the GRUP length is 2^32 - 1: above 2^31 - 1, above any reader's "
+      "chunk limit and beyond the end of the file; CHUNK_TOO_LONG comes first (spec/pln.md §4.1)")
+def _():
+    return patched(CUBE_FILE, GRUP_AT + 4, (0xFFFFFFFF).to_bytes(4, "little"))
+
+
+@case("xplns_stored_short", "SIZE_MISMATCH", "uncompressed PLNS data of 68 bytes with raw_size 72 (what 6 "
+      "float32 planes take): method 0 with a stored size other than raw size (spec/pln.md §6 step 3)")
+def _():
+    return file(cube(PLNS=plns_raw(CUBE.astype("<f4").tobytes()[:68], raw_size=72)))
+
+
+@case("xgrup_method_and_bomb", "BAD_COMPRESSION", "GRUP compression method 2 with raw_size 2^32 - 1: the method, "
+      "a defect of the file, is checked before the reader's limits (spec/pln.md §6 steps 1-2)")
+def _():
+    return file(cube(GRUP=grup_raw(body(), compression=2, raw_size=0xFFFFFFFF)))
+
+
+@case("xplns_zlib_truncated", "SIZE_MISMATCH", "a zlib stream cut after 30 of its bytes: a valid start that ends "
+      "inside the stream is SIZE_MISMATCH, not BAD_COMPRESSION (spec/pln.md §6 step 5)")
+def _():
+    z = zlib.compress(CUBE.astype("<f4").tobytes(), 9)
+    assert len(z) > 30
+    return file(cube(PLNS=plns_raw(z[:30], compression=1, raw_size=72)))
+
+
+@case("xplns_zlib_check", "BAD_COMPRESSION", "a zlib stream that inflates to the 72 bytes but whose Adler-32 "
+      "check value is wrong: an error the inflater reports (spec/pln.md §6 step 5)")
+def _():
+    z = bytearray(zlib.compress(CUBE.astype("<f4").tobytes(), 9))
+    z[-1] ^= 0x01
+    return file(cube(PLNS=plns_raw(bytes(z), compression=1, raw_size=72)))
+
+
+@case("xplns_padding_and_code", "BAD_PAYLOAD", "quantized 7/9/5 with a padding bit set and the first nu code 127, "
+      "above M_nu = 64: padding is checked before the codes (spec/pln.md §7.3)")
+def _():
+    q = Quantization(7, 9, 5, 0.0, 1.0)
+    payload = bytearray(plns(head=Header(coding=Coding.QUANTIZED, quantization=q)))
+    payload[20] |= 0x7F  # record 0's nu: bits 0-6 of the data
+    payload[-1] |= 0x80
+    return file(cube(PHDR=header(coding=Coding.QUANTIZED, quantization=q), PLNS=bytes(payload)))
+
+
+@case("xv2_predicted_extra_and_code", "SIZE_MISMATCH", "version 2.0, predicted planes: the first nu difference -1 "
+      "(a negative code) and one byte after the 18 varints: the fill is checked before the codes (spec/pln.md §7.4)")
+def _():
+    return v2(v2_planes(b"\x01" + V2_STREAMS[V2_FIRST:] + b"\x00"))
+
+
+@case("xv2_ref_count_long", "BAD_PAYLOAD", "version 2.0 group body: ref_count 200 in a body of 8 bytes: ref_count "
+      "is not compared with the bytes left, the body ends inside the references (spec/pln.md §9.2 step 3)")
+def _():
+    return v2(GRUP=grup_raw(b"\xc8\x01\x00\x01\x01\x01\x01\x01"))
+
+
+@case("xv2_ref_range_then_cut", "BAD_PAYLOAD", "version 2.0 group body: ref_count 6, the second difference 9 "
+      "reaches past the 6 planes, and the body ends after the fourth: every reference is read before any is checked "
+      "(spec/pln.md §9.2 steps 3-4)")
+def _():
+    return v2(GRUP=grup_raw(b"\x06\x00\x09\x01\x01"))
+
+
+@case("xv3_sealed_vertex_third", "BAD_GROUP_STRUCTURE", "version 3.1 sealed cube whose vertex_count says 25 with "
+      "74 bytes after it (the cube's 73 and one more): 3 x 25 = 75 > 74, whatever a reader's rounding of a third "
+      "(spec/pln.md §2.1, §9.9)")
+def _():
+    return sealed_file(sealed_body(vertex_count=25) + b"\x00")
+
+
+@case("xv3_shell_counts_short", "BAD_PAYLOAD", "version 3.2 shell cube cut 30 bytes short: its counts (8 corners, "
+      "12 triangles) pass their checks against the 43 bytes left after them, and the body ends inside the corner "
+      "codes (spec/pln.md §9.10 step 3)")
+def _():
+    return shell_file(shell_body()[:-30])
+
+
+@case("xv3_shell_step_then_cut", "BAD_PAYLOAD", "version 3.2 shell cube with its corner explicit: a coordinate step "
+      "of 2^53 (beyond 2^52) and the last corner code cut: every field is read before any value is checked "
+      "(spec/pln.md §9.10 steps 3, 5)")
+def _():
+    good = shell_body(SHELL_MIXED)
+    big = records._shell_body(dataclasses.replace(SHELL_MIXED, grid=np.array([[1 << 53, 0, 0]])))
+    b = good[:8] + big
+    return shell_file(b[:-1] + bytes([b[-1] | 0x80]))
+
+
+@geometry_case("xgeom_cells_empty_cell", "EMPTY_POLYTOPE", "the L's two cells and a third, x >= 1 and x <= 0 "
+               "within the box: an empty cell is an error (spec/pln.md §9.6)")
+def _():
+    cells = L_CELLS + ((7, 11, 0, 4, 12, 14),)
+    geometry_defect("EMPTY_POLYTOPE", 1, L_PLANES, L_ROLES, cells)
+    return l_file(grup(range(9), kind=1, bounding=L_ROLES, cells=cells))
+
+
+@geometry_case("xgeom_cells_unbounded_z", "UNBOUNDED_POLYTOPE", "a cells group whose first cell lacks z >= 0: an "
+               "unbounded cell is UNBOUNDED_POLYTOPE (spec/pln.md §9.6)")
+def _():
+    cells = ((0, 2, 4, 17, 12), L_CELLS[1])
+    geometry_defect("UNBOUNDED_POLYTOPE", 1, L_PLANES, L_ROLES, cells)
+    return l_file(grup(range(9), kind=1, bounding=L_ROLES, cells=cells))
+
+
+@geometry_case("xgeom_bsp_unbounded_leaf", "UNBOUNDED_POLYTOPE", "a tree whose IN leaf is the half-space z >= 0: "
+               "an unbounded IN leaf is UNBOUNDED_POLYTOPE (spec/pln.md §9.7)")
+def _():
+    geometry_defect("UNBOUNDED_POLYTOPE", 2, L_PLANES[:8], None, None, (7, IN, OUT))
+    return l_file(grup(range(8), kind=2, tree=(7, IN, OUT)), L_PLANES[:8])

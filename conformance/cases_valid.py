@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -82,6 +83,9 @@ class ValidCase:
     decoded_bbox: bool = False  # header bbox = the decoded geometry's, rounded to 9 decimals
     assembled_only: bool = False  # uses what a version 1.0 writer cannot write
     header_flags: int = 0  # PHDR flag bits beyond the writer's (assembled cases only)
+    #: Rewrites the assembled chunks (type, payload) before iNDX and PEND are added: bytes a writer
+    #: does not write but a reader must accept (assembled cases only).
+    edit: Callable[[list], list] | None = field(default=None, compare=False)
     findings: tuple[str, ...] = ()
     findings_optional: tuple[str, ...] = ()
     table: np.ndarray = field(init=False, repr=False, compare=False)
@@ -189,6 +193,8 @@ def assembled(case: ValidCase, header: Header) -> bytes:
             layout.append((schema.COLR, records.encode_colours(Colours(op.group, op.rgba))))
         else:
             layout.append((op.type, op.payload))
+    if case.edit is not None:
+        layout = case.edit(layout)
     return frame(finish(layout, case.index, header.version[0]))
 
 
@@ -404,6 +410,42 @@ NEWER_MINOR = dict(
     decoded_bbox=True, assembled_only=True, header_flags=0x0100,
     findings=("SKIPPED_GROUP_KIND",), findings_optional=("NEWER_MINOR_VERSION",))
 
+def ignored_fields(layout: list) -> list:
+    """Every field spec/pln.md §2.1 says readers ignore, set: the PHDR's undefined flag bits (through
+    ``header_flags``) and, under a float coding, its widths (and in version 1 its reserved bytes and h
+    range, NaN and -inf); the OBJT's undefined flag bits (and in version 1 its reserved byte); in
+    version 1 the reserved bytes of PLNS and GRUP heads."""
+    out = []
+    v1 = layout[0][1][0] == 1  # the PHDR's version_major
+    for ctype, payload in layout:
+        p = bytearray(payload)
+        if ctype == schema.PHDR:
+            p[5:8] = b"\x08\x10\x20"  # widths of a coding without widths
+            if v1:
+                p[9:12] = b"\xa5\x5a\xff"  # reserved
+                p[12:28] = np.array([math.nan, -math.inf], "<f8").tobytes()  # h range of a float coding
+        elif ctype == schema.OBJT:
+            if v1:
+                p[8] |= 0xFE  # flags: every bit but HAS_TRANSFORM
+                p[9] = 0x77  # reserved
+            else:
+                p[2] |= 0xFE  # version 3: index 0 and parent 0 (one-byte varints), then flags
+        elif ctype == schema.PLNS and v1:
+            p[13:16] = b"\x01\x02\x03"
+        elif ctype == schema.GRUP and v1:
+            p[10:12] = b"\xfe\xff"
+        out.append((ctype, bytes(p)))
+    return out
+
+
+#: The L's tree with one more split at its root on x >= 0 (reference 5), whose outer side (x <= 0)
+#: splits on x <= 1 (reference 3) into an OUT leaf and an IN leaf whose region, x <= 0 and x >= 1, is
+#: empty: an empty IN leaf contributes nothing (spec/pln.md §9.7).
+L_TREE_EMPTY_LEAF = (5,) + L_TREE + (3, OUT, IN)
+#: patch_convex's open box with its first face reference (x <= 1) given twice.
+PATCH_REPEATED_OPS = (Obj("open box"), Planes(np.vstack([box((0, 0, 0), (1, 1, 1))[[0, 1, 2, 3, 5]], [[0.46, math.pi, 0.8]]])),
+                      Group(0, GroupKind.PSEUDO_CONVEX, (0, 0, 1, 2, 3, 4, 5), bounding=(6,)))
+
 CASES = [
     ValidCase("cube_float32", "the unit cube of spec §12, float32, metres, with index: the 401 bytes printed there",
               SPEC_HEADER, cube_ops()),
@@ -564,4 +606,24 @@ CASES = [
                Colour(0, np.array([[0, 128, 0, 255]], dtype=np.uint8))), decoded_bbox=True),
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),
+    # -- rules spec/pln.md decides (issue 32)
+    ValidCase("ignored_fields", "the spec §12 cube of version 1.0 with every field a reader ignores set "
+              "(spec/pln.md §2.1, A.1): undefined PHDR and OBJT flag bits, the widths (8/16/32) and h range (NaN, "
+              "-inf) of a float coding, the reserved bytes of PHDR, OBJT, PLNS and GRUP; read as the cube",
+              SPEC_HEADER, cube_ops(), assembled_only=True, header_flags=0xFFF8, edit=ignored_fields),
+    ValidCase("ignored_fields_v3", "the cube of version 3.0 with every field a reader ignores set (spec/pln.md "
+              "§2.1): undefined PHDR and OBJT flag bits, the widths (8/16/32) of a float coding",
+              V3_CUBE, cube_ops(), assembled_only=True, header_flags=0xFFF8, edit=ignored_fields),
+    ValidCase("convex_roles", "the cube's convex group with role bit 1 on reference 5 (z >= 0): role bits of a convex "
+              "group carry no meaning, the face z = 0 is decoded (spec/pln.md §9.4)",
+              SPEC_HEADER, (Obj("cube"), Planes(CUBE), Group(0, GroupKind.CONVEX, tuple(range(6)), bounding=(5,))),
+              assembled_only=True),
+    ValidCase("bsp_empty_leaf", "the L of bsp_l with one more split at the root, x >= 0, whose outer side holds an "
+              "IN leaf of empty region (x <= 0 and x >= 1): allowed, it adds nothing (spec/pln.md §9.7)",
+              Header(coding=Coding.FLOAT64, units=Units.METRE),
+              (Obj("L"), Planes(L_PLANES[:8]), Group(0, GroupKind.BSP, tuple(range(8)), tree=L_TREE_EMPTY_LEAF)),
+              decoded_bbox=True),
+    ValidCase("patch_repeated_face", "kind 3: the open box of patch_convex with its face reference x <= 1 given "
+              "twice: the face is decoded once per reference, twice (spec/pln.md §9.8)",
+              Header(coding=Coding.FLOAT64, units=Units.METRE), PATCH_REPEATED_OPS, decoded_bbox=True),
 ]

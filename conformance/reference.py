@@ -154,11 +154,24 @@ def _overlap(face: Face, other: Face) -> float:
 
 
 def _cell_faces(omega: np.ndarray, h: np.ndarray, entries) -> list[Face]:
-    """Faces of one cell: entries ``2 j + s`` of local planes, ``s = 1`` for the complement."""
+    """Faces of one cell: entries ``2 j + s`` of local planes, ``s = 1`` for the complement. An entry
+    given twice (a tree that splits on a plane its path already took) bounds the cell once."""
+    entries = list(dict.fromkeys(int(e) for e in entries))
     j = np.asarray(entries, dtype=np.int64) >> 1
     sign = np.where(np.asarray(entries) & 1, -1.0, 1.0)
     faces = convex_faces(omega[j] * sign[:, None], h[j] * sign)
     return [Face(f.normal, f.offset, f.points, int(j[f.plane])) for f in faces]
+
+
+def _leaf_faces(omega: np.ndarray, h: np.ndarray, entries) -> list[Face]:
+    """Faces of an IN leaf's region; none where it is empty or flat, which spec/pln.md §9.7 allows (an
+    unbounded region is still a ``Defect``)."""
+    try:
+        return _cell_faces(omega, h, entries)
+    except Defect as exc:
+        if exc.code != "EMPTY_POLYTOPE":
+            raise
+        return []
 
 
 def bsp_cells(tokens, m: int) -> list[list[int]]:
@@ -262,7 +275,8 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
             raise ValueError("vertices too close together for the counts to be unambiguous")
     else:
         entries = cells if kind == 1 else bsp_cells(tree, len(h))
-        cell_faces = [_cell_faces(omega, h, e) for e in entries]
+        cell_faces = [_cell_faces(omega, h, e) if kind == 1 else _leaf_faces(omega, h, e) for e in entries]
+        cell_faces = [faces for faces in cell_faces if faces]
         points = np.concatenate([f.points for faces in cell_faces for f in faces])
         area, vector = _solid_union(cell_faces, float(np.linalg.norm(np.ptp(points, axis=0))))
         volume = sum(f.area * f.offset for faces in cell_faces for f in faces) / 3.0

@@ -173,15 +173,16 @@ def pack(data: bytes, compress: bool) -> tuple[int, bytes]:
 
 
 def unpack(method: int, stored: bytes, raw_size: int, limits: Limits) -> bytes:
-    """The raw bytes of a stored payload, with the deflate-bomb caps of spec §10.3."""
+    """The raw bytes of a stored payload, checked in the order of spec/pln.md §6, with the deflate-bomb
+    caps of its §12.4: the method (a defect of the file) before the reader's own limits."""
+    if method not in (schema.COMPRESSION_NONE, schema.COMPRESSION_ZLIB):
+        raise FormatError(f"unknown compression method {method}", code="BAD_COMPRESSION")
     if raw_size > limits.max_raw_size:
         raise LimitError(f"declared raw size {raw_size} exceeds the limit {limits.max_raw_size}")
     if method == schema.COMPRESSION_NONE:
         if len(stored) != raw_size:
             raise FormatError(f"raw size {raw_size} != stored size {len(stored)}", code="SIZE_MISMATCH")
         return stored
-    if method != schema.COMPRESSION_ZLIB:
-        raise FormatError(f"unknown compression method {method}", code="BAD_COMPRESSION")
     if raw_size > max(len(stored), 1) * limits.max_compression_ratio:
         raise LimitError(f"declared raw size {raw_size} is over {limits.max_compression_ratio}x "
                          f"the {len(stored)} stored bytes")
@@ -736,9 +737,8 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
                           f"allows", code="BAD_GROUP_STRUCTURE")
     explicit, pos = _bit_field(raw, pos, v, "shell group: the body", "corner flags")
     e = int(explicit.sum())
-    if 3 * (v - e) + 3 * e + 3 * t > len(raw) - pos:
-        raise FormatError("shell group: more corners and triangles declared than the body holds",
-                          code="BAD_GROUP_STRUCTURE")
+    # Every field is read before any value is checked (spec/pln.md §9.10): a body that ends inside one
+    # is BAD_PAYLOAD whatever else is wrong. The counts' checks above bound what is decoded.
     triples, used = varint.decode(raw[pos:], 3 * (v - e), "shell corner planes")
     pos += used
     origin, step, grid = np.zeros(3), 0.0, np.zeros((0, 3), dtype=np.int64)
@@ -751,14 +751,17 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
         deltas, used = varint.decode(raw[pos:], 3 * e, "shell corner coordinates")
         pos += used
         steps = varint.unzigzag(deltas).reshape(-1, 3)
-        if np.abs(steps).max(initial=0) > MAX_GRID:
-            raise FormatError("shell group: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE")
-        grid = np.cumsum(steps, axis=0)
     gaps, used = varint.decode(raw[pos:], t - u, "shell face references")
     pos += used
     codes, used = varint.decode(raw[pos:], 3 * t, "shell triangle corners")
     if pos + used != len(raw):
         raise FormatError("shell group: the triangles do not fill the body", code="BAD_GROUP_STRUCTURE")
+    if e:
+        # Checked before the cumulative sum, which steps near 2^63 would overflow (and compared on both
+        # sides: abs(-2^63) is still negative in int64).
+        if ((steps > MAX_GRID) | (steps < -MAX_GRID)).any():
+            raise FormatError("shell group: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE")
+        grid = np.cumsum(steps, axis=0)
     if len(gaps) and gaps.max() >= len(bounding):
         raise FormatError("shell group: a face reference is past the group's references",
                           code="BAD_GROUP_STRUCTURE")
