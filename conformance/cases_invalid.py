@@ -1,6 +1,6 @@
 """The broken golden files: each is a valid file with exactly one defect, and the error it must raise.
 
-Most start from the cube of spec §12 (``cube()``), assembled chunk by chunk
+Most start from the cube of spec/pln-1.md §12 (``cube()``), assembled chunk by chunk
 from planefmt's payload encoders; the defect is made in a payload before it
 is framed (so its CRC is right and the reader gets as far as the defect), or
 in the framed bytes where the framing itself is the defect. Offsets in the
@@ -51,10 +51,10 @@ def case(name: str, error: str, description: str, *, level: str = "container", a
     return register
 
 
-# -- the cube of spec §12 and its parts --------------------------------------------------------
+# -- the cube of spec/pln-1.md §12 and its parts ------------------------------------------------
 
 def header(**fields) -> bytes:
-    """A PHDR payload: spec §12's header with counts 6 / 1 / 1, fields replaced."""
+    """A PHDR payload: spec/pln-1.md §12's header with counts 6 / 1 / 1, fields replaced."""
     h = dataclasses.replace(SPEC_HEADER, plane_count=6, object_count=1, group_count=1)
     return records.encode_header(dataclasses.replace(h, **fields))
 
@@ -96,7 +96,7 @@ def body(refs=range(6), roles: bytes | None = None, extra: bytes = b"") -> bytes
 
 
 def cube(**parts: bytes) -> Layout:
-    """The chunks of the spec §12 cube before iNDX; ``PHDR=``, ``OBJT=``, ... replace one payload."""
+    """The chunks of the spec/pln-1.md §12 cube before iNDX; ``PHDR=``, ``OBJT=``, ... replace one payload."""
     default = {"PHDR": header(), "OBJT": objt(), "PLNS": plns(), "GRUP": grup()}
     default.update(parts)
     return [(t.encode(), p) for t, p in default.items()]
@@ -464,7 +464,7 @@ def _():
     return file(cube(PLNS=plns_raw(z, compression=1, raw_size=72)))
 
 
-# -- version 2.0 (spec/pln-2.md) ----------------------------------------------------------------
+# -- version 2.0 (spec/pln.md A.2) --------------------------------------------------------------
 
 V2_HEAD = Header(version=(2, 0), coding=Coding.PREDICTED, quantization=Quantization(16, 16, 16, 0.0, 1.0),
                  units=Units.METRE)
@@ -549,11 +549,11 @@ def _():
     return v2(GRUP=grup())
 
 
-# -- version 3.0 (spec/pln-3.md) ----------------------------------------------------------------
+# -- version 3.0 (spec/pln.md) ------------------------------------------------------------------
 
 def v3(PHDR: bytes | None = None, OBJT: bytes | None = None, PLNS: bytes | None = None, GRUP: bytes | None = None,
        *, index: bool = True, end: bytes | None = None) -> bytes:
-    """The cube of spec §12 as a version 3.0 file, one payload replaced (``end``: the PEND payload)."""
+    """The cube of spec/pln-1.md §12 as a version 3.0 file, one payload replaced (``end``: the PEND payload)."""
     layout = cube(PHDR=PHDR or header(version=(3, 0)),
                   OBJT=OBJT or records.encode_object(ObjectRecord(0, "cube", None, None), 3),
                   PLNS=PLNS or records.encode_planes(0, CUBE, V3_HEAD, False),
@@ -648,14 +648,14 @@ def _():
     return frame(layout + [(schema.INDX, index), (schema.PEND, records.encode_end(at[-1], 3))])
 
 
-# -- sealed groups (spec/pln-3.md §8.8, version 3.1) ---------------------------------------------
+# -- sealed groups (spec/pln.md §9.9, version 3.1) ---------------------------------------------
 
 V3_F64 = dataclasses.replace(V3_HEAD, coding=Coding.FLOAT64)
 
 
 def sealed_body(vertex_planes=SEALED_CUBE_VERTICES, facets=SEALED_CUBE_FACETS, *, roles: bytes = b"\0",
                 vertex_count: int | None = None) -> bytes:
-    """The body of a sealed group over the cube's 6 references (spec 2.0 §8.7, 3.1 §8.8), varint by
+    """The body of a sealed group over the cube's 6 references (spec §9.2, §9.9), varint by
     varint, since the writer refuses broken ones; ``facets`` rows are (face, i0, i1, i2), the face
     stored as a difference."""
     faces = [f[0] for f in facets]
@@ -667,7 +667,7 @@ def sealed_body(vertex_planes=SEALED_CUBE_VERTICES, facets=SEALED_CUBE_FACETS, *
 
 
 def sealed_file(body: bytes, version: tuple[int, int] = (3, 1)) -> bytes:
-    """The cube of spec §12 as a version 3.1 file (or ``version``), float64 (its planes x <= 1 and
+    """The cube of spec/pln-1.md §12 as a version 3.1 file (or ``version``), float64 (its planes x <= 1 and
     x >= 0 are then 1e-16 from parallel), with a sealed group of ``body`` in place of the convex one."""
     group = schema.GroupHead3.build(dict(index=0, object=0, kind=5, compression=0, raw_size=len(body), body=body))
     return v3(PHDR=header(version=version, coding=Coding.FLOAT64), PLNS=records.encode_planes(0, CUBE, V3_F64, False),
@@ -719,10 +719,10 @@ def _():
     return sealed_file(b[:-1] + bytes([b[-1] | 0x80]))
 
 
-# -- shell groups (spec/pln-3.md §8.9, version 3.2) ----------------------------------------------
+# -- shell groups (spec/pln.md §9.10, version 3.2) ----------------------------------------------
 
 def shell_file(body: bytes, version: tuple[int, int] = (3, 2), colours: bytes | None = None) -> bytes:
-    """The cube of spec §12 as a version 3.2 file (or ``version``), float64, with a shell group of
+    """The cube of spec/pln-1.md §12 as a version 3.2 file (or ``version``), float64, with a shell group of
     ``body`` (its references and roles included) in place of the convex one, and a cOLR chunk of
     ``colours`` after it if given."""
     group = schema.GroupHead3.build(dict(index=0, object=0, kind=6, compression=0, raw_size=len(body), body=body))
@@ -801,7 +801,7 @@ def _():
     return file(cube(GRUP=grup_raw(zlib.compress(body(), 9), compression=1, raw_size=0xFFFFFFFF)))
 
 
-# -- objects (spec §8.1) -----------------------------------------------------------------------
+# -- objects (spec §8) -----------------------------------------------------------------------
 
 @case("xobjt_index", "BAD_OBJECT", "the first OBJT has index 1")
 def _():
@@ -848,7 +848,7 @@ def _():
     return file(cube(OBJT=bytes(payload)))
 
 
-# -- part groups (spec §8.2) -------------------------------------------------------------------
+# -- part groups (spec §9) -------------------------------------------------------------------
 
 @case("xgrup_plane_range", "BAD_PLANE_REFERENCE", "a reference to plane 6 of a 6-plane table")
 def _():
@@ -913,7 +913,7 @@ def _():
     return file(cube(PHDR=header(version=(1, 1)), GRUP=grup([0, 1, 2, 3, 4, 6], kind=9)))
 
 
-# -- cells (spec §8.3) and trees (spec §8.4) ---------------------------------------------------
+# -- cells (spec §9.6) and trees (spec §9.7) ---------------------------------------------------
 
 L_ROLES = [False] * 8 + [True]  # the cut plane x = y
 
@@ -989,7 +989,7 @@ def _():
     return l_file(grup_raw(body(range(8), extra=tokens + b"\0\0\0\0"), kind=2), L_PLANES[:8])
 
 
-# -- colours (spec §8.5) -----------------------------------------------------------------------
+# -- colours (spec §10.1) -----------------------------------------------------------------------
 
 def colr(group: int = 0, count: int = 6) -> bytes:
     return records.encode_colours(Colours(group, np.full((count, 4), 200, dtype=np.uint8)))
@@ -1011,7 +1011,7 @@ def _():
     return file(cube() + [(schema.COLR, colr(count=5))])
 
 
-# -- index and end (spec §4.4, §8.6) -----------------------------------------------------------
+# -- index and end (spec §4.4, §10.2) -----------------------------------------------------------
 
 def with_index(entries: list[tuple[int, bytes, int]], layout: Layout | None = None,
                index_offset: int | None = None) -> bytes:
@@ -1081,7 +1081,7 @@ def _():
     return frame(finish(cube(), index=False)[:-1] + [(schema.PEND, bytes(12))])
 
 
-# -- geometry (spec §8.2): only decoders of geometry see these ---------------------------------
+# -- geometry (spec §9): only decoders of geometry see these ---------------------------------
 
 def geometry_case(name: str, error: str, description: str, *, also: tuple[str, ...] = ()):
     return case(name, error, description, level="geometry", also=also)

@@ -37,7 +37,7 @@ class Obj:
     name: str
     parent: int | None = None
     transform: np.ndarray | None = None
-    extra: bytes = b""  # OBJT fields of a newer minor version (spec §8.1)
+    extra: bytes = b""  # OBJT fields of a newer minor version (spec §8)
 
 
 @dataclass(frozen=True)
@@ -55,7 +55,7 @@ class Group:
     tree: tuple[int, ...] | None = None
     vertex_planes: tuple[tuple[int, int, int], ...] | None = None  # sealed groups: local references
     facets: tuple[tuple[int, int, int, int], ...] | None = None  # sealed groups: face reference, 3 vertices
-    shell: Shell | None = None  # shell groups (spec 3.2 §8.9)
+    shell: Shell | None = None  # shell groups (spec §9.10)
     extra: bytes = b""  # kind data of a kind this version does not know
 
 
@@ -148,7 +148,7 @@ def written(case: ValidCase, header: Header) -> bytes:
     """The file as ``planefmt.Writer`` writes it."""
     sink = _Pipe() if case.stream else io.BytesIO()
     if header.version[0] == 3 and case.counts is not None:
-        # A version 3 writer writes the counts it is told up front (spec 3.0 §5).
+        # A version 3 writer writes the counts it is told up front (spec §5).
         header = dataclasses.replace(header, plane_count=case.counts[0], object_count=case.counts[1],
                                      group_count=case.counts[2])
     with planefmt.Writer(sink, header, compress=case.compress, index=case.index) as w:
@@ -356,7 +356,7 @@ V3_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 0))
 V3_Q221 = Header(version=(3, 0), coding=Coding.QUANTIZED, quantization=Quantization(2, 2, 1, 0.0, 1.0),
                  units=Units.MILLIMETRE, tolerance=1e-6, error_bound=2.2e-14)
 
-#: The unit cube as a sealed group (kind 5, spec 3.1 §8.8) over the planes of CUBE: vertex x + 2y + 4z
+#: The unit cube as a sealed group (kind 5, spec §9.9) over the planes of CUBE: vertex x + 2y + 4z
 #: is the corner (x, y, z), named by its three face planes (x = 1 or 0: 0 or 2, y: 1 or 3, z: 4 or 5).
 SEALED_CUBE_VERTICES = tuple((0 if x else 2, 1 if y else 3, 4 if z else 5)
                              for z in (0, 1) for y in (0, 1) for x in (0, 1))
@@ -373,7 +373,7 @@ SEALED_CORNER_VERTICES = ((2, 3, 6),) + SEALED_CUBE_VERTICES[1:]
 def shell_of(corners, facets, origin=(0.0, 0.0, 0.0), step: float = 1.0) -> Shell:
     """A :class:`Shell` from ``corners`` (each a triple of local references, or ``("grid", x, y, z)``)
     and ``facets`` (face or -1, i0, i1, i2) in any order: triangles sorted by face, free ones last,
-    and corners renumbered by first use, as spec 3.2 §8.9 stores them."""
+    and corners renumbered by first use, as spec §9.10 stores them."""
     fc = sorted(facets, key=lambda f: (f[0] < 0, f[0]))
     order: list[int] = []
     for f in fc:
@@ -388,7 +388,7 @@ def shell_of(corners, facets, origin=(0.0, 0.0, 0.0), step: float = 1.0) -> Shel
                  facets=np.array([(f[0], *(rank[i] for i in f[1:])) for f in fc], dtype=np.int64))
 
 
-#: The unit cube as a shell (kind 6, spec 3.2 §8.9): the corners and triangles of the sealed cube.
+#: The unit cube as a shell (kind 6, spec §9.10): the corners and triangles of the sealed cube.
 SHELL_CUBE = shell_of(SEALED_CUBE_VERTICES, SEALED_CUBE_FACETS)
 #: The same with its corner (0, 0, 0) explicit (grid step 0.25, at 0, 0, 0) and the two triangles of
 #: face 5 (z >= 0) free: reference 5 then only names corners.
@@ -443,19 +443,22 @@ def ignored_fields(layout: list) -> list:
 #: empty: an empty IN leaf contributes nothing (spec/pln.md §9.7).
 L_TREE_EMPTY_LEAF = (5,) + L_TREE + (3, OUT, IN)
 #: patch_convex's open box with its first face reference (x <= 1) given twice.
-PATCH_REPEATED_OPS = (Obj("open box"), Planes(np.vstack([box((0, 0, 0), (1, 1, 1))[[0, 1, 2, 3, 5]], [[0.46, math.pi, 0.8]]])),
+PATCH_REPEATED_OPS = (Obj("open box"),
+                      Planes(np.vstack([box((0, 0, 0), (1, 1, 1))[[0, 1, 2, 3, 5]], [[0.46, math.pi, 0.8]]])),
                       Group(0, GroupKind.PSEUDO_CONVEX, (0, 0, 1, 2, 3, 4, 5), bounding=(6,)))
 
 CASES = [
-    ValidCase("cube_float32", "the unit cube of spec §12, float32, metres, with index: the 401 bytes printed there",
+    ValidCase("cube_float32", "the unit cube of spec/pln-1.md §12, float32, metres, with index: the 401 bytes "
+              "printed there",
               SPEC_HEADER, cube_ops()),
-    ValidCase("cube_float64", "the unit cube of spec §12 in float64",
+    ValidCase("cube_float64", "the unit cube of spec/pln-1.md §12 in float64",
               dataclasses.replace(SPEC_HEADER, coding=Coding.FLOAT64), cube_ops()),
-    ValidCase("cube_noindex", "the spec §12 cube without iNDX: PEND index_offset 0",
+    ValidCase("cube_noindex", "the spec/pln-1.md §12 cube without iNDX: PEND index_offset 0",
               SPEC_HEADER, cube_ops(), index=False),
-    ValidCase("cube_colours", "the spec §12 cube with a cOLR chunk, one RGBA colour per face",
+    ValidCase("cube_colours", "the spec/pln-1.md §12 cube with a cOLR chunk, one RGBA colour per face",
               SPEC_HEADER, cube_ops(Colour(0, _rgba))),
-    ValidCase("cube_ancillary", "the spec §12 cube with an unknown ancillary chunk nOTE between OBJT and PLNS",
+    ValidCase("cube_ancillary", "the spec/pln-1.md §12 cube with an unknown ancillary chunk nOTE between OBJT and "
+              "PLNS",
               SPEC_HEADER, (Obj("cube"), Chunk(b"nOTE", b"an ancillary chunk no reader knows; skip it"),
                             Planes(CUBE), Group(0, GroupKind.CONVEX, tuple(range(6)))),
               findings=("UNKNOWN_ANCILLARY_CHUNK",)),
@@ -557,9 +560,9 @@ CASES = [
               (Obj("gem"), Planes(GEM), Group(0, 0, tuple(range(10))),
                Group(0, GroupKind.PSEUDO_CONVEX, (0, 2, 3, 4, 5, 6, 7, 8, 9, 9))),
               decoded_bbox=True, findings_optional=("REDUNDANT_PLANE",)),
-    ValidCase("cube_v3", "version 3.0: the unit cube of spec §12, float32, metres, with index: the bytes printed "
-              "in spec/pln-3.md §12 (bbox, tolerance and error bound as float32, counts and heads as varints, an "
-              "8-byte PEND)", V3_CUBE, cube_ops()),
+    ValidCase("cube_v3", "version 3.0: the unit cube of spec/pln-1.md §12, float32, metres, with index: the bytes "
+              "printed in spec/pln-3.md §12 (bbox, tolerance and error bound as float32, counts and heads as "
+              "varints, an 8-byte PEND)", V3_CUBE, cube_ops()),
     ValidCase("cube_v3_q2_2_1", "version 3.0: the cube bit-packed at 2/2/1 bits over h in [0, 1] (every plane an "
               "exact code), lossless, the bbox of the decoded cube, no index: an empty PEND", V3_Q221, cube_ops(),
               decoded_bbox=True, index=False),
@@ -607,7 +610,7 @@ CASES = [
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),
     # -- rules spec/pln.md decides (issue 32)
-    ValidCase("ignored_fields", "the spec §12 cube of version 1.0 with every field a reader ignores set "
+    ValidCase("ignored_fields", "the spec/pln-1.md §12 cube of version 1.0 with every field a reader ignores set "
               "(spec/pln.md §2.1, A.1): undefined PHDR and OBJT flag bits, the widths (8/16/32) and h range (NaN, "
               "-inf) of a float coding, the reserved bytes of PHDR, OBJT, PLNS and GRUP; read as the cube",
               SPEC_HEADER, cube_ops(), assembled_only=True, header_flags=0xFFF8, edit=ignored_fields),

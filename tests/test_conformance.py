@@ -135,7 +135,7 @@ def test_regenerating_gives_identical_files(tmp_path):
 
 
 def spec_hexdump() -> bytes:
-    """The bytes of the file printed in spec §12, parsed from its hex dump.
+    """The bytes of the file printed in spec/pln-1.md §12, parsed from its hex dump.
 
     Rows are ``NNNN: hex bytes  comment``; ``00..`` stands for zeros up to the
     next row's offset and ``(× n)`` repeats a row's bytes n times. Every row
@@ -166,7 +166,7 @@ def test_cube_is_the_file_of_spec_section_12():
 
 def test_cube_v3_is_the_file_of_spec_3_section_12():
     """Every byte of cube_v3.pln as spec/pln-3.md §12 lists it: the hex rows (``(xN)`` repeats the
-    bytes before it), each ``(CRC)`` the CRC-32 of its chunk's type and payload (spec 1.0 §4.1),
+    bytes before it), each ``(CRC)`` the CRC-32 of its chunk's type and payload (spec §4.1),
     the plane payload the 72 bytes of the version 1.0 cube, the index entries (offset u64, type,
     ordinal u32) as the row under iNDX names them, followed by the index's CRC."""
     import zlib
