@@ -1282,3 +1282,11 @@ def _():
 def _():
     geometry_defect("UNBOUNDED_POLYTOPE", 2, L_PLANES[:8], None, None, (7, IN, OUT))
     return l_file(grup(range(8), kind=2, tree=(7, IN, OUT)), L_PLANES[:8])
+
+
+@geometry_case("xgeom_patch_no_face", "EMPTY_POLYTOPE", "a pseudo-convex patch (kind 3) of the cube's six planes, "
+               "every one a bounding plane (role bits 0x3f): the polytope is fine but no face is on a face plane "
+               "(spec/pln.md §9.8)")
+def _():
+    geometry_defect("EMPTY_POLYTOPE", 3, CUBE, [True] * 6)
+    return group_file(CUBE, grup(range(6), kind=3, bounding=[True] * 6))

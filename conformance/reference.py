@@ -263,6 +263,8 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
             volume = sum(f.area * f.offset for f in faces) / 3.0  # divergence theorem
         else:
             faces = [f for f in faces if not bounding[f.plane]]
+            if not faces:
+                raise Defect("EMPTY_POLYTOPE", "no face of the patch lies on a face plane (spec §9.8)")
             if kind == 4:
                 faces = [flipped(f) for f in faces]
         points = np.concatenate([f.points for f in faces])
