@@ -12,7 +12,7 @@ merged by exact position) and every codec:
   bbox diagonal), the whole file with its chunks and object records, as
   ``pln convert`` writes it with its default scheme (convex bodies of up to
   256 planes as convex groups, everything else as one shell group per object:
-  version 3.2, spec/pln-3.md §8.9; bit-packed or predicted plane codes,
+  version 3.2, spec/pln.md §9.10; bit-packed or predicted plane codes,
   varint group bodies and chunk heads, ``--compact``),
   payloads deflated where that saves bytes (spec §6, ``--compress``); the
   codec picks its coding (quantized or float planes). The source scene is

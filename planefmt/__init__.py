@@ -1,6 +1,6 @@
 """planefmt: the reference implementation of the .pln format, 3D meshes stored as planes.
 
-Conventions: a plane is the triplet (nu, phi, h) of spec/pln-1.md: nu in
+Conventions: a plane is the triplet (nu, phi, h) of spec/pln.md §2.3: nu in
 [0, pi] and phi in [0, 2*pi) in radians give the outward unit normal omega,
 h the signed distance in model units; the solid lies where omega . x <= h.
 """

@@ -1,6 +1,6 @@
 """The geometry codec: triangle meshes to part groups of planes and back, with verified error.
 
-Conventions (spec §2.2): planes ``(omega, h)`` with outward unit normals,
+Conventions (spec §2.3): planes ``(omega, h)`` with outward unit normals,
 the solid where ``omega . x <= h``; triplets ``(nu, phi, h)`` in radians,
 radians, model units; triangles counter-clockwise seen from outside.
 Tolerances and error bounds are **fractions of the bounding-box diagonal**;
@@ -299,7 +299,7 @@ def encode_shell_body(body: Body) -> list[GroupSpec]:
         raise GeometryError(f"a body of {len(fp)} triangles, none with an area", code="DEGENERATE_GEOMETRY")
     count = np.bincount(fp[fp >= 0], minlength=len(body.h))
     keep = (fp >= 0) & ((count[np.maximum(fp, 0)] >= 2) | body.every_plane)
-    # A group has at least one reference (spec §8.2).
+    # A group has at least one reference (spec §9).
     refs = np.unique(fp[keep]) if keep.any() else fp[fp >= 0][:1]
     return [GroupSpec(GroupKind.SHELL, refs, np.zeros(len(refs), dtype=bool), faces=body.faces)]
 
@@ -340,14 +340,14 @@ SCHEMES = {"shell": SHELL_STRATEGIES, "paper": BODY_STRATEGIES}
 
 def decode_convex_group(planes: np.ndarray, group: GroupLike, label: object,
                         error: PlaneError) -> DecodedGroup:
-    """A ``CONVEX`` group: the intersection of all its inner half-spaces (spec §8.2.1)."""
+    """A ``CONVEX`` group: the intersection of all its inner half-spaces (spec §9.5)."""
     poly = decode_convex(planes, group=label, plane_error=error.of(planes), merge_limit=error.merge_limit)
     inc_vertex, inc_ref = poly.incidences
     return DecodedGroup(poly.vertices, poly.triangles, inc_vertex, inc_ref, poly.redundant, poly.triangle_plane)
 
 
 def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``BSP`` group: the closed surface of its IN leaves, welded without T-junctions (spec §8.4)."""
+    """A ``BSP`` group: the closed surface of its IN leaves, welded without T-junctions (spec §9.7)."""
     if group.tree is None:
         raise GeometryError(f"part group {label}: a BSP group without a tree", code="BAD_GROUP_STRUCTURE")
     omega, h = from_triplets(planes)
@@ -357,7 +357,7 @@ def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: Plane
 
 
 def decode_cells(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``CELLS`` group: the closed surface of the union of its convex cells (spec §8.3)."""
+    """A ``CELLS`` group: the closed surface of the union of its convex cells (spec §9.6)."""
     if group.cells is None:
         raise GeometryError(f"part group {label}: a cells group without cells", code="BAD_GROUP_STRUCTURE")
     omega, h = from_triplets(planes)
@@ -367,7 +367,7 @@ def decode_cells(planes: np.ndarray, group: GroupLike, label: object, error: Pla
 
 
 def decode_sealed_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``SEALED`` group: its triangles, each corner where its three planes meet (spec 3.1 §8.8)."""
+    """A ``SEALED`` group: its triangles, each corner where its three planes meet (spec §9.9)."""
     if group.vertex_planes is None or group.facets is None:
         raise GeometryError(f"part group {label}: sealed groups are kind 5 only from version 3.1 on",
                             code="UNKNOWN_GROUP_KIND")
@@ -383,7 +383,7 @@ def decode_sealed_group(planes: np.ndarray, group: GroupLike, label: object, err
 
 
 def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes (spec §8.2.2).
+    """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes (spec §9.8).
 
     Small patches are intersected in numpy (:mod:`planefmt.polytopes`); where that finds no
     polytope, Qhull (:func:`planefmt.halfspace.intersect`) decides: near-duplicate bounding
@@ -413,8 +413,8 @@ def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: Pla
 
 
 def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``SHELL`` group: its triangles over its corners, named by three planes or explicit (spec 3.2
-    §8.9). Linear time: one batched 3×3 solve."""
+    """A ``SHELL`` group: its triangles over its corners, named by three planes or explicit (spec
+    §9.10). Linear time: one batched 3×3 solve."""
     shell = group.shell
     if shell is None:
         raise GeometryError(f"part group {label}: shell groups are kind 6 only from version 3.2 on",
@@ -648,7 +648,7 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     :class:`PlnWarning` says so. By default such a source fails.
 
     ``scheme``: ``"shell"`` (default) stores convex bodies as convex groups
-    and everything else as one shell group (spec 3.2 §8.9), whose error
+    and everything else as one shell group (spec §9.10), whose error
     holds by construction; ``"paper"`` uses the paper's BSP trees, sealed
     groups and patches for non-convex bodies, verified by a certified
     Hausdorff search (slow: minutes for a few thousand CAD triangles).
@@ -1238,7 +1238,7 @@ def _planeless(obj: _Object) -> _Object | None:
         return None
     if obj.face_colours is not None and (obj.face_colours != obj.face_colours[0]).any():
         return None
-    # A group keeps one reference (spec §8.2: m >= 1), which its free triangles take their colour from.
+    # A group keeps one reference (spec §9: m >= 1), which its free triangles take their colour from.
     return replace(obj, groups=tuple(replace(g, refs=g.refs[:1], bounding=g.bounding[:1]) for g in obj.groups))
 
 
@@ -1499,7 +1499,7 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
 
     ``compress`` (the default, as ``pln convert``): payloads deflated where
     that saves bytes. ``compact`` (the default, as ``pln convert``; False
-    writes version 1.0): a version 3.0 file (spec/pln-3.md): quantized planes in
+    writes version 1.0): a version 3.0 file (spec/pln.md): quantized planes in
     whichever of the bit-packed and the predicted coding takes fewer bytes,
     group references, cells and trees as varints, chunk heads as varints. The
     planes and the decoded surface are those of the version 1 file. A scene
@@ -1691,7 +1691,7 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
     """Read a .pln file into a :class:`Scene`: one node per object, its groups decoded and joined.
 
     Streams: part groups are decoded in batches of up to 4096 as they are read.
-    Groups of a kind from a newer minor version are skipped, as spec §11 asks
+    Groups of a kind from a newer minor version are skipped, as spec §13 asks
     of a reader, with one :class:`PlnWarning` naming them.
     """
     parts: dict[int, list[tuple[int, DecodedGroup]]] = {}
@@ -1725,7 +1725,7 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
 
 
 def skipped_groups(groups: Sequence[GroupLike]) -> str:
-    """The part groups of newer minor versions' kinds a reader skipped (spec §11), named."""
+    """The part groups of newer minor versions' kinds a reader skipped (spec §13), named."""
     which = ", ".join(f"{g.index} (kind {int(g.kind)})" for g in groups)
     return f"part group{'s' if len(groups) > 1 else ''} {which} of a newer minor version than this reader knows"
 
@@ -1775,18 +1775,18 @@ def _assemble(objects: Sequence[ObjectRecord], parts: dict[int, list[tuple[int, 
 
 
 def _object_mesh(parts: list[tuple[int, DecodedGroup]], colours: dict[int, np.ndarray]) -> Mesh:
-    """The groups of one object joined; face colours from their cOLR chunks (spec §8.5), if any."""
+    """The groups of one object joined; face colours from their cOLR chunks (spec §10.1), if any."""
     mesh = _concatenate([d for _, d in parts])
     if not any(k in colours for k, _ in parts):
         return mesh
-    # A shell's free triangles (reference -1) take its last reference's colour (spec 3.2 §8.9).
+    # A shell's free triangles (reference -1) take its last reference's colour (spec §9.10).
     face = np.concatenate([colours[k][d.triangle_ref] if k in colours else np.tile(UNCOLOURED, (len(d.triangles), 1))
                            for k, d in parts]).astype(np.uint8)
     return Mesh(mesh.vertices, mesh.faces, face_colours=face)
 
 
 def check_group(group: PartGroup, reader: Reader) -> list[Finding]:
-    """Geometry findings of one part group for ``planefmt.validate`` (spec §8.2, §10.2).
+    """Geometry findings of one part group for ``planefmt.validate`` (spec §9, §12.3).
 
     ``EMPTY_POLYTOPE`` / ``UNBOUNDED_POLYTOPE`` errors, one ``REDUNDANT_PLANE``
     warning per plane of a convex group that bounds no face. Kinds without a

@@ -27,7 +27,7 @@ class Coding(IntEnum):
     FLOAT32 = 0
     FLOAT64 = 1
     QUANTIZED = 2
-    #: Version 2: the codes of QUANTIZED, each predicted from the previous plane's (spec 2.0 §7.4).
+    #: Version 2: the codes of QUANTIZED, each predicted from the previous plane's (spec §7.4).
     PREDICTED = 3
 
     @property
@@ -50,8 +50,8 @@ class Units(IntEnum):
 
 
 class GroupKind(IntEnum):
-    """Part group kinds: 0-4 of version 1.0 (spec §8.2), 5 of version 3.1 (spec 3.1 §8.8), 6 of
-    version 3.2 (spec 3.2 §8.9)."""
+    """Part group kinds: 0-4 of version 1.0 (spec §9), 5 of version 3.1 (spec §9.9), 6 of
+    version 3.2 (spec §9.10)."""
 
     CONVEX = 0
     CELLS = 1
@@ -62,7 +62,8 @@ class GroupKind(IntEnum):
     SHELL = 6
 
 
-#: BSP tree leaf tokens (spec §8.4); every smaller token is a split plane.
+#: BSP tree leaf tokens in version 1.0's numbering (spec Appendix A.1), which the model uses for every
+#: version (spec §9.7 codes IN 0, OUT 1, a split on j as j + 2); every smaller token is a split plane.
 BSP_IN = 0xFFFFFFFE
 BSP_OUT = 0xFFFFFFFF
 BSP_MAX_SPLIT = 0xFFFFFFEF
@@ -120,7 +121,7 @@ class Header:
 
 @dataclass(frozen=True)
 class ObjectRecord:
-    """An OBJT chunk: a named node of the scene (spec §8.1)."""
+    """An OBJT chunk: a named node of the scene (spec §8)."""
 
     index: int
     name: str
@@ -138,7 +139,7 @@ class PlaneBlock:
 
 #: Face reference of a free triangle (no face plane), in :attr:`Shell.facets`.
 FREE = -1
-#: Largest magnitude of a grid coordinate (spec 3.2 §8.9): integers of float64 exactly.
+#: Largest magnitude of a grid coordinate (spec §9.10): integers of float64 exactly.
 MAX_GRID = 1 << 52
 
 
@@ -170,17 +171,18 @@ class Shell:
 
 @dataclass(frozen=True)
 class PartGroup:
-    """A GRUP chunk (spec §8.2).
+    """A GRUP chunk (spec §9).
 
     ``refs`` are indices into the file's plane table; ``bounding[i]`` is True
     where ``refs[i]`` is a bounding or cut plane rather than a face plane.
     For CELLS groups, ``cells`` holds one uint32 array per convex cell whose
     entries are ``2 * local + complement`` (``local`` indexes ``refs``;
     ``complement`` 1 means the half-space ``omega . x >= h``). For BSP groups,
-    ``tree`` holds the preorder token stream of spec §8.4. For SEALED groups,
+    ``tree`` holds the preorder tokens of spec §9.7 in version 1.0's numbering (:data:`BSP_IN`,
+    :data:`BSP_OUT`, a split on j as j). For SEALED groups,
     ``vertex_planes`` (V, 3) holds each vertex's three local references and
     ``facets`` (T, 4) each triangle's face local reference and three vertices
-    (spec 3.1 §8.8). ``planes`` holds the referenced triplets when the reader
+    (spec §9.9). ``planes`` holds the referenced triplets when the reader
     resolved them.
     """
 
@@ -204,7 +206,7 @@ class PartGroup:
 
 @dataclass(frozen=True)
 class Colours:
-    """A cOLR chunk: one RGBA8 colour per reference of a part group (spec §8.5)."""
+    """A cOLR chunk: one RGBA8 colour per reference of a part group (spec §10.1)."""
 
     group: int
     rgba: np.ndarray  # (m, 4) uint8

@@ -1,4 +1,4 @@
-"""Streaming reader of .pln files (spec §4-§10).
+"""Streaming reader of .pln files (spec §4–§12).
 
 ``open()`` reads the signature and header at once and everything else lazily:
 iterating yields records one at a time in file order, with memory bounded by
@@ -192,7 +192,7 @@ class Reader:
         raise FormatError(f"unknown critical chunk {raw.name}", code="UNKNOWN_CRITICAL_CHUNK")
 
     def _check_index(self, entries: np.ndarray) -> None:
-        """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §8.6)."""
+        """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §10.2)."""
         listed = np.array(self._listed, dtype=schema.INDEX_ENTRY_DTYPE)
         if len(entries) != len(listed):
             raise FormatError(f"iNDX lists {len(entries)} chunks; the file has {len(listed)} OBJT, PLNS and GRUP "
@@ -242,7 +242,7 @@ class Reader:
         major = self.header.version[0]
         stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
         if major == 3 and end >= 12:
-            # A version 3 file without an index ends in an empty PEND (spec 3.0 §4.4).
+            # A version 3 file without an index ends in an empty PEND (spec §4.4).
             self._fp.seek(self._base + end - 12)
             if self._fp.read(12) == chunk_bytes(schema.PEND, b""):
                 raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - 12)

@@ -1,4 +1,4 @@
-"""Unsigned LEB128 varints and zigzag signs (spec 2.0, §2.3), vectorized over whole arrays.
+"""Unsigned LEB128 varints and zigzag signs (spec §2.2), vectorized over whole arrays.
 
 A value is written 7 bits at a time, least significant group first, each byte
 but the last with its high bit set; values are below 2^64 and minimal (no

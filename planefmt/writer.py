@@ -1,4 +1,4 @@
-"""Streaming writer of .pln files (spec §4, §9).
+"""Streaming writer of .pln files (spec §4, §11).
 
 Objects, planes and part groups are written as they come; counts need not be
 known in advance. On ``close()`` the writer appends the iNDX and PEND chunks,
@@ -43,7 +43,7 @@ class Writer:
 
     ``header`` gives version, coding, quantization, units, bbox and error
     bound. Versions 1 and 2: its counts are ignored and replaced by the actual
-    ones where the output is seekable. Version 3 (spec/pln-3.md): counts given
+    ones where the output is seekable. Version 3 (spec/pln.md): counts given
     in it are written and must match what is written by :meth:`close`
     (``COUNT_MISMATCH`` otherwise, and the output is discarded); without them
     the file declares none. ``index``: write an ``iNDX`` chunk; None writes
@@ -149,8 +149,8 @@ class Writer:
 
         ``bounding[i]`` marks ``refs[i]`` as a bounding/cut plane (default: all faces). A BSP
         group needs ``tree``, a CELLS group ``cells``, a SEALED group (version 3.1 and later)
-        ``vertex_planes`` and ``facets`` in local references (spec 3.1 §8.8), a SHELL group
-        (version 3.2 and later) ``shell`` (spec 3.2 §8.9).
+        ``vertex_planes`` and ``facets`` in local references (spec §9.9), a SHELL group
+        (version 3.2 and later) ``shell`` (spec §9.10).
         """
         refs = np.asarray(refs, dtype=np.int64).reshape(-1)
         if len(refs) == 0:

@@ -1,4 +1,4 @@
-"""Shell groups (kind 6, spec 3.2 §8.9): the default scheme's encoding of every body that is not a
+"""Shell groups (kind 6, spec §9.10): the default scheme's encoding of every body that is not a
 small convex one, its error bound by construction, and its structure kept."""
 
 from __future__ import annotations

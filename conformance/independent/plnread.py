@@ -42,7 +42,12 @@ TRAILING_DATA here.
 
 Section numbers below are those of spec/pln-1.md; "pln-2 §x" and "pln-3 §x"
 mark a section of spec/pln-2.md or spec/pln-3.md (which use the section
-numbers of pln-1).
+numbers of pln-1), the documents it was written from, kept as history.
+Four places follow spec/pln.md, the one document that replaced them, where
+this reader had read the old text otherwise (each marked "pln.md §x"): the
+h range and widths of codings 0 and 1 are ignored, not checked; a zlib
+stream that the stored bytes end inside is SIZE_MISMATCH; and a version 2
+group's references are all read before any is checked.
 
 Usage:
     python conformance/independent/plnread.py FILE.pln
@@ -301,10 +306,11 @@ def decompress(method, raw_size, stored, what):
     if len(out) > raw_size:
         raise PlnError("SIZE_MISMATCH", "%s: inflates to more than raw size %d" % (what, raw_size))
     if not d.eof:
+        # pln.md §6 step 5: a stream the stored bytes end inside (no error from
+        # the inflater on what it consumed) is SIZE_MISMATCH, however much it
+        # inflated to; an error the inflater reports is BAD_COMPRESSION
         if len(out) < raw_size:
-            raise PlnError("BAD_COMPRESSION", "%s: zlib stream ends early" % what)
-        # exactly raw_size bytes so far but the stream is not finished: see
-        # whether it would produce more (SIZE_MISMATCH) or is cut (BAD_COMPRESSION)
+            raise PlnError("SIZE_MISMATCH", "%s: zlib stream ends early" % what)
         try:
             more = d.decompress(d.unconsumed_tail, 1)
         except zlib.error as e:
@@ -312,7 +318,7 @@ def decompress(method, raw_size, stored, what):
         if more:
             raise PlnError("SIZE_MISMATCH", "%s: inflates to more than raw size %d" % (what, raw_size))
         if not d.eof:
-            raise PlnError("BAD_COMPRESSION", "%s: zlib stream ends early" % what)
+            raise PlnError("SIZE_MISMATCH", "%s: zlib stream ends early" % what)
     if len(out) != raw_size:
         raise PlnError(
             "SIZE_MISMATCH", "%s: inflates to %d bytes, raw size %d" % (what, len(out), raw_size)
@@ -492,8 +498,14 @@ class Reader:
             for w in (bn, bp, bh):
                 if not 1 <= w <= 32:
                     raise PlnError("UNSUPPORTED_CODING", "quantized width %d outside 1-32" % w)
-        if not (math.isfinite(h_min) and math.isfinite(h_max)) or h_min > h_max:
-            raise PlnError("BAD_HEADER_VALUE", "h range [%r, %r]" % (h_min, h_max))
+        # pln.md §5: the h range exists for codings 2 and 3 only; otherwise
+        # it and the widths are ignored (pln.md §2.1), whatever they hold
+        if coding in (CODING_QUANTIZED, CODING_PREDICTED):
+            if not (math.isfinite(h_min) and math.isfinite(h_max)) or h_min > h_max:
+                raise PlnError("BAD_HEADER_VALUE", "h range [%r, %r]" % (h_min, h_max))
+        else:
+            bn = bp = bh = 0
+            h_min = h_max = 0.0
         if units > 7:
             raise PlnError("BAD_HEADER_VALUE", "units %d" % units)
         if flags & FLAG_BBOX_KNOWN:
@@ -850,8 +862,9 @@ class Reader:
         n_planes = len(self.planes)
         refs = []
         r = 0
-        for i in range(m):
-            d = c.varint("reference difference %d" % i)
+        # pln.md §9.2: all m differences are read (BAD_PAYLOAD) before any is checked
+        diffs = [c.varint("reference difference %d" % i) for i in range(m)]
+        for i, d in enumerate(diffs):
             if d >= n_planes or r + d >= n_planes:
                 raise PlnError("BAD_PLANE_REFERENCE",
                                "reference %d: %d + difference %d, %d planes defined"
