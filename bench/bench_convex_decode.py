@@ -40,9 +40,10 @@ import numpy as np
 import scipy
 
 import planefmt
-from planefmt import codec, quantize
+from planefmt import codec
+from planefmt.container import quantize
 from planefmt.model import Coding, GroupKind, Header, Mesh, Node, Scene
-from planefmt.polygonize import polygonize
+from planefmt.geometry.polygonize import polygonize
 
 try:
     import DracoPy

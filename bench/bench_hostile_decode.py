@@ -2,7 +2,7 @@
 
 For each family of hostile convex groups and m = 1,000 to 30,000
 planes (the reader's default allows 2^24 references per group), times
-``planefmt.halfspace.intersect`` (best of 3, one thread) and prints the time
+``planefmt.geometry.halfspace.intersect`` (best of 3, one thread) and prints the time
 per plane and the growth from one size to the next, beside m log m's own
 growth. A ``GeometryError`` (empty, unbounded) is a
 valid outcome: what matters is that it comes as fast.
@@ -20,7 +20,7 @@ Families:
 * ``empty``: the sphere family with one plane cutting everything away.
 
 Measured 2026-12-01 (x86_64, 2 cores, scipy 1.17.1), before and after the decoder moved
-to joggled Qhull ("QJ") with vertices solved from the planes (planefmt.halfspace): the cone
+to joggled Qhull ("QJ") with vertices solved from the planes (planefmt.geometry.halfspace): the cone
 took 0.05 s at m = 1,000 and 6.6 s at 10,000 (Qhull's coplanar-facet merging, O(k^2) in
 the planes through one point); now 0.02 s and 0.3 s, and every family grows like m log m.
 Still open: at m = 100,000 the cone's apex is left known only from nearly dependent plane
@@ -41,7 +41,7 @@ import time
 import numpy as np
 
 from planefmt.errors import GeometryError
-from planefmt.halfspace import intersect
+from planefmt.geometry.halfspace import intersect
 
 
 def _unit(v: np.ndarray) -> np.ndarray:

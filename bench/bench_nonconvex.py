@@ -33,11 +33,11 @@ import warnings
 
 import numpy as np
 
-from planefmt.bodies import (MeshGroups, decode_groups, encode_groups, euler_characteristic, is_closed_manifold,
+from planefmt.groups.bodies import (MeshGroups, decode_groups, encode_groups, euler_characteristic, is_closed_manifold,
                              signed_volume)
-from planefmt.hausdorff import hausdorff
+from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import GroupKind
-from planefmt.polygonize import weld
+from planefmt.geometry.polygonize import weld
 
 CORPUS = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "corpus")
 TOLERANCE = 1e-6

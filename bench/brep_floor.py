@@ -9,7 +9,7 @@ measures what that information is on each mesh, for a future part-group kind
 to be weighed against:
 
 * *faces*: connected regions of triangles on one plane (the planes of
-  ``planefmt.polygonize`` at half the tolerance, as the encoder takes them;
+  ``planefmt.geometry.polygonize`` at half the tolerance, as the encoder takes them;
   a plane can hold several faces);
 * *corners*: vertices on three or more faces, by the number of faces; a
   vertex on one or two faces (inside a face, on a straight edge) is not a
@@ -45,8 +45,8 @@ from scipy.sparse.csgraph import connected_components
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from compare import CORPUS, load  # noqa: E402
 
-from planefmt.polygonize import COPLANAR_TOLERANCE, edge_adjacency, polygonize  # noqa: E402
-from planefmt.repair import merge_close_vertices  # noqa: E402
+from planefmt.geometry.polygonize import COPLANAR_TOLERANCE, edge_adjacency, polygonize  # noqa: E402
+from planefmt.geometry.repair import merge_close_vertices  # noqa: E402
 
 
 def faces_of(v: np.ndarray, f: np.ndarray, tolerance: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:

@@ -23,7 +23,7 @@ merged by exact position) and every codec:
 
 Measured per codec: file bytes; bits per source triangle; the error, the
 certified upper bound of the two-sided Hausdorff distance between the
-decoded and the source surface (``planefmt.hausdorff.relative_hausdorff``,
+decoded and the source surface (``planefmt.geometry.hausdorff.relative_hausdorff``,
 stopping once its bounds are 1e-7 apart, relative to the source's bbox
 diagonal), the same measure for every codec; encode and decode wall time;
 peak memory, the rise of the resident set above its level when the
@@ -94,7 +94,7 @@ def no_larger(error: float, than: float) -> bool:
 
 def load(path: str):
     """The corpus file as a scene and as one world-space mesh ``(vertices, faces)``, welded."""
-    from planefmt.polygonize import weld
+    from planefmt.geometry.polygonize import weld
     from planefmt_converters import registry
     from planefmt_converters.assemble import flatten
 
@@ -185,7 +185,7 @@ MATCHED = "pln@d14"
 def _measure(path: str, name: str, tolerances: tuple[float, ...], matched: float | None, conn) -> None:
     """In the child: load, encode, decode, measure; send one result dict."""
     try:
-        from planefmt.hausdorff import relative_hausdorff
+        from planefmt.geometry.hausdorff import relative_hausdorff
 
         scene, v, f = load(path)
         if name == MATCHED:
@@ -223,8 +223,8 @@ def draco_connectivity(v: np.ndarray, f: np.ndarray) -> int:
 
 def pln_parts(data: bytes) -> dict:
     """Where a .pln file's bytes go: plane table, part groups and the rest, each with its chunk framing."""
-    from planefmt import reader
-    from planefmt.chunks import ChunkStream, Limits
+    from planefmt.container import reader
+    from planefmt.container.chunks import ChunkStream, Limits
 
     stream = ChunkStream(io.BytesIO(data), file=None, limits=Limits())
     stream.read_signature()
@@ -479,7 +479,7 @@ def main(argv: list[str] | None = None) -> int:
     import trimesh  # noqa: F401
 
     import planefmt.codec  # noqa: F401
-    import planefmt.hausdorff  # noqa: F401
+    import planefmt.geometry.hausdorff  # noqa: F401
     import planefmt_converters.registry  # noqa: F401
     files = corpus_files(folders)
     if args.jobs == 1:

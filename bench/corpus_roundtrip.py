@@ -71,7 +71,7 @@ def _convert(src: str, dst: str, timeout: float, options: tuple[str, ...] = ()) 
 def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tuple[str, list[str]]:
     """The row of one corpus file and its failures."""
     import planefmt
-    from planefmt.hausdorff import hausdorff
+    from planefmt.geometry.hausdorff import hausdorff
     from planefmt_converters import registry
     from planefmt_converters.assemble import flatten
 
@@ -95,7 +95,7 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
     diag = float(np.linalg.norm(np.ptp(v[np.unique(faces)], axis=0)))
     rounding = FLOAT32_ROUNDING * float(np.abs(v).max())
     # The header's bound is relative to its bbox (the decoded scene's); two certified measures of
-    # one distance differ by their rounding margins (planefmt.hausdorff: 64 eps of the magnitude).
+    # one distance differ by their rounding margins (planefmt.geometry.hausdorff: 64 eps of the magnitude).
     limit = bound * float(np.linalg.norm(box[1] - box[0])) + 128.0 * np.finfo(np.float64).eps * (
         float(np.abs(v).max()) + diag)
     r = hausdorff(dec.vertices, dec.faces, v, faces, target=limit, max_pieces=DECODING_PIECES)

@@ -17,7 +17,8 @@ import sys
 import numpy as np
 
 import planefmt
-from planefmt import GroupKind, records
+from planefmt import GroupKind
+from planefmt.container import records
 
 #: Kinds whose summary has a volume (README.md): solids, and sealed surfaces, closed as a rule.
 SOLID_KINDS = (GroupKind.CONVEX, GroupKind.CELLS, GroupKind.BSP, GroupKind.SEALED)

@@ -16,7 +16,8 @@ import math
 
 import numpy as np
 
-from planefmt import chunk_bytes, records, schema
+from planefmt import chunk_bytes
+from planefmt.container import records, schema
 from planefmt.model import Coding, Header, Quantization, Units
 
 Layout = list[tuple[bytes, bytes]]

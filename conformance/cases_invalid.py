@@ -21,8 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planefmt import records, schema, varint
-from planefmt.chunks import chunk_bytes
+from planefmt.container import records, schema, varint
+from planefmt.container.chunks import chunk_bytes
 from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization, Units
 
 from . import reference

@@ -19,8 +19,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 import planefmt
-import planefmt.quantize
-from planefmt import records, schema
+import planefmt.container.quantize
+from planefmt.container import records, schema
 from planefmt.model import (Coding, Colours, GroupKind, Header, ObjectRecord, PartGroup, Quantization, Shell,
                             Units)
 
@@ -339,7 +339,7 @@ def _sorted_l() -> tuple[np.ndarray, tuple[int, ...]]:
     """The L's eight face planes sorted by their 8/8/8 codes over [-1, 2] (as a version 2 writer
     sorts them), and its tree renumbered to match."""
     q = Quantization(8, 8, 8, -1.0, 2.0)
-    codes = planefmt.quantize.quantize(L_PLANES[:8], q)
+    codes = planefmt.container.quantize.quantize(L_PLANES[:8], q)
     order = np.lexsort((codes[:, 2], codes[:, 1], codes[:, 0]))
     rank = np.empty(8, dtype=np.int64)
     rank[order] = np.arange(8)

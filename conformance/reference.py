@@ -1,6 +1,6 @@
 """Reference geometry of part groups (spec §9, §9.9), for the expected results of valid cases.
 
-Deliberately independent of planefmt's own decoder (``planefmt.halfspace``,
+Deliberately independent of planefmt's own decoder (``planefmt.geometry.halfspace``,
 ``planefmt.codec``): the suite checks that decoder against this one. It is
 written for clarity on the handful of small groups the suite holds, not for
 speed: linear programs (scipy's HiGHS) decide emptiness and boundedness,

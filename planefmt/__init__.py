@@ -5,13 +5,13 @@ Conventions: a plane is the triplet (nu, phi, h) of spec/pln.md §2.3: nu in
 h the signed distance in model units; the solid lies where omega . x <= h.
 """
 
-from .chunks import Limits, chunk_bytes
+from .container.chunks import Limits, chunk_bytes
 from .errors import (CODES, ChecksumError, ConversionError, FormatError, GeometryError, LimitError,
                      PlnError, PlnWarning, SkippedGroupsWarning, TruncatedError, VersionError)
 from .model import (Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup, PlaneBlock,
                     Quantization, Scene, UnknownChunk, Units)
-from .reader import Reader, open
-from .writer import Writer
+from .container.reader import Reader, open
+from .container.writer import Writer
 
 __version__ = "0.1.0"
 

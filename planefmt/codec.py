@@ -9,7 +9,7 @@ distances are otherwise in model units.
 Encoding a mesh (:func:`encode_mesh`):
 
 1. Vertices are welded by position and adjacent coplanar triangles merged
-   into polygons, one plane each (:mod:`planefmt.polygonize`, coplanarity
+   into polygons, one plane each (:mod:`planefmt.geometry.polygonize`, coplanarity
    tolerance ``min(5e-7, tolerance / 2)`` of the diagonal).
 2. Lossy options of the paper (§5 there): ``tau`` merges neighbouring planes
    whose normals differ by less than ``tau`` radians, ``delta`` drops planes
@@ -18,13 +18,13 @@ Encoding a mesh (:func:`encode_mesh`):
    the first strategy of :data:`BODY_STRATEGIES` that takes it; a strategy
    returns the body's part groups: a closed, outward, convex body (within
    the tolerance) one ``CONVEX`` group; any other body what
-   :func:`planefmt.bodies.encode_body` makes of it (a ``BSP`` group for a
+   :func:`planefmt.groups.bodies.encode_body` makes of it (a ``BSP`` group for a
    closed solid, a ``SEALED`` group for a closed body no tree decodes with
    its topology, else pseudo-convex / pseudo-concave patches).
 4. The triplet coding is chosen and **verified**: each candidate's planes go
    through :func:`quantize.roundtrip` (exactly what a reader gets back), are
    decoded, and the two-sided Hausdorff distance between decoded and source
-   surface is measured (:func:`planefmt.hausdorff.hausdorff`); a candidate
+   surface is measured (:func:`planefmt.geometry.hausdorff.hausdorff`); a candidate
    must meet the tolerance and keep the source's structure
    (:func:`structure_kept`). A first-order prediction of the vertex
    displacement (planes re-intersected at each decoded vertex) skips widths
@@ -57,27 +57,28 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, QhullError
 
-from . import progress, quantize, records
+from . import progress
+from .container import quantize, records
 from .errors import CODES, FormatError, GeometryError, PlnError, PlnWarning, SkippedGroupsWarning
-from .halfspace import decode_convex, intersect, resolve_vertices
-from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
+from .geometry.halfspace import decode_convex, intersect, resolve_vertices
+from .geometry.hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
 from .model import (BSP_MAX_SPLIT, Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup,
                     Quantization, Scene, Units)
-from .convexbound import convex_hausdorff
-from .bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
-from .cells import decode_cells_group
-from .patches import PlaneTable, decode_patch_groups
-from .planes import from_triplets, to_triplets, transform_points
-from .polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize, weld
-from .repair import mend_cracks
-from .reader import Reader
-from .solids import FLAT_STRATEGIES, STRATEGIES, Splitter, decode_bsp_group
-from .salvage import salvage
-from .sealed import decode_sealed
-from .shells import FREE, Shell, ShellPlan, decode_shell, encode_shell, plan_shell, reordered
-from .trianglegeom import TriangleIndex
-from .validate import GROUP_CHECKS, Finding
-from .writer import BLOCK_PLANES, Writer
+from .geometry.convexbound import convex_hausdorff
+from .groups.bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
+from .groups.cells import decode_cells_group
+from .groups.patches import PlaneTable, decode_patch_groups
+from .geometry.planes import from_triplets, to_triplets, transform_points
+from .geometry.polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize, weld
+from .geometry.repair import mend_cracks
+from .container.reader import Reader
+from .groups.solids import FLAT_STRATEGIES, STRATEGIES, Splitter, decode_bsp_group
+from .container.salvage import salvage
+from .groups.sealed import decode_sealed
+from .groups.shells import FREE, Shell, ShellPlan, decode_shell, encode_shell, plan_shell, reordered
+from .geometry.trianglegeom import TriangleIndex
+from .container.validate import GROUP_CHECKS, Finding
+from .container.writer import BLOCK_PLANES, Writer
 
 #: Quantized widths tried for nu and phi.
 MIN_BITS, MAX_BITS = 2, 32
@@ -104,7 +105,7 @@ _RETRY_PIECES = DEFAULT_MAX_PIECES
 #: 2.9 million pieces in about 200 s, not with 2 million.
 _FINAL_PIECES = 8_000_000
 
-#: Closing the cracks of open meshes (:func:`planefmt.repair.mend_cracks`), as fractions of the tolerance: vertices
+#: Closing the cracks of open meshes (:func:`planefmt.geometry.repair.mend_cracks`), as fractions of the tolerance: vertices
 #: closer than ``_MERGE`` of it (capped at the lossless tolerance) are one point written with two
 #: roundings (angle_block.STL: 46 pairs 6e-17 apart, so the solid looked open and took 24x the
 #: bytes as patches); T-vertices within ``_SPLIT`` of it of an edge split that edge.
@@ -176,7 +177,7 @@ class Body:
     tolerance: float
     table: PlaneTable  # the object's planes: ``omega``, ``h``, then the bounding planes strategies add
     simplified: bool  # tau or delta changed the planes
-    splitters: tuple[Splitter, ...] = STRATEGIES  # BSP splitter strategies (planefmt.solids)
+    splitters: tuple[Splitter, ...] = STRATEGIES  # BSP splitter strategies (planefmt.groups.solids)
     every_plane: bool = False  # shells keep the plane of a face of one triangle too (colours ride on planes)
 
 
@@ -277,7 +278,7 @@ def encode_convex_body(body: Body) -> list[GroupSpec] | None:
 
 
 def encode_general_body(body: Body) -> list[GroupSpec]:
-    """Any other body through :func:`planefmt.bodies.encode_body`: a closed outward body as a BSP
+    """Any other body through :func:`planefmt.groups.bodies.encode_body`: a closed outward body as a BSP
     tree of its own face planes (verified closed, same volume and Euler characteristic), falling
     back to, and anything else as, verified pseudo-convex and pseudo-concave patches."""
     if body.simplified:
@@ -385,8 +386,8 @@ def decode_sealed_group(planes: np.ndarray, group: GroupLike, label: object, err
 def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
     """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes (spec §9.8).
 
-    Small patches are intersected in numpy (:mod:`planefmt.polytopes`); where that finds no
-    polytope, Qhull (:func:`planefmt.halfspace.intersect`) decides: near-duplicate bounding
+    Small patches are intersected in numpy (:mod:`planefmt.geometry.polytopes`); where that finds no
+    polytope, Qhull (:func:`planefmt.geometry.halfspace.intersect`) decides: near-duplicate bounding
     planes (TestScene.gltf's floor: two copies of one normal, h 3e-7 apart) defeat the former's
     vertex tests but not the latter's hull.
     """
@@ -520,7 +521,7 @@ def decode_groups(items: Sequence[tuple[np.ndarray, GroupLike, object]],
     """:func:`decode_group` of each ``(planes, group, label)``, the patch groups in one batch.
 
     A mesh stored as patches has tens of thousands of small groups (bun_zipper.ply: 28k); one
-    :func:`planefmt.patches.decode_patch_groups` call intersects them together, and gives each the
+    :func:`planefmt.groups.patches.decode_patch_groups` call intersects them together, and gives each the
     result it gets alone. If the batch finds a bad group, every patch is decoded on its own, which
     names the group and tries Qhull where the batch gives up.
     """
@@ -615,7 +616,7 @@ class _Object:
     world: np.ndarray
     simplified: bool
     fit: float  # model units
-    mended: float  # model units: how far closing cracks moved the source (planefmt.repair)
+    mended: float  # model units: how far closing cracks moved the source (planefmt.geometry.repair)
     closed: bool  # the source is a closed 2-manifold: its decoding must be one, of the same volume
     volume: float  # model units cubed, local coordinates
     euler: int
@@ -1415,7 +1416,7 @@ def _verify(mesh: Mesh, obj: _Object, target: float, pieces: int,
     when it is not at most ``target``.
 
     Convex groups over convex source bodies (``decoded`` given) are bounded from their corners
-    (:func:`planefmt.convexbound.convex_hausdorff`), group by group, without a search.
+    (:func:`planefmt.geometry.convexbound.convex_hausdorff`), group by group, without a search.
     """
     shift = _mended(obj)
     convex = _convex_bounds(decoded, obj) if decoded is not None else None
@@ -1733,7 +1734,7 @@ def skipped_groups(groups: Sequence[GroupLike]) -> str:
 def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str]]:
     """What :func:`decode_scene` gives for the intact part of a damaged file, and what was lost.
 
-    Reads through :func:`planefmt.salvage.salvage`: every intact object and
+    Reads through :func:`planefmt.container.salvage.salvage`: every intact object and
     part group is kept, a group that no longer decodes (its planes were
     damaged into an empty or unbounded set) joins the losses. Raises
     ``FormatError`` (``MISSING_HEADER``) when no header survived.
@@ -1786,7 +1787,7 @@ def _object_mesh(parts: list[tuple[int, DecodedGroup]], colours: dict[int, np.nd
 
 
 def check_group(group: PartGroup, reader: Reader) -> list[Finding]:
-    """Geometry findings of one part group for ``planefmt.validate`` (spec §9, §12.3).
+    """Geometry findings of one part group for ``planefmt.container.validate`` (spec §9, §12.3).
 
     ``EMPTY_POLYTOPE`` / ``UNBOUNDED_POLYTOPE`` errors, one ``REDUNDANT_PLANE``
     warning per plane of a convex group that bounds no face. Kinds without a

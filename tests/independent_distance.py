@@ -1,7 +1,7 @@
 """A second measure of the distance between two triangle meshes, sharing no code with planefmt.
 
-planefmt certifies its error bound with :mod:`planefmt.hausdorff`, a BVH of
-:mod:`planefmt.trianglegeom` and the wedge bounds of :mod:`planefmt.stars`.
+planefmt certifies its error bound with :mod:`planefmt.geometry.hausdorff`, a BVH of
+:mod:`planefmt.geometry.trianglegeom` and the wedge bounds of :mod:`planefmt.geometry.stars`.
 The tests check that bound against this module, which is written from the
 textbook instead: the exact distance from a point to a triangle by the
 Voronoi regions of Ericson, *Real-Time Collision Detection* (2005), §5.1.5,

@@ -11,9 +11,9 @@ import trimesh
 
 from planefmt import codec
 from planefmt import open as planefmt_open
-from planefmt.bodies import euler_characteristic, is_closed_manifold, signed_volume
+from planefmt.groups.bodies import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.errors import GeometryError
-from planefmt.hausdorff import hausdorff
+from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import GroupKind
 
 import shapes
@@ -141,7 +141,7 @@ def test_the_drift_bound_keeps_the_polygon_fit_within_the_tolerance():
     """King_geom.usd's gently curved quads: with the default drift bound (4 coplanarity
     tolerances) its fitted planes are more than the tolerance 1e-6 of the diagonal from their
     vertices (1.42e-6); capped at the tolerance, the curved polygons are split and the fit is within it."""
-    from planefmt.polygonize import polygonize
+    from planefmt.geometry.polygonize import polygonize
 
     v, f = _king()
     loose = polygonize(v, f, tolerance=5e-7)
@@ -153,7 +153,7 @@ def test_the_drift_bound_keeps_the_polygon_fit_within_the_tolerance():
 def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkeypatch):
     """A fit over the tolerance (King_geom.usd polygonized without the drift cap) is refused after
     polygonizing, not after encoding."""
-    from planefmt import polygonize as polygonize_module
+    from planefmt.geometry import polygonize as polygonize_module
 
     v, f = _king()
 
@@ -264,7 +264,7 @@ def test_the_smaller_file_of_the_two_splitter_sets_is_written(monkeypatch):
     """Where a hull-first tree was kept at a lossy tolerance, the objects are encoded again with
     the second set of splitter strategies and the smaller file is written, whichever set made it
     (two one-strategy sets here, so that the two files differ on a small solid)."""
-    from planefmt import solids
+    from planefmt.groups import solids
 
     v, f = shapes.random_boxes(1)
     base, one, other = solids.STRATEGIES[0], (8, 3.0, True), (64, 30.0, True)
@@ -284,7 +284,7 @@ def test_the_smaller_file_of_the_two_splitter_sets_is_written(monkeypatch):
 def test_encode_mesh_keeps_the_smaller_of_the_two_splitter_sets(monkeypatch):
     """encode_mesh chooses between the two splitter sets as encode_scene does: its planes are
     those of the smaller (version 1) file, whichever set is tried first."""
-    from planefmt import solids
+    from planefmt.groups import solids
 
     v, f = shapes.random_boxes(1)
     base, one, other = solids.STRATEGIES[0], (8, 3.0, True), (64, 30.0, True)
@@ -312,7 +312,7 @@ def _trees(e: codec.Encoded) -> list:
 def test_the_second_splitter_set_is_tried_only_where_widths_can_shrink(monkeypatch):
     """At the lossless 1e-6, and for a forced coding, one set; at a lossy tolerance the second set
     re-encodes only the objects that kept a hull-first tree."""
-    from planefmt import solids
+    from planefmt.groups import solids
 
     calls = []
     prepare = codec._prepare

@@ -10,11 +10,12 @@ import numpy as np
 import pytest
 import trimesh
 
-from planefmt import PlnError, codec, quantize, varint
+from planefmt import PlnError, codec
+from planefmt.container import quantize, varint
 from planefmt import open as planefmt_open
-from planefmt.hausdorff import hausdorff
+from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import Coding, GroupKind, Header, Quantization
-from planefmt.writer import Writer
+from planefmt.container.writer import Writer
 
 from corpus import CORPUS
 

@@ -13,7 +13,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import planefmt
-from planefmt import chunk_bytes, quantize, records, schema
+from planefmt import chunk_bytes
+from planefmt.container import quantize, records, schema
 from planefmt.model import BSP_IN, BSP_OUT, Coding, GroupKind, Header, PartGroup, PlaneBlock, Quantization, Shell
 
 from streams import TrickleReader, TrickleWriter

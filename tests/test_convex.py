@@ -1,4 +1,4 @@
-"""Convex decoding (planefmt.halfspace) and the geometry codec (planefmt.codec), issue 3."""
+"""Convex decoding (planefmt.geometry.halfspace) and the geometry codec (planefmt.codec), issue 3."""
 
 from __future__ import annotations
 
@@ -13,14 +13,15 @@ from hypothesis import strategies as st
 from scipy.spatial import ConvexHull, cKDTree
 
 import planefmt
-from planefmt import planes, quantize
+from planefmt.geometry import planes
+from planefmt.container import quantize
 from planefmt.codec import decode_mesh, decode_scene, encode_mesh, encode_scene
 from planefmt.errors import GeometryError
-from planefmt.halfspace import decode_convex, intersect
-from planefmt.hausdorff import hausdorff
+from planefmt.geometry.halfspace import decode_convex, intersect
+from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import Coding, GroupKind, Mesh, Node, Scene, Units
-from planefmt.polygonize import weld
-from planefmt.validate import validate
+from planefmt.geometry.polygonize import weld
+from planefmt.container.validate import validate
 
 import corpus
 from corpus import CORPUS
@@ -174,7 +175,7 @@ NEARLY_PARALLEL = np.array([
 def test_small_polytopes_keep_the_corner_of_nearly_parallel_planes():
     # The numpy path of small polytopes solved that corner by Cramer's rule 1e-8 off its own
     # planes, on none of their faces: the patch decoded without one face, a third of its area.
-    from planefmt.polytopes import intersect_many
+    from planefmt.geometry.polytopes import intersect_many
 
     omega, h = planes.from_triplets(NEARLY_PARALLEL)
     batch = intersect_many(omega, h, np.zeros(len(h), dtype=np.int64), 1, 1e-11 * np.abs(h).max())

@@ -7,8 +7,8 @@ import pytest
 import trimesh
 
 from planefmt import codec
-from planefmt.convexbound import convex_hausdorff
-from planefmt.hausdorff import hausdorff
+from planefmt.geometry.convexbound import convex_hausdorff
+from planefmt.geometry.hausdorff import hausdorff
 
 import shapes
 from independent_distance import hausdorff_lower_bound

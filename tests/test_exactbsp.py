@@ -1,4 +1,4 @@
-"""Exact side tests (planefmt.predicates) and the exact surface of a BSP tree (planefmt.exactbsp)."""
+"""Exact side tests (planefmt.geometry.predicates) and the exact surface of a BSP tree (planefmt.groups.exactbsp)."""
 
 from __future__ import annotations
 
@@ -7,16 +7,16 @@ from fractions import Fraction
 import numpy as np
 import pytest
 
-import planefmt.bodies as bodies
-import planefmt.solids as solids
-from planefmt.bodies import (encode_groups, euler_characteristic, is_closed_manifold, plane_positions,
+import planefmt.groups.bodies as bodies
+import planefmt.groups.solids as solids
+from planefmt.groups.bodies import (encode_groups, euler_characteristic, is_closed_manifold, plane_positions,
                              reflex_planes, signed_volume)
-from planefmt.bsptree import parse
-from planefmt.exactbsp import exact_boundary, split_pinches
+from planefmt.groups.bsptree import parse
+from planefmt.groups.exactbsp import exact_boundary, split_pinches
 from planefmt.model import GroupKind
-from planefmt.planes import from_triplets, to_triplets
-from planefmt.predicates import points, sides
-from planefmt.trianglegeom import TriangleIndex
+from planefmt.geometry.planes import from_triplets, to_triplets
+from planefmt.geometry.predicates import points, sides
+from planefmt.geometry.trianglegeom import TriangleIndex
 
 import shapes
 from corpus import CORPUS
@@ -111,10 +111,10 @@ def test_exact_decoding_closes_what_rounded_decisions_misplace(monkeypatch):
     """King_geom.usd's base (7,392 triangles, fillets of 30 planes within a micrometre): its first
     tree decodes open when sides are decided in float64 and closed, with the source's volume and
     Euler characteristic, in exact arithmetic."""
-    from planefmt.bodies import body_labels
-    from planefmt.polygonize import polygonize
-    from planefmt.repair import merge_close_vertices
-    from planefmt.solids import partition
+    from planefmt.groups.bodies import body_labels
+    from planefmt.geometry.polygonize import polygonize
+    from planefmt.geometry.repair import merge_close_vertices
+    from planefmt.groups.solids import partition
     from planefmt_converters import registry
     from planefmt_converters.assemble import flatten
 
@@ -155,7 +155,7 @@ def test_exact_side_tests_are_capped(monkeypatch):
     """A square pyramid: its four side planes pass (within rounding) through the apex, where no
     float64 bound decides a side; with no exact test allowed the decoding stops with
     LIMIT_EXCEEDED (decode_tree then keeps its rounded surface, as the King test shows)."""
-    import planefmt.exactbsp as exactbsp
+    import planefmt.groups.exactbsp as exactbsp
     from planefmt.errors import GeometryError
 
     omega = np.array([[1.0, 0, 1], [-1.0, 0, 1], [0, 1.0, 1], [0, -1.0, 1], [0, 0, -1.0]])

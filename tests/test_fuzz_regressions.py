@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from planefmt.salvage import salvage
+from planefmt.container.salvage import salvage
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "fuzz"))

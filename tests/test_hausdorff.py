@@ -9,7 +9,7 @@ import pytest
 import trimesh
 
 from planefmt.errors import GeometryError
-from planefmt.hausdorff import closest_distance, hausdorff, point_triangle_distance, relative_hausdorff
+from planefmt.geometry.hausdorff import closest_distance, hausdorff, point_triangle_distance, relative_hausdorff
 
 from corpus import CORPUS
 
@@ -309,7 +309,7 @@ def test_thin_strips_do_not_chain_perpendicular_faces_into_one_region():
     a chain of them made one coplanar region of two perpendicular faces (0.35 thick), whose
     boundary edges then fell within reach of every piece (angle_block.STL's exact decoding: 76
     million candidate pairs, 24 GB). With a flatness limit the region splits at the strips."""
-    from planefmt.planarpatches import ConvexPatches
+    from planefmt.geometry.planarpatches import ConvexPatches
 
     v, f, strip = fold_with_micro_fillet(1e-7)
     tol = 2e-7

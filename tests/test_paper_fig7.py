@@ -16,12 +16,12 @@ from __future__ import annotations
 import numpy as np
 
 import planefmt
-from planefmt.bodies import Group, decode_groups, encode_open
-from planefmt.hausdorff import hausdorff
+from planefmt.groups.bodies import Group, decode_groups, encode_open
+from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import Coding, GroupKind, Header
-from planefmt.patches import PlaneTable
-from planefmt.planes import to_triplets
-from planefmt.polygonize import polygonize
+from planefmt.groups.patches import PlaneTable
+from planefmt.geometry.planes import to_triplets
+from planefmt.geometry.polygonize import polygonize
 
 import shapes
 

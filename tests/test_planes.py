@@ -1,4 +1,4 @@
-"""Plane math (planefmt.planes) and polygonization (planefmt.polygonize), issue 3."""
+"""Plane math (planefmt.geometry.planes) and polygonization (planefmt.geometry.polygonize), issue 3."""
 
 from __future__ import annotations
 
@@ -12,9 +12,9 @@ from hypothesis import strategies as st
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from planefmt import planes
+from planefmt.geometry import planes
 from planefmt.errors import GeometryError
-from planefmt.polygonize import edge_adjacency, polygonize, weld
+from planefmt.geometry.polygonize import edge_adjacency, polygonize, weld
 
 from corpus import CORPUS
 

@@ -1,4 +1,4 @@
-"""Meshes closed but for their cracks (planefmt.repair): two vertices of one point, T-junctions.
+"""Meshes closed but for their cracks (planefmt.geometry.repair): two vertices of one point, T-junctions.
 Mended, they are stored as solids; what the mending moved is counted in the verified error."""
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ import pytest
 import trimesh
 
 from planefmt import codec
-from planefmt.bodies import is_closed_manifold, signed_volume
+from planefmt.groups.bodies import is_closed_manifold, signed_volume
 from planefmt.model import GroupKind
-from planefmt.repair import merge_close_vertices, split_t_junctions
+from planefmt.geometry.repair import merge_close_vertices, split_t_junctions
 
 from corpus import CORPUS
 

@@ -10,7 +10,7 @@ import pytest
 
 import planefmt
 from planefmt.model import GroupKind, Header, PartGroup
-from planefmt.salvage import salvage
+from planefmt.container.salvage import salvage
 
 CUBE = np.column_stack([np.radians([[90, 0], [90, 90], [90, 180], [90, 270], [0, 0], [180, 0]]),
                         [1, 1, 0, 0, 1, 0]])
@@ -127,7 +127,7 @@ def test_a_group_index_claiming_billions_is_one_loss():
     """A damaged GRUP index says group 4,294,967,040 follows group 3: the groups in between are
     reported as one run, not one loss each (which took 1.8 s and 590k records for a fuzzer input
     claiming 589,824, and would not end for this one)."""
-    from planefmt.chunks import chunk_bytes
+    from planefmt.container.chunks import chunk_bytes
 
     data = ten_groups()
     pos = grup_offsets(data)[4]

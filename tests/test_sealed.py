@@ -9,13 +9,13 @@ import pytest
 
 import planefmt
 from planefmt import codec
-from planefmt.bodies import decode_groups, encode_groups, euler_characteristic, is_closed_manifold, signed_volume
+from planefmt.groups.bodies import decode_groups, encode_groups, euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.errors import GeometryError, PlnError
-from planefmt.hausdorff import hausdorff
+from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import GroupKind, Header, Mesh, Node, Scene
-from planefmt.patches import PlaneTable
-from planefmt.planes import from_triplets, to_triplets
-from planefmt.sealed import corners, decode_sealed, encode_sealed
+from planefmt.groups.patches import PlaneTable
+from planefmt.geometry.planes import from_triplets, to_triplets
+from planefmt.groups.sealed import corners, decode_sealed, encode_sealed
 
 import shapes
 from corpus import CORPUS
@@ -26,14 +26,14 @@ TOL = 1e-6
 @pytest.fixture
 def no_tree(monkeypatch):
     """Every BSP attempt refused, as for King_geom.usd's smooth bodies (tunnels below the tolerance)."""
-    import planefmt.bodies
+    import planefmt.groups.bodies
 
     def refuse(*args, **kwargs):
         args[-1].note = "refused by the test"
         return None
 
-    monkeypatch.setattr(planefmt.bodies, "encode_solid", refuse)
-    monkeypatch.setattr(planefmt.bodies, "MIXED_ROUNDS", 0)
+    monkeypatch.setattr(planefmt.groups.bodies, "encode_solid", refuse)
+    monkeypatch.setattr(planefmt.groups.bodies, "MIXED_ROUNDS", 0)
 
 
 def _corpus(rel: str) -> tuple[np.ndarray, np.ndarray]:
@@ -160,7 +160,7 @@ def test_kind_5_of_an_older_version_is_opaque_and_skipped() -> None:
             (g,) = list(r.part_groups())
             assert g.extra == b"\x07anything" and g.facets is None
             assert finding in [code for code, _ in r.findings]
-        codes = [f.code for f in planefmt.validate.validate(io.BytesIO(buf.getvalue()))]
+        codes = [f.code for f in planefmt.container.validate.validate(io.BytesIO(buf.getvalue()))]
         assert sorted(codes) == ["NEWER_MINOR_VERSION", finding]
 
 

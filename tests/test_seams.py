@@ -1,10 +1,10 @@
-"""Sewing decoded polygons (planefmt.seams): rings that welding pinches."""
+"""Sewing decoded polygons (planefmt.groups.seams): rings that welding pinches."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from planefmt.seams import Planes, stitch
+from planefmt.groups.seams import Planes, stitch
 
 
 def _edge_uses(triangles: np.ndarray) -> np.ndarray:
@@ -64,8 +64,8 @@ def _box() -> tuple[np.ndarray, np.ndarray]:
 
 
 def test_a_flat_slit_is_closed_facing_the_surface_around_it() -> None:
-    from planefmt.bodies import is_closed_manifold, signed_volume
-    from planefmt.seams import fill_slits
+    from planefmt.groups.bodies import is_closed_manifold, signed_volume
+    from planefmt.groups.seams import fill_slits
 
     v, f = _box()
     holed = f[1:]
@@ -80,7 +80,7 @@ def test_a_flat_slit_is_closed_facing_the_surface_around_it() -> None:
 
 
 def test_holes_that_are_not_flat_slits_are_left_open() -> None:
-    from planefmt.seams import fill_slits
+    from planefmt.groups.seams import fill_slits
 
     v, f = _box()
     # Two triangles of two faces meeting at an edge: a bent hole, its corners 0.3+ off any plane.

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 import planefmt
 from planefmt import codec
-from planefmt.bodies import euler_characteristic, is_closed_manifold, signed_volume
+from planefmt.groups.bodies import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.errors import GeometryError
 from planefmt.model import GroupKind, Mesh, Node, Scene, Shell
-from planefmt.shells import decode_shell
+from planefmt.groups.shells import decode_shell
 from planefmt_converters import registry
 
 import shapes

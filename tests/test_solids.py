@@ -1,4 +1,4 @@
-"""Closed non-convex solids as BSP trees of their own planes (planefmt.solids, bsptree, seams, bodies)."""
+"""Closed non-convex solids as BSP trees of their own planes (planefmt.groups.solids, bsptree, seams, bodies)."""
 
 from __future__ import annotations
 
@@ -6,15 +6,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from planefmt import bodies, solids
-from planefmt.bodies import (decode_groups, encode_groups, euler_characteristic, is_closed_manifold,
+from planefmt.groups import bodies, solids
+from planefmt.groups.bodies import (decode_groups, encode_groups, euler_characteristic, is_closed_manifold,
                              signed_volume)
-from planefmt.bsptree import parse
+from planefmt.groups.bsptree import parse
 from planefmt.errors import GeometryError
-from planefmt.hausdorff import closest_distance, hausdorff
+from planefmt.geometry.hausdorff import closest_distance, hausdorff
 from planefmt.model import BSP_IN, BSP_OUT, GroupKind
-from planefmt.planes import from_triplets, to_triplets
-from planefmt.solids import decode_tree
+from planefmt.geometry.planes import from_triplets, to_triplets
+from planefmt.groups.solids import decode_tree
 
 import shapes
 from corpus import CORPUS
@@ -233,8 +233,8 @@ def test_the_smallest_tree_of_the_splitter_strategies_is_kept() -> None:
 
 
 def _partition_input(v: np.ndarray, f: np.ndarray) -> tuple:
-    from planefmt.bodies import plane_positions, reflex_planes
-    from planefmt.polygonize import polygonize
+    from planefmt.groups.bodies import plane_positions, reflex_planes
+    from planefmt.geometry.polygonize import polygonize
 
     poly = polygonize(v, f, tolerance=1e-9)
     x, rmax = plane_positions(poly.vertices, poly.faces, poly.face_plane, poly.omega, poly.h)
@@ -293,7 +293,7 @@ def test_pieces_clipped_without_qhull_keep_their_planes(monkeypatch) -> None:
     """Where Qhull cannot intersect a convex piece, its faces are clipped square by square; they lie
     on the piece's own planes, and the triangles say so (busted.STL: such faces were tagged with the
     planes of the tree's first nodes, 1.6 degrees off)."""
-    import planefmt.halfspace
+    import planefmt.geometry.halfspace
 
     v, f = shapes.ring()
     enc = encode_groups(v, f, tolerance=TOL)
@@ -305,7 +305,7 @@ def test_pieces_clipped_without_qhull_keep_their_planes(monkeypatch) -> None:
     def no_qhull(*args, **kwargs):
         raise GeometryError("stub: Qhull declines", code="DEGENERATE_GEOMETRY")
 
-    monkeypatch.setattr(planefmt.halfspace, "intersect", no_qhull)
+    monkeypatch.setattr(planefmt.geometry.halfspace, "intersect", no_qhull)
     cv, ct, cplane = decode_tree(omega, h, group.tree, face)
     assert is_closed_manifold(ct, len(cv))
     off = np.abs(np.einsum("ij,ij->i", omega[cplane], cv[ct].mean(axis=1)) - h[cplane])

@@ -1,15 +1,15 @@
-"""Wedge bounds around a vertex star (planefmt.stars) and what they add to the Hausdorff certificate."""
+"""Wedge bounds around a vertex star (planefmt.geometry.stars) and what they add to the Hausdorff certificate."""
 
 from __future__ import annotations
 
 import numpy as np
 import trimesh
 
-from planefmt import hausdorff as hd
-from planefmt.halfspace import intersect
-from planefmt.planarpatches import ConvexPatches
-from planefmt.stars import VertexStars
-from planefmt.trianglegeom import closest_distance
+from planefmt.geometry import hausdorff as hd
+from planefmt.geometry.halfspace import intersect
+from planefmt.geometry.planarpatches import ConvexPatches
+from planefmt.geometry.stars import VertexStars
+from planefmt.geometry.trianglegeom import closest_distance
 
 
 def fan(angles: np.ndarray, radii: np.ndarray, heights: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

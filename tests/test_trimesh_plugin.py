@@ -8,7 +8,7 @@ import numpy as np
 import trimesh
 
 import planefmt_converters.trimesh_plugin  # noqa: F401  (registers the loader and exporter)
-from planefmt.hausdorff import closest_distance  # noqa: I001  (after the plugin on purpose: it is what is tested)
+from planefmt.geometry.hausdorff import closest_distance  # noqa: I001  (after the plugin on purpose: it is what is tested)
 
 
 def test_trimesh_exports_and_loads_pln(tmp_path: Path):

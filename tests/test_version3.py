@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 import planefmt
-from planefmt import PlnError, records, schema
+from planefmt import PlnError
+from planefmt.container import records, schema
 from planefmt.model import Coding, GroupKind, Header, Quantization
 
 CUBE = np.column_stack([np.radians([[90, 0], [90, 90], [90, 180], [90, 270], [0, 0], [180, 0]]),

@@ -11,10 +11,11 @@ import warnings
 import numpy as np
 import pytest
 
-from planefmt import bodies, codec
-from planefmt.bodies import is_closed_manifold
+from planefmt.groups import bodies
+from planefmt import codec
+from planefmt.groups.bodies import is_closed_manifold
 from planefmt.errors import GeometryError, PlnWarning
-from planefmt.hausdorff import hausdorff
+from planefmt.geometry.hausdorff import hausdorff
 from planefmt_converters import pln as pln_format
 from planefmt.model import Mesh, Node, Scene
 

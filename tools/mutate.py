@@ -36,14 +36,14 @@ class Mutant:
 
 
 MUTANTS = (
-    Mutant("crc check skipped", "planefmt/chunks.py",
+    Mutant("crc check skipped", "planefmt/container/chunks.py",
            (('        if crc != int.from_bytes(tail, "little"):', "        if False:"),),
            ("tests/test_container.py",)),
     Mutant("recorded error bound = verifier's lower bound", "planefmt/codec.py",
            (("    return (upper if upper <= target else math.inf), max(lower - shift, 0.0)",
              "    lower = max(lower - shift, 0.0)\n    return (lower if upper <= target else math.inf), lower"),),
            ("tests/test_error_bound.py",)),
-    Mutant("convex corner bound one way only", "planefmt/convexbound.py",
+    Mutant("convex corner bound one way only", "planefmt/geometry/convexbound.py",
            (("    return max(ab, ba), max(ab_low, ba_low)", "    return ab, ab_low"),),
            ("tests/test_convexbound.py",)),
     Mutant("shell error bound halved", "planefmt/codec.py",
@@ -54,12 +54,12 @@ MUTANTS = (
            (("        if topology and not is_closed_manifold(mesh.faces, len(mesh.vertices)):", "        if False:"),),
            ("tests/test_watertight.py",
             "tests/test_codec_bodies.py::test_a_closed_source_that_decodes_open_is_refused_with_the_reason")),
-    Mutant("atomic write replaced by direct write", "planefmt/writer.py",
+    Mutant("atomic write replaced by direct write", "planefmt/container/writer.py",
            (('            os.fchmod(fd, mode)\n            self._fp: BinaryIO = os.fdopen(fd, "wb")',
              '            os.close(fd)\n            os.unlink(self._tmp)\n            self._tmp = str(self._path)\n'
              '            self._fp: BinaryIO = open(self._path, "wb")'),),
            ("tests/test_container.py",)),
-    Mutant("quantization width off by one (h)", "planefmt/quantize.py",
+    Mutant("quantization width off by one (h)", "planefmt/container/quantize.py",
            (("    m_h = float((1 << q.bits_h) - 1)", "    m_h = float((1 << (q.bits_h - 1)) - 1)"),),
            ("tests/test_container.py",)),
     Mutant("runner comparison disabled", "conformance/runner.py",
@@ -67,7 +67,7 @@ MUTANTS = (
              "def compare_valid(want: dict, got: dict, level: str) -> str | None:\n    return None\n"),),
            ("tests/test_conformance.py::test_the_runner_fails_an_implementation_that_reports_a_wrong_value",
             "tests/test_conformance.py::test_the_runner_fails_a_reader_whose_plane_is_half_a_unit_off")),
-    Mutant("salvage keeping a corrupt group", "planefmt/salvage.py",
+    Mutant("salvage keeping a corrupt group", "planefmt/container/salvage.py",
            (('        if crc32(payload, crc32(head[:4])) != int.from_bytes(self.data[end:end + 4], "little"):',
              '        if crc32(payload, crc32(head[:4])) != int.from_bytes(self.data[end:end + 4], "little") \\\n'
              '                and head[:4] != b"GRUP":'),),

@@ -12,7 +12,8 @@ import math
 import sys
 from collections import Counter
 
-from planefmt import errors, reader, salvage
+from planefmt import errors
+from planefmt.container import reader, salvage
 from planefmt.model import GroupKind, ObjectRecord, PartGroup, PlaneBlock
 
 

@@ -28,8 +28,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from planefmt import codec, reader
-    from planefmt.planes import transform_points
+    from planefmt import codec
+    from planefmt.container import reader
+    from planefmt.geometry.planes import transform_points
 
     from ..atomic import write_bytes
     from ..render import png_bytes, render

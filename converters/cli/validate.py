@@ -6,7 +6,7 @@ import argparse
 import json
 import sys
 
-from planefmt.validate import has_errors, validate
+from planefmt.container.validate import has_errors, validate
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

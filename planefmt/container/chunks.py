@@ -1,0 +1,194 @@
+"""Chunk framing (spec §3–§4): signature check, bounded chunk reads, CRC, ``chunk_bytes``.
+
+Framing knows nothing of payload meaning. ``chunk_bytes`` is the one helper
+that frames a payload; the writer, the conformance generator and the tests
+that build broken files all use it.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import stat
+from dataclasses import dataclass
+from typing import BinaryIO
+
+from . import schema
+from .crc import crc32
+from ..errors import ChecksumError, FormatError, LimitError, TruncatedError
+
+#: Payloads are read in blocks of this size so that a declared length never
+#: allocates more than the bytes that actually arrive.
+READ_BLOCK = 1 << 20
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Resource caps of a reader (spec §12.4). Defaults suit files up to a few GB."""
+
+    max_chunk_length: int = 256 << 20
+    max_raw_size: int = 256 << 20  # uncompressed size of one payload
+    max_compression_ratio: int = 1100  # deflate's own ceiling is about 1032
+    max_planes: int = 1 << 28
+    max_refs_per_group: int = 1 << 24
+    max_objects: int = 1 << 24
+
+
+def chunk_bytes(ctype: bytes, payload: bytes) -> bytes:
+    """Frame ``payload`` as one chunk: type, length, payload, CRC-32 (spec §4.1)."""
+    if len(ctype) != 4:
+        raise ValueError("chunk type must be 4 bytes")
+    crc = crc32(payload, crc32(ctype))
+    return ctype + len(payload).to_bytes(4, "little") + payload + crc.to_bytes(4, "little")
+
+
+def is_ancillary(ctype: bytes) -> bool:
+    """Bit 5 of the first byte set (a lowercase letter) marks an ancillary chunk."""
+    return bool(ctype[0] & 0x20)
+
+
+def valid_type(ctype: bytes) -> bool:
+    return len(ctype) == 4 and all(65 <= (b & ~0x20) <= 90 for b in ctype)
+
+
+def type_name(ctype: bytes) -> str:
+    return ctype.decode("latin-1") if valid_type(ctype) else ctype.hex()
+
+
+def check_signature(data: bytes, *, file: str | None = None) -> None:
+    """Raise ``FormatError`` unless ``data`` is the 8-byte signature (spec §3).
+
+    Damage a text-mode transfer does (CR LF -> LF, LF -> CR LF, the high bit
+    stripped) is reported as TEXT_MODE_DAMAGE rather than a foreign file.
+    """
+    if data == schema.SIGNATURE:
+        return
+    if len(data) < len(schema.SIGNATURE) and schema.SIGNATURE.startswith(data):
+        raise TruncatedError("file ends inside the signature", file=file, offset=0)
+    if data[1:4] == b"PLN" and data[:1] in (b"\x89", b"\x09"):
+        raise FormatError("signature damaged by a text-mode transfer (line endings or 8th bit)",
+                          code="TEXT_MODE_DAMAGE", file=file, offset=0)
+    raise FormatError("not a .pln file (bad signature)", code="BAD_SIGNATURE", file=file, offset=0)
+
+
+@dataclass(frozen=True)
+class RawChunk:
+    """A framed chunk as read: its type, payload and the offset of its first byte."""
+
+    type: bytes
+    payload: bytes
+    offset: int
+
+    @property
+    def name(self) -> str:
+        return type_name(self.type)
+
+
+class ChunkStream:
+    """Reads chunks from a binary stream, one at a time, checking every CRC.
+
+    Works on non-seekable streams (pipes, sockets): it never seeks unless asked
+    to, tracks its own byte offset, and reads payloads in bounded blocks.
+    """
+
+    def __init__(self, fp: BinaryIO, *, file: str | None, limits: Limits, start: int = 0) -> None:
+        self.fp = fp
+        self.file = file
+        self.limits = limits
+        self.offset = start
+        self._size = _stream_size(fp)
+
+    def remaining(self) -> int | None:
+        """Bytes left in a regular file, None for a stream whose size is unknown."""
+        return None if self._size is None else self._size - self.fp.tell()
+
+    def read_exact(self, n: int, *, chunk: str | None, what: str) -> bytes:
+        left = self.remaining()
+        if left is not None and n > left:
+            raise TruncatedError(f"{what} needs {n} bytes but only {left} remain",
+                                 file=self.file, chunk=chunk, offset=self.offset)
+        if left is not None:
+            # The size was checked against the file: safe to allocate once and fill in place.
+            buf = bytearray(n)
+            view = memoryview(buf)
+            got = 0
+            while got < n:
+                k = self.fp.readinto(view[got:]) if hasattr(self.fp, "readinto") else None
+                if k is None:
+                    block = self.fp.read(n - got)
+                    k = len(block)
+                    view[got:got + k] = block
+                if not k:
+                    raise TruncatedError(f"file ends after {got} of {n} bytes of {what}",
+                                         file=self.file, chunk=chunk, offset=self.offset)
+                got += k
+            self.offset += n
+            return bytes(buf) if n <= 64 else buf
+        parts = []
+        got = 0
+        while got < n:
+            block = self.fp.read(min(READ_BLOCK, n - got))
+            if not block:
+                raise TruncatedError(f"file ends after {got} of {n} bytes of {what}",
+                                     file=self.file, chunk=chunk, offset=self.offset)
+            parts.append(block)
+            got += len(block)
+        data = parts[0] if len(parts) == 1 else b"".join(parts)
+        self.offset += n
+        return data
+
+    def read_signature(self) -> None:
+        start = self.offset
+        data = b""
+        while len(data) < len(schema.SIGNATURE):
+            block = self.fp.read(len(schema.SIGNATURE) - len(data))
+            if not block:
+                break
+            data += block
+        self.offset = start + len(data)
+        if not data:
+            raise TruncatedError("empty file", file=self.file, offset=0)
+        check_signature(data, file=self.file)
+
+    def next_chunk(self) -> RawChunk:
+        """Read the next chunk; raise a located ``FormatError`` if it is damaged."""
+        start = self.offset
+        head = self.read_exact(8, chunk=None, what="chunk head")
+        ctype = head[:4]
+        name = type_name(ctype)
+        if not valid_type(ctype):
+            raise FormatError(f"chunk type {ctype!r} is not four ASCII letters", code="BAD_CHUNK_TYPE",
+                              file=self.file, offset=start)
+        length = int.from_bytes(head[4:], "little")
+        if length > schema.MAX_CHUNK_LENGTH:
+            raise FormatError(f"declared length {length} exceeds 2^31-1", code="CHUNK_TOO_LONG",
+                              file=self.file, chunk=name, offset=start)
+        if length > self.limits.max_chunk_length:
+            raise LimitError(f"declared length {length} exceeds the limit {self.limits.max_chunk_length}",
+                             file=self.file, chunk=name, offset=start)
+        payload = self.read_exact(length, chunk=name, what=f"a {length}-byte payload")
+        tail = self.read_exact(4, chunk=name, what="the CRC")
+        crc = crc32(payload, crc32(ctype))
+        if crc != int.from_bytes(tail, "little"):
+            raise ChecksumError(f"CRC mismatch (stored {int.from_bytes(tail, 'little'):08x}, computed {crc:08x})",
+                                file=self.file, chunk=name, offset=start)
+        return RawChunk(ctype, payload, start)
+
+    def at_eof(self) -> bool:
+        """True if nothing follows; consumes at most one byte."""
+        return not self.fp.read(1)
+
+    def seek(self, offset: int) -> None:
+        self.fp.seek(offset)
+        self.offset = offset
+
+
+def _stream_size(fp: BinaryIO) -> int | None:
+    """Total size of a regular file or in-memory buffer, None for pipes and sockets."""
+    if isinstance(fp, io.BytesIO):
+        return len(fp.getbuffer())
+    try:
+        st = os.fstat(fp.fileno())
+    except (AttributeError, OSError, io.UnsupportedOperation):
+        return None
+    return st.st_size if stat.S_ISREG(st.st_mode) else None

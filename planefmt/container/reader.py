@@ -1,0 +1,324 @@
+"""Streaming reader of .pln files (spec §4–§12).
+
+``open()`` reads the signature and header at once and everything else lazily:
+iterating yields records one at a time in file order, with memory bounded by
+the largest chunk (plus the plane table when ``retain_planes`` is set, which
+part groups need to resolve their planes). Works on pipes and sockets; on
+seekable files the trailing index gives random access to part groups.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import os
+import sys
+from collections import Counter
+from collections.abc import Iterator
+from typing import BinaryIO
+
+import numpy as np
+
+from . import records, schema
+from .chunks import ChunkStream, Limits, RawChunk, chunk_bytes, is_ancillary
+from ..errors import FormatError, PlnError
+from ..model import ObjectRecord, PartGroup, Record, UnknownChunk
+
+
+class Reader:
+    """A .pln file opened for reading; see :func:`open`."""
+
+    def __init__(self, source: str | os.PathLike | BinaryIO, *, retain_planes: bool = True,
+                 limits: Limits | None = None, name: str | None = None) -> None:
+        self._own = isinstance(source, (str, os.PathLike))
+        if self._own:
+            self.name = name or os.fspath(source)
+            self._fp: BinaryIO = builtin_open(source, "rb")
+        else:
+            self._fp = source
+            self.name = name or getattr(source, "name", None) or "<stream>"
+            if not isinstance(self.name, str):
+                self.name = "<stream>"
+        self.limits = limits or Limits()
+        self.retain_planes = retain_planes
+        self.findings: list[tuple[str, str]] = []
+        self.objects: list[ObjectRecord] = []
+        self.chunk_stats: Counter[str] = Counter()  # payload + framing bytes per chunk type
+        self.chunk_counts: Counter[str] = Counter()
+        self._table = np.empty((0, 3), dtype=np.float64)
+        self._plane_count = 0
+        self._group_refs: dict[int, int] = {}
+        self._group_count = 0
+        self._done = False
+        self._started = False
+        self.index_offset: int | None = None
+        # (offset, type, ordinal) of every OBJT, PLNS and GRUP chunk so far: what iNDX must list.
+        self._listed: list[tuple[int, bytes, int]] = []
+        self._base = _tell(self._fp)
+        try:
+            self._stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
+            self._stream.read_signature()
+            first = self._stream.next_chunk()
+            if first.type != schema.PHDR:
+                raise FormatError(f"first chunk is {first.name}, not PHDR", code="MISSING_HEADER",
+                                  chunk=first.name, offset=first.offset)
+            self._count(first)
+            self.header, found = self._located(lambda raw: records.decode_header(raw.payload), first)
+            self._after_header = first.offset + 12 + len(first.payload)
+            self.findings.extend(found)
+        except BaseException:
+            self.close()
+            raise
+
+    # -- context manager and iteration ------------------------------------------------------
+
+    def __enter__(self) -> "Reader":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Close the file if this reader opened it (a caller's stream stays open)."""
+        if self._own and not self._fp.closed:
+            self._fp.close()
+
+    @property
+    def planes(self) -> np.ndarray:
+        """The plane table read so far: ``(n, 3)`` triplets (empty unless ``retain_planes``)."""
+        return self._table[: self._plane_count] if self.retain_planes else self._table
+
+    # Counts: the header's where it records them (a file whose chunks disagree fails with COUNT_MISMATCH
+    # when read to its end), else what was read so far (a stream's writer may not have known them).
+
+    @property
+    def plane_count(self) -> int:
+        """Planes in the file's table: the header's count, else those read so far."""
+        recorded = self.header.plane_count
+        return self._plane_count if recorded is None else max(recorded, self._plane_count)
+
+    @property
+    def group_count(self) -> int:
+        """Part groups in the file: the header's count, else those read so far."""
+        recorded = self.header.group_count
+        return self._group_count if recorded is None else max(recorded, self._group_count)
+
+    @property
+    def object_count(self) -> int:
+        """Objects in the file: the header's count, else those read so far (``objects`` holds the records
+        read so far: object records follow the header, so they are known only once read)."""
+        recorded = self.header.object_count
+        return len(self.objects) if recorded is None else max(recorded, len(self.objects))
+
+    def __iter__(self) -> Iterator[Record]:
+        if self._started:
+            raise PlnError("a reader iterates once; open the file again to re-read it", code="CHUNK_ORDER",
+                           file=self.name)
+        self._started = True
+        while not self._done:
+            raw = self._stream.next_chunk()
+            self._count(raw)
+            record = self._located(self._dispatch, raw)
+            if record is not None:
+                yield record
+
+    def records(self) -> Iterator[Record]:
+        """Every record in file order (same as iterating the reader)."""
+        return iter(self)
+
+    def part_groups(self) -> Iterator[PartGroup]:
+        """Part groups one at a time, with ``planes`` resolved when planes are retained."""
+        for record in self:
+            if isinstance(record, PartGroup):
+                yield record
+
+    def read_all(self) -> list[Record]:
+        return list(self)
+
+    # -- dispatch --------------------------------------------------------------------------
+
+    def _count(self, raw: RawChunk) -> None:
+        self.chunk_stats[raw.name] += len(raw.payload) + 12
+        self.chunk_counts[raw.name] += 1
+
+    def _located(self, fn, raw: RawChunk):
+        try:
+            return fn(raw)
+        except PlnError as exc:
+            raise exc.located(file=self.name, chunk=raw.name, offset=raw.offset)
+
+    def _dispatch(self, raw: RawChunk) -> Record | None:
+        t = raw.type
+        if self.index_offset is not None and t != schema.PEND:
+            raise FormatError(f"{raw.name} after iNDX: iNDX must be followed by PEND", code="CHUNK_ORDER")
+        if t == schema.PLNS:
+            self._listed.append((raw.offset, t, self._plane_count))
+            block = records.decode_planes(raw.payload, self.header, self._plane_count, self.limits)
+            self._append_planes(block.triplets)
+            return block
+        if t == schema.OBJT:
+            if len(self.objects) >= self.limits.max_objects:
+                raise PlnError(f"more than {self.limits.max_objects} objects", code="LIMIT_EXCEEDED")
+            self._listed.append((raw.offset, t, len(self.objects)))
+            obj = records.decode_object(raw.payload, len(self.objects), self.header.version[0])
+            self.objects.append(obj)
+            return obj
+        if t == schema.GRUP:
+            group, found = records.decode_group(
+                raw.payload, expected_index=self._group_count, objects=len(self.objects),
+                planes=self._plane_count, minor=self.header.version[1], limits=self.limits,
+                major=self.header.version[0])
+            self.findings.extend(found)
+            self._listed.append((raw.offset, t, group.index))
+            self._group_refs[group.index] = len(group.refs)
+            self._group_count += 1
+            if self.retain_planes:
+                group = _with_planes(group, self._table[group.refs])
+            return group
+        if t == schema.COLR:
+            return records.decode_colours(raw.payload, self._group_refs)
+        if t == schema.INDX:
+            self.index_offset = raw.offset
+            self._check_index(records.decode_index(raw.payload, raw.offset, self._after_header))
+            return None
+        if t == schema.PEND:
+            self._finish(raw)
+            return None
+        if t == schema.PHDR:
+            raise FormatError("a second PHDR chunk", code="DUPLICATE_HEADER")
+        if is_ancillary(t):
+            self.findings.append(("UNKNOWN_ANCILLARY_CHUNK", f"skipped chunk {raw.name} at byte {raw.offset}"))
+            return UnknownChunk(type=t, payload=bytes(raw.payload), offset=raw.offset)
+        raise FormatError(f"unknown critical chunk {raw.name}", code="UNKNOWN_CRITICAL_CHUNK")
+
+    def _check_index(self, entries: np.ndarray) -> None:
+        """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §10.2)."""
+        listed = np.array(self._listed, dtype=schema.INDEX_ENTRY_DTYPE)
+        if len(entries) != len(listed):
+            raise FormatError(f"iNDX lists {len(entries)} chunks; the file has {len(listed)} OBJT, PLNS and GRUP "
+                              "chunks before it", code="BAD_INDEX")
+        wrong = np.flatnonzero(entries != listed)
+        if len(wrong):
+            i = int(wrong[0])
+            got, want = entries[i], listed[i]
+            raise FormatError(f"iNDX entry {i} says {got['type'].decode('latin-1')} #{got['ordinal']} at byte "
+                              f"{got['offset']}; the file has {want['type'].decode()} #{want['ordinal']} at byte "
+                              f"{want['offset']}", code="BAD_INDEX")
+
+    def _finish(self, raw: RawChunk) -> None:
+        index_offset = records.decode_end(raw.payload, self.header.version[0])
+        if index_offset and index_offset != self.index_offset:
+            raise FormatError(f"PEND points at byte {index_offset}, the iNDX chunk is at {self.index_offset}",
+                              code="BAD_INDEX")
+        h = self.header
+        if h.plane_count is not None and (h.plane_count, h.object_count, h.group_count) != (
+                self._plane_count, len(self.objects), self._group_count):
+            raise FormatError(
+                f"header counts {h.plane_count} planes, {h.object_count} objects, {h.group_count} groups; "
+                f"the file holds {self._plane_count}, {len(self.objects)}, {self._group_count}",
+                code="COUNT_MISMATCH")
+        self._done = True
+        if not self._stream.at_eof():
+            raise FormatError("bytes follow the PEND chunk", code="TRAILING_DATA",
+                              offset=raw.offset + len(raw.payload) + 12)
+
+    def _append_planes(self, triplets: np.ndarray) -> None:
+        n = self._plane_count + len(triplets)
+        if self.retain_planes:
+            if n > len(self._table):
+                grown = np.empty((max(n, 2 * len(self._table)), 3), dtype=np.float64)
+                grown[: self._plane_count] = self._table[: self._plane_count]
+                self._table = grown
+            self._table[self._plane_count:n] = triplets
+        self._plane_count = n
+
+    # -- random access ---------------------------------------------------------------------
+
+    def index(self) -> np.ndarray:
+        """The iNDX entries (offset, type, ordinal) of a seekable file, read from its end."""
+        if self._base is None:
+            raise PlnError("random access needs a seekable file", code="BAD_INDEX", file=self.name)
+        end = self._fp.seek(0, os.SEEK_END) - self._base
+        major = self.header.version[0]
+        stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
+        if major == 3 and end >= 12:
+            # A version 3 file without an index ends in an empty PEND (spec §4.4).
+            self._fp.seek(self._base + end - 12)
+            if self._fp.read(12) == chunk_bytes(schema.PEND, b""):
+                raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - 12)
+        if end < 20:
+            raise FormatError("file too short to end with PEND", code="TRUNCATED", file=self.name)
+        stream.seek(self._base + end - 20)
+        stream.offset = end - 20
+        raw = stream.next_chunk()
+        if raw.type != schema.PEND:
+            raise FormatError("the file does not end with a PEND chunk", code="MISSING_END", file=self.name,
+                              offset=end - 20)
+        index_offset = self._located(lambda r: records.decode_end(r.payload, major), raw)
+        if not index_offset or index_offset >= end - 20:
+            raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - 20)
+        stream.seek(self._base + index_offset)
+        stream.offset = index_offset
+        raw = stream.next_chunk()
+        if raw.type != schema.INDX:
+            raise FormatError("PEND does not point at an iNDX chunk", code="BAD_INDEX", file=self.name,
+                              offset=index_offset)
+        try:
+            return records.decode_index(raw.payload, index_offset, self._after_header)
+        except PlnError as exc:
+            raise exc.located(file=self.name, chunk="iNDX", offset=index_offset)
+
+    def group(self, k: int) -> PartGroup:
+        """Part group ``k`` by random access (seekable files with an index only).
+
+        Reads the objects and plane blocks it depends on and the group chunk itself.
+        """
+        entries = self.index()
+        types = entries["type"]
+        groups = np.flatnonzero(types == schema.GRUP)
+        if not 0 <= k < len(groups):
+            raise PlnError(f"no part group {k}; the file has {len(groups)}", code="BAD_INDEX", file=self.name)
+        pos = groups[k]
+        # A shallow copy shares the file but starts from an empty plane table and object list.
+        sub = copy.copy(self)
+        sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
+        sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
+        stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
+        for i in np.flatnonzero(np.isin(types[: pos + 1], [schema.OBJT, schema.PLNS])).tolist() + [int(pos)]:
+            offset = int(entries["offset"][i])
+            stream.seek(self._base + offset)
+            stream.offset = offset
+            raw = stream.next_chunk()
+            if raw.type != types[i]:
+                raise FormatError(f"index says {types[i].decode()} at byte {offset}, found {raw.name}",
+                                  code="BAD_INDEX", file=self.name, offset=offset)
+            sub._group_count = k
+            record = sub._located(sub._dispatch, raw)
+        return record
+
+
+builtin_open = open
+
+
+def open(source: str | os.PathLike | BinaryIO, *, retain_planes: bool = True,  # noqa: A001
+         limits: Limits | None = None, name: str | None = None) -> Reader:
+    """Open a .pln file or binary stream for reading (use as a context manager).
+
+    ``source`` may be a path, ``"-"`` for standard input, or a binary file
+    object (which is left open on close). ``retain_planes=False`` keeps memory
+    bounded by the largest chunk but leaves ``PartGroup.planes`` unresolved.
+    """
+    if isinstance(source, str) and source == "-":
+        return Reader(sys.stdin.buffer, retain_planes=retain_planes, limits=limits, name=name or "<stdin>")
+    return Reader(source, retain_planes=retain_planes, limits=limits, name=name)
+
+
+def _with_planes(group: PartGroup, planes: np.ndarray) -> PartGroup:
+    return dataclasses.replace(group, planes=planes)
+
+
+def _tell(fp: BinaryIO) -> int | None:
+    try:
+        return fp.tell() if fp.seekable() else None
+    except (AttributeError, ValueError, OSError):
+        return None

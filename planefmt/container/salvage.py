@@ -1,0 +1,238 @@
+"""Recover what is intact from a damaged .pln file (``pln info --salvage``).
+
+The streaming reader stops at the first error, as the spec requires. Salvage
+is the opposite trade: it reads the whole input into memory, walks the chunk
+framing, and when a chunk is damaged it reports the loss and resynchronizes
+on the next position where a known chunk type is followed by a length that
+fits and a matching CRC. Every object, plane block and part group that is
+intact and whose dependencies (its object, the planes it references) are
+intact is recovered; everything else is listed in ``losses``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+from dataclasses import dataclass, field
+from typing import BinaryIO
+
+import numpy as np
+
+from . import records, schema
+from .chunks import Limits, RawChunk, check_signature, is_ancillary, type_name, valid_type
+from .crc import crc32
+from ..errors import FormatError, PlnError
+from ..model import Header, ObjectRecord, PartGroup, Record, UnknownChunk
+
+_KNOWN = (schema.PHDR, schema.OBJT, schema.PLNS, schema.GRUP, schema.COLR, schema.INDX, schema.PEND)
+
+
+@dataclass(frozen=True)
+class Loss:
+    """Something salvage could not recover: an error code, what was lost, and where."""
+
+    code: str
+    message: str
+    offset: int | None
+
+
+@dataclass
+class Salvaged:
+    """The recovered records in file order and the list of losses."""
+
+    header: Header | None
+    records: list[Record] = field(default_factory=list)
+    losses: list[Loss] = field(default_factory=list)
+
+    @property
+    def part_groups(self) -> list[PartGroup]:
+        return [r for r in self.records if isinstance(r, PartGroup)]
+
+
+def salvage(source: str | os.PathLike | BinaryIO, *, limits: Limits | None = None,
+            max_bytes: int = 1 << 31) -> Salvaged:
+    """Recover every intact record of ``source`` (a path or binary stream) and report the rest."""
+    limits = limits or Limits()
+    if isinstance(source, (str, os.PathLike)):
+        with open(source, "rb") as f:
+            data = f.read(max_bytes + 1)
+    else:
+        data = source.read(max_bytes + 1)
+    if len(data) > max_bytes:
+        raise PlnError(f"salvage reads at most {max_bytes} bytes", code="LIMIT_EXCEEDED")
+    return _Salvager(data, limits).run()
+
+
+class _Salvager:
+    def __init__(self, data: bytes, limits: Limits) -> None:
+        self.data = data
+        self.limits = limits
+        self.out = Salvaged(header=None)
+        self.table = np.empty((0, 3))
+        self.lost_planes = np.zeros(0, dtype=bool)
+        self.objects = 0
+        self.object_ok: set[int] = set()  # indices of the objects recovered
+        self.groups = 0
+        self.group_refs: dict[int, int] = {}
+
+    def lose(self, code: str, message: str, offset: int | None) -> None:
+        self.out.losses.append(Loss(code, message, offset))
+
+    def _lose_run(self, code: str, what: str, first: int, end: int, offset: int) -> None:
+        """One loss for records ``first``..``end - 1`` missing: a damaged index can claim billions."""
+        if end - first == 1:
+            self.lose(code, f"{what} {first} lost", offset)
+        elif end > first:
+            self.lose(code, f"{what}s {first}..{end - 1} lost", offset)
+
+    def run(self) -> Salvaged:
+        sig = self.data[: len(schema.SIGNATURE)]
+        try:
+            check_signature(sig)
+            pos = len(schema.SIGNATURE)
+        except FormatError as exc:
+            self.lose(exc.code, exc.reason, 0)
+            pos = 0
+        while pos < len(self.data):
+            chunk = self._chunk_at(pos)
+            if chunk is None:
+                after = self._framed(pos)
+                if after is not None and (after == len(self.data) or self._chunk_at(after) is not None):
+                    # Framing is intact (the next chunk starts where the length says): only this one is lost.
+                    self.lose("CRC_MISMATCH", f"chunk {type_name(self.data[pos:pos + 4])} lost: CRC mismatch", pos)
+                    pos = after
+                    continue
+                nxt = self._resync(pos + 1)
+                self.lose("BAD_PAYLOAD",
+                          f"damaged bytes {pos}..{(nxt if nxt is not None else len(self.data)) - 1} skipped", pos)
+                if nxt is None:
+                    break
+                pos = nxt
+                continue
+            pos = chunk.offset + len(chunk.payload) + 12
+            if chunk.type == schema.PEND:
+                if pos != len(self.data):
+                    self.lose("TRAILING_DATA", f"{len(self.data) - pos} bytes after PEND ignored", pos)
+                return self._finish()
+            try:
+                self._take(chunk)
+            except PlnError as exc:
+                self.lose(exc.code, f"chunk {chunk.name} lost: {exc.reason}", chunk.offset)
+        self.lose("TRUNCATED", "the file ends without PEND", len(self.data))
+        return self._finish()
+
+    def _finish(self) -> Salvaged:
+        h = self.out.header
+        if h is not None and h.group_count is not None and self.groups < h.group_count:
+            self.lose("COUNT_MISMATCH", f"part groups {self.groups}..{h.group_count - 1} lost", None)
+        return self.out
+
+    def _framed(self, pos: int) -> int | None:
+        """Where the next chunk starts if a valid type and a length that fits stand at ``pos``."""
+        head = self.data[pos:pos + 8]
+        if len(head) < 8 or not valid_type(head[:4]):
+            return None
+        after = pos + 12 + int.from_bytes(head[4:], "little")
+        return after if after <= len(self.data) else None
+
+    def _chunk_at(self, pos: int) -> RawChunk | None:
+        head = self.data[pos:pos + 8]
+        if len(head) < 8 or not valid_type(head[:4]):
+            return None
+        length = int.from_bytes(head[4:], "little")
+        end = pos + 8 + length
+        if length > self.limits.max_chunk_length or end + 4 > len(self.data):
+            return None
+        payload = self.data[pos + 8:end]
+        if crc32(payload, crc32(head[:4])) != int.from_bytes(self.data[end:end + 4], "little"):
+            return None
+        return RawChunk(head[:4], payload, pos)
+
+    def _resync(self, start: int) -> int | None:
+        """The first offset >= start where a known chunk type begins an intact chunk."""
+        candidates = sorted(p for t in _KNOWN for p in _find_all(self.data, t, start))
+        for p in candidates:
+            if self._chunk_at(p) is not None:
+                return p
+        return None
+
+    def _take(self, chunk: RawChunk) -> None:
+        t = chunk.type
+        if t == schema.PHDR:
+            if self.out.header is None:
+                self.out.header, _ = records.decode_header(chunk.payload)
+            return
+        if self.out.header is None:
+            raise FormatError("no intact PHDR before this chunk", code="MISSING_HEADER")
+        if t == schema.OBJT:
+            self._take_object(chunk)
+        elif t == schema.PLNS:
+            self._take_planes(chunk)
+        elif t == schema.GRUP:
+            self._take_group(chunk)
+        elif t == schema.COLR:
+            self.out.records.append(records.decode_colours(chunk.payload, self.group_refs))
+        elif t == schema.INDX:
+            return
+        elif is_ancillary(t):
+            self.out.records.append(UnknownChunk(t, bytes(chunk.payload), chunk.offset))
+        else:
+            raise FormatError(f"unknown critical chunk {type_name(t)}", code="UNKNOWN_CRITICAL_CHUNK")
+
+    def _take_object(self, chunk: RawChunk) -> None:
+        index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
+        if index < self.objects or index > self.limits.max_objects:
+            raise FormatError(f"object index {index} out of sequence", code="BAD_OBJECT")
+        self._lose_run("BAD_OBJECT", "object", self.objects, index, chunk.offset)
+        self.object_ok.add(index)
+        self.objects = index + 1
+        obj = records.decode_object(chunk.payload, index, self.out.header.version[0])
+        if obj.parent is not None and obj.parent not in self.object_ok:
+            obj = ObjectRecord(obj.index, obj.name, None, obj.transform)
+            self.lose("BAD_OBJECT", f"object {index} ({obj.name!r}) lost its parent; kept as a root", chunk.offset)
+        self.out.records.append(obj)
+
+    def _take_planes(self, chunk: RawChunk) -> None:
+        first = records.leading_index(chunk.payload, self.out.header.version[0], 8)
+        have = len(self.lost_planes)
+        if first < have or first > self.limits.max_planes:
+            raise FormatError(f"plane block at {first} overlaps or is out of range", code="PLANE_INDEX_MISMATCH")
+        if first > have:
+            self.lose("PLANE_INDEX_MISMATCH", f"planes {have}..{first - 1} lost", chunk.offset)
+            self._grow(first, lost=True)
+        block = records.decode_planes(chunk.payload, self.out.header, first, self.limits)
+        self._grow(first + len(block.triplets), lost=False)
+        self.table[first:first + len(block.triplets)] = block.triplets
+        self.out.records.append(block)
+
+    def _grow(self, n: int, *, lost: bool) -> None:
+        extra = n - len(self.lost_planes)
+        self.table = np.concatenate([self.table, np.full((extra, 3), np.nan)])
+        self.lost_planes = np.concatenate([self.lost_planes, np.full(extra, lost)])
+
+    def _take_group(self, chunk: RawChunk) -> None:
+        index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
+        if index < self.groups:
+            raise FormatError(f"group index {index} out of sequence", code="GROUP_INDEX_MISMATCH")
+        self._lose_run("GROUP_INDEX_MISMATCH", "part group", self.groups, index, chunk.offset)
+        self.groups = index + 1
+        group, _ = records.decode_group(chunk.payload, expected_index=index, objects=self.objects,
+                                        planes=len(self.lost_planes), minor=self.out.header.version[1],
+                                        limits=self.limits, major=self.out.header.version[0])
+        if group.object not in self.object_ok:
+            raise FormatError(f"part group {index} belongs to lost object {group.object}",
+                              code="BAD_OBJECT_REFERENCE")
+        if self.lost_planes[group.refs].any():
+            raise FormatError(f"part group {index} references lost planes", code="BAD_PLANE_REFERENCE")
+        self.group_refs[index] = len(group.refs)
+        self.out.records.append(dataclasses.replace(group, planes=self.table[group.refs]))
+
+
+def _find_all(data: bytes, tag: bytes, start: int):
+    pos = data.find(tag, start)
+    while pos != -1:
+        yield pos
+        pos = data.find(tag, pos + 1)
+
+
+__all__ = ["Loss", "Salvaged", "salvage"]

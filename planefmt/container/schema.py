@@ -1,0 +1,274 @@
+"""Construct declarations of the .pln container, versions 1, 2 and 3, read beside spec/pln.md: each
+under the section it implements ("spec §x"), the fixed-size structures of versions 1 and 2 under its
+Appendix A.1.
+
+Only structure lives here. Bulk arrays (triplets, plane references, role
+bits, cell entries, tree tokens, colours, index entries) are ``Bytes`` fields
+that the payload modules view with ``numpy.frombuffer``. All integers and
+floats are little-endian.
+"""
+
+import construct as cs
+
+VARINT_MAX_BYTES = 10
+
+
+class Leb128(cs.Construct):
+    """A minimal unsigned LEB128 varint below ``2**bits`` (spec §2.2; varint32 of 3.0): the
+    heads of version 3 chunks. Parsing fails on a varint that is not minimal, is longer than 10
+    bytes, or is out of range, so that every byte string has at most one reading."""
+
+    def __init__(self, bits: int = 64):
+        super().__init__()
+        self.bits = bits
+
+    def _parse(self, stream, context, path):
+        value = shift = 0
+        for n in range(1, VARINT_MAX_BYTES + 1):
+            b = cs.stream_read(stream, 1, path)[0]
+            value |= (b & 0x7F) << shift
+            shift += 7
+            if b < 0x80:
+                if n > 1 and b == 0:
+                    raise cs.ValidationError("varint is not minimal", path=path)
+                if value >> self.bits:
+                    raise cs.ValidationError(f"varint is 2^{self.bits} or more", path=path)
+                return value
+        raise cs.ValidationError(f"varint is longer than {VARINT_MAX_BYTES} bytes", path=path)
+
+    def _build(self, obj, stream, context, path):
+        if not isinstance(obj, int) or obj < 0 or obj >> self.bits:
+            raise cs.IntegerError(f"{obj!r} is not an integer in 0..2^{self.bits} - 1", path=path)
+        out, rest = bytearray(), obj
+        while rest >= 0x80:
+            out.append(rest & 0x7F | 0x80)
+            rest >>= 7
+        out.append(rest)
+        cs.stream_write(stream, bytes(out), len(out), path)
+        return obj
+
+    def _sizeof(self, context, path):
+        raise cs.SizeofError("a varint has no fixed size", path=path)
+
+
+Varint = Leb128(64)
+Varint32 = Leb128(32)
+
+# spec §3 Signature
+SIGNATURE = b"\x89PLN\r\n\x1a\n"
+Signature = cs.Const(SIGNATURE)
+
+# spec §4 Chunk framing: type, length, payload, CRC-32 over type + payload
+ChunkHead = cs.Struct(
+    "type" / cs.Bytes(4),
+    "length" / cs.Int32ul,
+)
+ChunkTail = cs.Struct(
+    "crc" / cs.Int32ul,
+)
+MAX_CHUNK_LENGTH = 2**31 - 1
+
+# spec §4.2 Chunk types
+PHDR = b"PHDR"
+OBJT = b"OBJT"
+PLNS = b"PLNS"
+GRUP = b"GRUP"
+PEND = b"PEND"
+COLR = b"cOLR"
+INDX = b"iNDX"
+CRITICAL_TYPES = frozenset({PHDR, OBJT, PLNS, GRUP, PEND})
+
+# spec §5 Header (PHDR): the flags of every version; the 108-byte layout of versions 1 and 2 (Appendix A.1)
+FLAG_LOSSY = 0x0001
+FLAG_COUNTS_KNOWN = 0x0002
+FLAG_BBOX_KNOWN = 0x0004
+#: The first 9 bytes, the same in every version (version 3 has nothing else that is fixed).
+HEADER_FIXED = (
+    "version_major" / cs.Int8ul,
+    "version_minor" / cs.Int8ul,
+    "flags" / cs.Int16ul,
+    "coding" / cs.Int8ul,
+    "bits_nu" / cs.Int8ul,
+    "bits_phi" / cs.Int8ul,
+    "bits_h" / cs.Int8ul,
+    "units" / cs.Int8ul,
+)
+Header = cs.Struct(
+    *HEADER_FIXED,
+    "reserved" / cs.Bytes(3),
+    "h_min" / cs.Float64l,
+    "h_max" / cs.Float64l,
+    "bbox_min" / cs.Array(3, cs.Float64l),
+    "bbox_max" / cs.Array(3, cs.Float64l),
+    "tolerance" / cs.Float64l,
+    "error_bound" / cs.Float64l,
+    "plane_count" / cs.Int64ul,
+    "object_count" / cs.Int32ul,
+    "group_count" / cs.Int32ul,
+    "extra" / cs.GreedyBytes,
+)
+HEADER_SIZE = 108
+
+# spec §6 Compression of PLNS data and GRUP bodies
+COMPRESSION_NONE = 0
+COMPRESSION_ZLIB = 1
+
+# spec Appendix A.1 Plane table head (PLNS) of versions 1 and 2
+PlaneBlock = cs.Struct(
+    "first" / cs.Int64ul,
+    "count" / cs.Int32ul,
+    "compression" / cs.Int8ul,
+    "reserved" / cs.Bytes(3),
+    "raw_size" / cs.Int32ul,
+    "data" / cs.GreedyBytes,
+)
+PLANE_BLOCK_HEAD = 20
+
+# spec Appendix A.1 Objects (OBJT) of versions 1 and 2
+OBJECT_HAS_TRANSFORM = 0x01
+Object = cs.Struct(
+    "index" / cs.Int32ul,
+    "parent" / cs.Int32ul,
+    "flags" / cs.Int8ul,
+    "reserved" / cs.Bytes(1),
+    "name_length" / cs.Int16ul,
+    "name" / cs.Bytes(cs.this.name_length),
+    "transform" / cs.If(cs.this.flags & OBJECT_HAS_TRANSFORM, cs.Bytes(128)),
+    "extra" / cs.GreedyBytes,
+)
+
+# spec Appendix A.1 Part groups (GRUP) of versions 1 and 2: a fixed head, then a possibly deflated body
+GroupHead = cs.Struct(
+    "index" / cs.Int32ul,
+    "object" / cs.Int32ul,
+    "kind" / cs.Int8ul,
+    "compression" / cs.Int8ul,
+    "reserved" / cs.Bytes(2),
+    "raw_size" / cs.Int32ul,
+    "body" / cs.GreedyBytes,
+)
+GROUP_HEAD = 16
+
+# spec Appendix A.1 Group body of version 1, common to every kind (known or not)
+GroupBody = cs.Struct(
+    "ref_count" / cs.Int32ul,
+    "refs" / cs.Bytes(cs.this.ref_count * 4),
+    "roles" / cs.Bytes((cs.this.ref_count + 7) // 8),
+    "extra" / cs.GreedyBytes,
+)
+
+# spec Appendix A.1 Kind-specific part of CELLS groups of version 1
+CellsExtra = cs.Struct(
+    "cell_count" / cs.Int32ul,
+    "sizes" / cs.Bytes(cs.this.cell_count * 4),
+    "entries" / cs.GreedyBytes,
+)
+
+# spec Appendix A.1 Kind-specific part of BSP groups of version 1
+TreeExtra = cs.Struct(
+    "token_count" / cs.Int32ul,
+    "tokens" / cs.Bytes(cs.this.token_count * 4),
+)
+
+# spec §2.2 Varints: unsigned LEB128, minimal, at most 10 bytes (VARINT_MAX_BYTES above). Bulk
+# varints (plane streams, references, tokens) are decoded with numpy in planefmt.container.varint, never per
+# element with construct; Leb128 serves the few in version 3 chunk heads.
+
+# spec §7.4 Predicted plane data (coding 3): three streams of `count` varints (nu, phi, h),
+# each below 2^33, taking 3 to 15 bytes a plane
+PREDICTED_LIMIT = 2**33
+PREDICTED_BYTES = (3, 15)
+
+# spec §9.2 Group body of version 2: ref_count, reference differences, role bits, kind data,
+# all varints but the role bits; tree tokens 0 IN, 1 OUT, j + 2 split on local reference j
+COMPACT_IN, COMPACT_OUT, COMPACT_SPLIT = 0, 1, 2
+# spec §9.9 Sealed group (kind 5) data: vertex count, three local references per vertex,
+# triangle count, then per triangle the face reference's difference from the previous one and its
+# three vertices; all varints (read in bulk by varint.decode)
+SEALED_VERTEX_FIELDS, SEALED_TRIANGLE_FIELDS = 3, 4
+
+# spec §9.10 Shell group (kind 6) data: corner, triangle and free-triangle counts (varints),
+# one flag bit per corner, three references per named corner (varints), and where a corner is
+# explicit this grid, then zigzag varint coordinate steps, face reference steps and corner codes
+ShellGrid = cs.Struct(
+    "origin" / cs.Array(3, cs.Float64l),
+    "step" / cs.Float64l,
+)
+SHELL_GRID_BYTES = 32
+
+# spec §10.1 Face colours (cOLR, ancillary)
+Colours = cs.Struct(
+    "group" / cs.Int32ul,
+    "count" / cs.Int32ul,
+    "rgba" / cs.Bytes(cs.this.count * 4),
+)
+
+# spec §10.2 Index (iNDX, ancillary); entries viewed as INDEX_ENTRY_DTYPE
+Index = cs.Struct(
+    "count" / cs.Int32ul,
+    "entries" / cs.Bytes(cs.this.count * 16),
+)
+INDEX_ENTRY_DTYPE = [("offset", "<u8"), ("type", "S4"), ("ordinal", "<u4")]
+
+# spec §4.4 End (PEND); versions 1 and 2 always 8 bytes (Appendix A.1)
+End = cs.Struct(
+    "index_offset" / cs.Int64ul,
+)
+END_SIZE = 8
+
+# spec §5 Header of version 3: a fixed part, then only the fields the coding and flags call for
+HEADER3_FIXED = 9
+CODINGS_WITH_RANGE = (2, 3)
+Header3 = cs.Struct(
+    *HEADER_FIXED,
+    "h_range" / cs.If(lambda this: this.coding in CODINGS_WITH_RANGE, cs.Array(2, cs.Float64l)),
+    "bbox" / cs.If(cs.this.flags & FLAG_BBOX_KNOWN, cs.Array(6, cs.Float32l)),
+    "tolerance" / cs.Float32l,
+    "error_bound" / cs.Float32l,
+    "counts" / cs.If(cs.this.flags & FLAG_COUNTS_KNOWN, cs.Struct(
+        "plane_count" / Varint,
+        "object_count" / Varint32,
+        "group_count" / Varint32,
+    )),
+    "extra" / cs.GreedyBytes,
+)
+
+# spec §7.1 Plane table head of version 3
+PlaneBlock3 = cs.Struct(
+    "first" / Varint,
+    "count" / Varint32,
+    "compression" / cs.Int8ul,
+    "raw_size" / Varint32,
+    "data_offset" / cs.Tell,
+    "data" / cs.GreedyBytes,
+)
+#: Longest head of PlaneBlock3 (varints of 10, 5 and 5 bytes and the compression byte).
+PLANE_BLOCK3_MAX_HEAD = 21
+
+# spec §8 Objects of version 3: parent 0 for a root, else the parent's index + 1
+OBJECT3_MAX_NAME = 0xFFFF
+Object3Head = cs.Struct(
+    "index" / Varint32,
+    "parent" / Varint32,
+    "flags" / cs.Int8ul,
+    "name_length" / Varint,
+)
+Object3 = cs.Struct(
+    "head" / Object3Head,
+    "name" / cs.Bytes(cs.this.head.name_length),
+    "transform" / cs.If(cs.this.head.flags & OBJECT_HAS_TRANSFORM, cs.Bytes(128)),
+    "extra" / cs.GreedyBytes,
+)
+
+# spec §9.1 Part group head of version 3; the body is that of spec §9.2
+GroupHead3 = cs.Struct(
+    "index" / Varint32,
+    "object" / Varint32,
+    "kind" / cs.Int8ul,
+    "compression" / cs.Int8ul,
+    "raw_size" / Varint32,
+    "body" / cs.GreedyBytes,
+)
+
+# spec §4.4 End of version 3: empty (no index) or the index offset
+END3_SIZES = (0, END_SIZE)

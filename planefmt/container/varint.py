@@ -1,0 +1,75 @@
+"""Unsigned LEB128 varints and zigzag signs (spec §2.2), vectorized over whole arrays.
+
+A value is written 7 bits at a time, least significant group first, each byte
+but the last with its high bit set; values are below 2^64 and minimal (no
+final 0x00 byte after a continued one). Zigzag maps signed integers to
+unsigned ones, 0, -1, 1, -2, ... to 0, 1, 2, 3, ...
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import FormatError
+from .schema import VARINT_MAX_BYTES as MAX_BYTES
+
+
+def encode(values: np.ndarray) -> bytes:
+    """The varints of ``values`` (non-negative integers below 2^64), concatenated."""
+    v = np.asarray(values).astype(np.uint64, copy=False).reshape(-1)
+    if len(v) == 0:
+        return b""
+    lengths = np.ones(len(v), dtype=np.int64)
+    for k in range(1, MAX_BYTES):
+        lengths += v >= np.uint64(1) << np.uint64(7 * k)
+    owner = np.repeat(np.arange(len(v)), lengths)
+    start = np.cumsum(lengths) - lengths
+    group = np.arange(len(owner)) - start[owner]
+    out = ((v[owner] >> (np.uint64(7) * group.astype(np.uint64))) & np.uint64(0x7F)).astype(np.uint8)
+    out[group < lengths[owner] - 1] |= 0x80
+    return out.tobytes()
+
+
+def decode(data: bytes | memoryview | np.ndarray, count: int, what: str) -> tuple[np.ndarray, int]:
+    """The first ``count`` varints of ``data`` as uint64, and the bytes they took.
+
+    ``FormatError`` (``BAD_PAYLOAD``) if the data ends inside them, a varint is
+    longer than 10 bytes, exceeds 2^64 - 1 or is not minimal; ``what`` names
+    the field in the message.
+    """
+    b = np.frombuffer(data, dtype=np.uint8) if not isinstance(data, np.ndarray) else data
+    if count == 0:
+        return np.zeros(0, dtype=np.uint64), 0
+    # Valid varints end within count * MAX_BYTES bytes: a few header fields need not scan a whole
+    # payload. Fewer ends there is an error, told apart by a scan of the rest.
+    ends = np.flatnonzero(b[:count * MAX_BYTES] < 0x80)
+    if len(ends) < count:
+        ends = np.flatnonzero(b < 0x80)
+    if len(ends) < count:
+        raise FormatError(f"{what}: the data ends inside varint {len(ends)} of {count}", code="BAD_PAYLOAD")
+    ends = ends[:count]
+    used = int(ends[-1]) + 1
+    starts = np.r_[0, ends[:-1] + 1]
+    lengths = ends - starts + 1
+    if lengths.max() > MAX_BYTES:
+        raise FormatError(f"{what}: a varint is longer than {MAX_BYTES} bytes", code="BAD_PAYLOAD")
+    if ((lengths > 1) & (b[ends] == 0)).any():
+        raise FormatError(f"{what}: a varint is not minimal (ends in a zero group)", code="BAD_PAYLOAD")
+    if ((lengths == MAX_BYTES) & (b[ends] > 1)).any():
+        raise FormatError(f"{what}: a varint exceeds 2^64 - 1", code="BAD_PAYLOAD")
+    owner = np.repeat(np.arange(count), lengths)
+    group = np.arange(used) - starts[owner]
+    parts = (b[:used].astype(np.uint64) & np.uint64(0x7F)) << (np.uint64(7) * group.astype(np.uint64))
+    return np.bitwise_or.reduceat(parts, starts), used
+
+
+def zigzag(values: np.ndarray) -> np.ndarray:
+    """Signed int64 to uint64: 0, -1, 1, -2 ... -> 0, 1, 2, 3 ..."""
+    v = np.asarray(values, dtype=np.int64)
+    return ((v << 1) ^ (v >> 63)).astype(np.uint64)
+
+
+def unzigzag(values: np.ndarray) -> np.ndarray:
+    """The inverse of :func:`zigzag`, as int64."""
+    u = np.asarray(values, dtype=np.uint64)
+    return ((u >> np.uint64(1)).astype(np.int64)) ^ (-(u & np.uint64(1)).astype(np.int64))
