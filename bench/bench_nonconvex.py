@@ -33,8 +33,8 @@ import warnings
 
 import numpy as np
 
-from planefmt.groups.bodies import (MeshGroups, decode_groups, encode_groups, euler_characteristic, is_closed_manifold,
-                             signed_volume)
+from planefmt.groups.bodies import MeshGroups, decode_groups, encode_groups
+from planefmt.geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import GroupKind
 from planefmt.geometry.polygonize import weld

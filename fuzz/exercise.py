@@ -6,10 +6,9 @@ from __future__ import annotations
 import io
 
 import planefmt
-from planefmt import codec  # noqa: F401  (registers the geometry checks of validate)
 from planefmt.container.chunks import Limits
 from planefmt.container.salvage import salvage
-from planefmt.container.validate import validate
+from planefmt.codec import validate
 
 #: Small caps: a fuzzer input is at most a few kB, so anything bigger is hostile.
 LIMITS = Limits(max_chunk_length=1 << 20, max_raw_size=1 << 22, max_planes=1 << 16,

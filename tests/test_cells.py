@@ -12,11 +12,11 @@ import pytest
 import planefmt
 from planefmt.groups import cells
 from planefmt import codec
-from planefmt.groups.bodies import euler_characteristic, is_closed_manifold, signed_volume
+from planefmt.geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.errors import GeometryError
 from planefmt.model import GroupKind, Header
 from planefmt.geometry.planes import to_triplets
-from planefmt.container.validate import validate
+from planefmt.codec import validate
 
 #: The L of conformance/cases_valid.py: [0,2]x[0,1]x[0,1] u [0,1]x[0,2]x[0,1], its eight face planes
 #: and the cut x = y (reference 8); cell entries 2 j + s.

@@ -10,8 +10,9 @@ import pytest
 import trimesh
 
 from planefmt import codec
+from planefmt.codec import choosing, encoding, preparing
 from planefmt import open as planefmt_open
-from planefmt.groups.bodies import euler_characteristic, is_closed_manifold, signed_volume
+from planefmt.geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.errors import GeometryError
 from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import GroupKind
@@ -163,8 +164,8 @@ def test_polygon_fit_above_the_tolerance_fails_before_any_body_is_encoded(monkey
     def uncapped(vertices, faces, *, tolerance, max_drift=None):
         return polygonize_module.polygonize(vertices, faces, tolerance=tolerance)
 
-    monkeypatch.setattr(codec, "_encode_body", no_body)
-    monkeypatch.setattr(codec, "polygonize", uncapped)
+    monkeypatch.setattr(preparing, "_encode_body", no_body)
+    monkeypatch.setattr(preparing, "polygonize", uncapped)
     fit = _fit(polygonize_module.polygonize(v, f, tolerance=5e-7)) / float(np.linalg.norm(np.ptp(v, axis=0)))
     with pytest.raises(GeometryError, match=f"fitted polygon planes are {fit:.3g} of the diagonal") as err:
         codec.encode_mesh(v, f, tolerance=1e-6, scheme="paper")
@@ -180,7 +181,7 @@ def test_a_lossy_tolerance_lets_the_volume_move_with_the_surface():
     enc = codec.encode_mesh(v, f, tolerance=1e-4, scheme="paper")
     assert enc.coding == codec.Coding.QUANTIZED
     assert enc.error_bound <= 1e-4
-    obj = codec._prepare(v, f, np.eye(4), 1e-4, None, None)
+    obj = preparing._prepare(v, f, np.eye(4), 1e-4, None, None)
     change = abs(signed_volume(enc.mesh.vertices, enc.mesh.faces) - obj.volume)
     diag = float(np.linalg.norm(np.ptp(v, axis=0)))
     assert 1e-6 * abs(obj.volume) < change <= 2 * obj.area * 1e-4 * diag
@@ -193,7 +194,7 @@ def test_a_closed_source_that_decodes_open_is_refused_with_the_reason():
     """The message of TOLERANCE_NOT_MET says what the float64 planes, the finest coding, failed: here
     a closed cube whose decoding lost one triangle (three edges left on one triangle)."""
     v, f = shapes.cube()
-    obj = codec._prepare(v, f, np.eye(4), TOL, None, None)
+    obj = preparing._prepare(v, f, np.eye(4), TOL, None, None)
     enc = codec.encode_mesh(v, f, tolerance=TOL, scheme="paper")
     holed = codec.Mesh(enc.mesh.vertices, enc.mesh.faces[1:])
     assert codec.structure_problem(holed, obj) == "a closed source decodes open (3 edges not on exactly two triangles)"
@@ -230,18 +231,18 @@ def test_float_planes_uncertified_within_the_budget_are_verified_again_with_a_la
     verification with less reports the bound uncertified, the lower bound far under the tolerance.
     The float64 planes get ``_FINAL_PIECES`` and pass; without that second budget the encode fails."""
     v, f = shapes.ring()
-    real = codec._verify
+    real = choosing._verify
     asked = []
 
     def needs_3m(mesh, obj, target, pieces):
         asked.append(pieces)
         return real(mesh, obj, target, pieces) if pieces >= 3_000_000 else (math.inf, 0.0)
 
-    monkeypatch.setattr(codec, "_verify", needs_3m)
+    monkeypatch.setattr(choosing, "_verify", needs_3m)
     enc = codec.encode_mesh(v, f, tolerance=TOL, scheme="paper")
     assert enc.coding == codec.Coding.FLOAT64 and 0 <= enc.error_bound <= TOL
-    assert asked[-2:] == [codec.DEFAULT_MAX_PIECES, codec._FINAL_PIECES]
-    monkeypatch.setattr(codec, "_FINAL_PIECES", 2_000_000)
+    assert asked[-2:] == [codec.DEFAULT_MAX_PIECES, choosing._FINAL_PIECES]
+    monkeypatch.setattr(choosing, "_FINAL_PIECES", 2_000_000)
     with pytest.raises(GeometryError) as err:
         codec.encode_mesh(v, f, tolerance=TOL, scheme="paper")
     assert err.value.code == "TOLERANCE_NOT_MET"
@@ -270,14 +271,14 @@ def test_the_smaller_file_of_the_two_splitter_sets_is_written(monkeypatch):
     base, one, other = solids.STRATEGIES[0], (8, 3.0, True), (64, 30.0, True)
     alone = {}
     for s in (one, other):
-        monkeypatch.setattr(codec, "STRATEGIES", (base, s))
-        monkeypatch.setattr(codec, "FLAT_STRATEGIES", (base, s))
+        monkeypatch.setattr(encoding, "STRATEGIES", (base, s))
+        monkeypatch.setattr(encoding, "FLAT_STRATEGIES", (base, s))
         alone[s] = _scene_bytes(v, f, 1e-3)
     assert len(alone[one]) != len(alone[other])
     smaller = min(alone.values(), key=len)
     for first, second in ((one, other), (other, one)):
-        monkeypatch.setattr(codec, "STRATEGIES", (base, first))
-        monkeypatch.setattr(codec, "FLAT_STRATEGIES", (base, second))
+        monkeypatch.setattr(encoding, "STRATEGIES", (base, first))
+        monkeypatch.setattr(encoding, "FLAT_STRATEGIES", (base, second))
         assert _scene_bytes(v, f, 1e-3) == smaller
 
 
@@ -290,15 +291,15 @@ def test_encode_mesh_keeps_the_smaller_of_the_two_splitter_sets(monkeypatch):
     base, one, other = solids.STRATEGIES[0], (8, 3.0, True), (64, 30.0, True)
     alone, size = {}, {}
     for s in (one, other):
-        monkeypatch.setattr(codec, "STRATEGIES", (base, s))
-        monkeypatch.setattr(codec, "FLAT_STRATEGIES", (base, s))
+        monkeypatch.setattr(encoding, "STRATEGIES", (base, s))
+        monkeypatch.setattr(encoding, "FLAT_STRATEGIES", (base, s))
         alone[s] = codec.encode_mesh(v, f, tolerance=1e-3, scheme="paper")
         size[s] = len(_scene_bytes(v, f, 1e-3, compact=False))
     assert size[one] != size[other] and _trees(alone[one]) != _trees(alone[other])
     smaller = alone[min(size, key=size.get)]
     for first, second in ((one, other), (other, one)):
-        monkeypatch.setattr(codec, "STRATEGIES", (base, first))
-        monkeypatch.setattr(codec, "FLAT_STRATEGIES", (base, second))
+        monkeypatch.setattr(encoding, "STRATEGIES", (base, first))
+        monkeypatch.setattr(encoding, "FLAT_STRATEGIES", (base, second))
         e = codec.encode_mesh(v, f, tolerance=1e-3, scheme="paper")
         assert e.quantization == smaller.quantization
         np.testing.assert_array_equal(e.triplets, smaller.triplets)
@@ -315,13 +316,13 @@ def test_the_second_splitter_set_is_tried_only_where_widths_can_shrink(monkeypat
     from planefmt.groups import solids
 
     calls = []
-    prepare = codec._prepare
+    prepare = encoding._prepare
 
     def spy(*args, **kwargs):
         calls.append(kwargs.get("splitters", args[8] if len(args) > 8 else solids.STRATEGIES))
         return prepare(*args, **kwargs)
 
-    monkeypatch.setattr(codec, "_prepare", spy)
+    monkeypatch.setattr(encoding, "_prepare", spy)
     v, f = shapes.random_boxes(1)
     for tolerance, flat in ((1e-6, 0), (1e-3, 1)):
         calls.clear()
@@ -338,7 +339,7 @@ def test_a_lossy_tolerance_lets_an_open_surface_s_rim_move():
     rim moved by the allowed distance adds: a unit square grown by d on every side gains 4d + 4d²."""
     v = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]])
     f = np.array([[0, 1, 2], [0, 2, 3]])
-    obj = codec._prepare(v, f, np.eye(4), TOL, None, None)
+    obj = preparing._prepare(v, f, np.eye(4), TOL, None, None)
     assert obj.rim == pytest.approx(4.0) and obj.area == pytest.approx(1.0)
     d = 1e-4
     grown = codec.Mesh((v - 0.5) * (1 + 2 * d) + 0.5, f)

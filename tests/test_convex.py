@@ -15,13 +15,12 @@ from scipy.spatial import ConvexHull, cKDTree
 import planefmt
 from planefmt.geometry import planes
 from planefmt.container import quantize
-from planefmt.codec import decode_mesh, decode_scene, encode_mesh, encode_scene
+from planefmt.codec import decode_mesh, decode_scene, encode_mesh, encode_scene, validate
 from planefmt.errors import GeometryError
 from planefmt.geometry.halfspace import decode_convex, intersect
 from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import Coding, GroupKind, Mesh, Node, Scene, Units
 from planefmt.geometry.polygonize import weld
-from planefmt.container.validate import validate
 
 import corpus
 from corpus import CORPUS

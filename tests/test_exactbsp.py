@@ -9,8 +9,8 @@ import pytest
 
 import planefmt.groups.bodies as bodies
 import planefmt.groups.solids as solids
-from planefmt.groups.bodies import (encode_groups, euler_characteristic, is_closed_manifold, plane_positions,
-                             reflex_planes, signed_volume)
+from planefmt.groups.bodies import encode_groups, plane_positions, reflex_planes
+from planefmt.geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.groups.bsptree import parse
 from planefmt.groups.exactbsp import exact_boundary, split_pinches
 from planefmt.model import GroupKind

@@ -19,7 +19,7 @@ import planefmt
 from planefmt.groups.bodies import Group, decode_groups, encode_open
 from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import Coding, GroupKind, Header
-from planefmt.groups.patches import PlaneTable
+from planefmt.geometry.planetable import PlaneTable
 from planefmt.geometry.planes import to_triplets
 from planefmt.geometry.polygonize import polygonize
 

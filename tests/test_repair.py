@@ -9,7 +9,8 @@ import pytest
 import trimesh
 
 from planefmt import codec
-from planefmt.groups.bodies import is_closed_manifold, signed_volume
+from planefmt.codec import preparing
+from planefmt.geometry.topology import is_closed_manifold, signed_volume
 from planefmt.model import GroupKind
 from planefmt.geometry.repair import merge_close_vertices, split_t_junctions
 
@@ -86,7 +87,7 @@ def test_twin_vertices_of_a_corpus_part_make_it_a_solid():
     """octagonal_pocket.STL has vertices 6e-17 from their twins (27 pairs): mended, it is one BSP
     group (it took 5,209 patch references before), and held to a closed solid's structure."""
     mesh = trimesh.load(CORPUS / "cad" / "octagonal_pocket.stl", process=False)
-    obj = codec._prepare(np.asarray(mesh.vertices), np.asarray(mesh.faces), np.eye(4), 1e-6, None, None,
+    obj = preparing._prepare(np.asarray(mesh.vertices), np.asarray(mesh.faces), np.eye(4), 1e-6, None, None,
                          scheme="paper")
     assert [g.kind for g in obj.groups] == [GroupKind.BSP]
     assert obj.closed and 0 < obj.mended < 1e-15

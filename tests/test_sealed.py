@@ -9,11 +9,12 @@ import pytest
 
 import planefmt
 from planefmt import codec
-from planefmt.groups.bodies import decode_groups, encode_groups, euler_characteristic, is_closed_manifold, signed_volume
+from planefmt.groups.bodies import decode_groups, encode_groups
+from planefmt.geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.errors import GeometryError, PlnError
 from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import GroupKind, Header, Mesh, Node, Scene
-from planefmt.groups.patches import PlaneTable
+from planefmt.geometry.planetable import PlaneTable
 from planefmt.geometry.planes import from_triplets, to_triplets
 from planefmt.groups.sealed import corners, decode_sealed, encode_sealed
 
@@ -160,7 +161,7 @@ def test_kind_5_of_an_older_version_is_opaque_and_skipped() -> None:
             (g,) = list(r.part_groups())
             assert g.extra == b"\x07anything" and g.facets is None
             assert finding in [code for code, _ in r.findings]
-        codes = [f.code for f in planefmt.container.validate.validate(io.BytesIO(buf.getvalue()))]
+        codes = [f.code for f in planefmt.codec.validate(io.BytesIO(buf.getvalue()))]
         assert sorted(codes) == ["NEWER_MINOR_VERSION", finding]
 
 

@@ -64,7 +64,7 @@ def _box() -> tuple[np.ndarray, np.ndarray]:
 
 
 def test_a_flat_slit_is_closed_facing_the_surface_around_it() -> None:
-    from planefmt.groups.bodies import is_closed_manifold, signed_volume
+    from planefmt.geometry.topology import is_closed_manifold, signed_volume
     from planefmt.groups.seams import fill_slits
 
     v, f = _box()

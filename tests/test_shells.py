@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import planefmt
 from planefmt import codec
-from planefmt.groups.bodies import euler_characteristic, is_closed_manifold, signed_volume
+from planefmt.geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.errors import GeometryError
 from planefmt.model import GroupKind, Mesh, Node, Scene, Shell
 from planefmt.groups.shells import decode_shell

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from planefmt.groups import bodies, solids
-from planefmt.groups.bodies import (decode_groups, encode_groups, euler_characteristic, is_closed_manifold,
-                             signed_volume)
+from planefmt.groups.bodies import decode_groups, encode_groups
+from planefmt.geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from planefmt.groups.bsptree import parse
 from planefmt.errors import GeometryError
 from planefmt.geometry.hausdorff import closest_distance, hausdorff

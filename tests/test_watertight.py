@@ -13,7 +13,7 @@ import pytest
 
 from planefmt.groups import bodies
 from planefmt import codec
-from planefmt.groups.bodies import is_closed_manifold
+from planefmt.geometry.topology import is_closed_manifold
 from planefmt.errors import GeometryError, PlnWarning
 from planefmt.geometry.hausdorff import hausdorff
 from planefmt_converters import pln as pln_format

@@ -16,6 +16,9 @@ from planefmt import errors
 from planefmt.container import reader, salvage
 from planefmt.model import GroupKind, ObjectRecord, PartGroup, PlaneBlock
 
+#: Kinds this version of planefmt names; a newer minor version's kind is shown by number.
+KINDS = frozenset(int(k) for k in GroupKind)
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("info", help="describe a .pln file", description=__doc__)
@@ -48,7 +51,7 @@ class _Summary:
         elif isinstance(rec, PlaneBlock):
             self.planes += len(rec.triplets)
         elif isinstance(rec, PartGroup):
-            kind = GroupKind(rec.kind).name.lower() if rec.kind in GroupKind._value2member_map_ \
+            kind = GroupKind(rec.kind).name.lower() if rec.kind in KINDS \
                 else f"kind{rec.kind}"
             self.kinds[kind] += 1
             self.planes_by_kind[kind] += len(rec.refs)

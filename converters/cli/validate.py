@@ -6,7 +6,8 @@ import argparse
 import json
 import sys
 
-from planefmt.container.validate import has_errors, validate
+from planefmt.codec import validate
+from planefmt.container.validate import has_errors
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

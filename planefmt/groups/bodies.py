@@ -37,12 +37,14 @@ from ..errors import GeometryError
 from ..geometry.halfspace import intersect
 from ..geometry.hausdorff import hausdorff
 from ..model import GroupKind
-from .patches import Patch, PatchReport, PlaneTable, decode_patch_faces, encode_patches
+from .patches import Patch, PatchReport, decode_patch_faces, encode_patches
 from ..geometry.planes import from_triplets, to_triplets
+from ..geometry.planetable import PlaneTable
 from ..geometry.polygonize import COPLANAR_TOLERANCE, edge_adjacency, polygonize
 from ..geometry.repair import merge_close_vertices
 from .sealed import decode_sealed, encode_sealed
 from .solids import STRATEGIES, Partition, Splitter, TreeSurface, decode_tree, partition
+from ..geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from ..geometry.trianglegeom import TriangleIndex
 
 #: Splitter seeds tried before a closed body falls back to patches.
@@ -114,25 +116,6 @@ def body_labels(faces: np.ndarray, vertex_count: int) -> np.ndarray:
     a, b = a[opposite], b[opposite]
     g = coo_matrix((np.ones(len(a), dtype=np.int8), (a // 3, b // 3)), shape=(m, m))
     return connected_components(g, directed=False)[1]
-
-
-def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
-    """Volume enclosed by triangles (model units cubed; positive for outward, closed surfaces)."""
-    p = vertices[faces]
-    c = p.reshape(-1, 3).mean(axis=0)
-    p = p - c
-    return float(np.einsum("ij,ij->i", p[:, 0], np.cross(p[:, 1], p[:, 2])).sum()) / 6.0
-
-
-def euler_characteristic(faces: np.ndarray) -> int:
-    """``V - E + F`` of a triangle mesh (vertices counted as used)."""
-    e = np.sort(np.column_stack([faces.reshape(-1), faces[:, [1, 2, 0]].reshape(-1)]), axis=1)
-    return len(np.unique(faces)) - len(np.unique(e, axis=0)) + len(faces)
-
-
-def is_closed_manifold(faces: np.ndarray, vertex_count: int) -> bool:
-    """Every edge shared by exactly two faces running opposite ways."""
-    return bool(len(faces)) and edge_adjacency(faces, vertex_count).closed
 
 
 def plane_positions(vertices: np.ndarray, faces: np.ndarray, face_plane: np.ndarray, omega: np.ndarray,

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import GeometryError
-from .patches import PlaneTable
+from ..geometry.planetable import PlaneTable
 
 #: Smallest ``|det|`` of three unit normals the encoder names a vertex by (below it, a rounding
 #: of the planes by 1e-16 moves the vertex by more than 1e-10 of the model's size).

@@ -1,0 +1,448 @@
+"""Choosing the coding of the plane triplets.
+
+The paper's scheme (:func:`_choose`): each candidate coding's planes go through
+:func:`planefmt.container.quantize.roundtrip`, are decoded and verified against the tolerance
+(:mod:`planefmt.codec.verifying`); a first-order prediction of the vertex displacement skips widths
+that cannot pass, the narrowest passing quantized width is found by bisection, then float32, then
+float64. The shell scheme (:func:`_choose_shells`) picks by file size among codings whose shells
+are correct by construction.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .. import progress
+from ..container import quantize
+from ..errors import GeometryError, PlnError, PlnWarning
+from ..geometry.hausdorff import DEFAULT_MAX_PIECES
+from ..geometry.planes import from_triplets, transform_points
+from ..geometry.trianglegeom import TriangleIndex
+from ..geometry.topology import euler_characteristic, signed_volume
+from ..groups.shells import FREE, ShellPlan, decode_shell, encode_shell, plan_shell
+from ..model import Coding, GroupKind, Mesh, Quantization
+from .decoding import EXACT, _concatenate, plane_error
+from .preparing import (LOSSLESS_TOLERANCE, STRUCTURE_TOLERANCE, _Object, _area, _diagonal, _fit_error, _one_shell,
+                      structure_problem)
+from .strategies import GroupSpec
+from .verifying import _Incidences, _decode_object, _measure, _peak, _verify
+
+
+#: Quantized widths tried for nu and phi.
+MIN_BITS, MAX_BITS = 2, 32
+
+#: Refinement budget of a pass/fail verification of a quantized coding in the bisection: a
+#: candidate whose bound cannot be certified within it counts as failed. Float64, the last, gets
+#: ``DEFAULT_MAX_PIECES`` (plate_holes.STL: certified with 2M pieces in 24 s, not with 200k).
+#: plate_holes.STL at 2e-5, 20-bit planes (true error under 2.6e-6): uncertified with 100k
+#: pieces in 11.6 s, certified with 400k in 13.8 s; the bisection then stops at 21 bits, not 26.
+_VERIFY_PIECES = 500_000
+
+#: If no width passes, the narrowest one left undecided by the budget with a certified lower bound
+#: at most this fraction of the target is verified again with ``_RETRY_PIECES``.
+#: 1002_tray_bottom.STL at tolerance 1e-4, 22-bit angles (lower bound 7e-7): uncertified with 100k
+#: pieces, certified with 2M, both in about 16 s.
+_LIKELY_PASS = 0.25
+
+_RETRY_PIECES = DEFAULT_MAX_PIECES
+
+#: Budget of a second verification of float planes, the last coding, when the first ran out of
+#: pieces with the lower bound at most ``_LIKELY_PASS`` of the target. ADIS16480.STL at 1e-6 (one
+#: BSP group; the source's sliver triangles run along decoded outlines 1e-9 inside their own, and
+#: are refined along them until the Lipschitz bound holds): lower bound 5.6e-8, certified with
+#: 2.9 million pieces in about 200 s, not with 2 million.
+_FINAL_PIECES = 8_000_000
+
+
+@dataclass(frozen=True)
+class _Choice:
+    coding: Coding
+    quantization: Quantization | None
+    meshes: list[Mesh]  # decoded, local coordinates
+    bbox: np.ndarray  # world
+    diagonal: float
+    error_bound: float  # fraction of diagonal
+    lossy: bool
+
+
+def _candidates(coding: Coding | None, bits: int | tuple[int, int, int] | None, table: np.ndarray,
+                radius: float) -> list[tuple[Coding, Quantization | None]]:
+    """Codings to try, cheapest first; forced ones alone."""
+    h_min, h_max = float(table[:, 2].min()), float(table[:, 2].max())
+    if bits is not None:
+        widths = (bits,) * 3 if isinstance(bits, int) else tuple(bits)
+        if len(widths) != 3 or not all(isinstance(b, (int, np.integer)) for b in widths):
+            raise PlnError(f"bits must be an int or three ints, not {bits!r}", code="UNSUPPORTED_CODING")
+        q = Quantization(*(int(b) for b in widths), h_min, h_max)
+        quantize.check_quantization(q)
+        return [(Coding.QUANTIZED, q)]
+    if coding is not None and not Coding(coding).quantized:
+        return [(Coding(coding), None)]
+    out: list[tuple[Coding, Quantization | None]] = []
+    span = h_max - h_min
+    for b in range(MIN_BITS, MAX_BITS + 1):
+        # nu and phi get equal widths (equal steps on the equator). h's half step is kept at half
+        # the displacement an angle half step causes at the far end of the model: the angles
+        # cost two widths, h one, so this split minimises bits for a given error.
+        target = 0.5 * Quantization(b, b, 1, 0.0, 0.0).steps()[0] * max(radius, 1e-300)
+        bits_h = 1 if span <= 0 else min(MAX_BITS, max(1, math.ceil(math.log2(span / target + 1))))
+        out.append((Coding.QUANTIZED, Quantization(b, b, bits_h, h_min, h_max)))
+    if coding is None:
+        out += [(Coding.FLOAT32, None), (Coding.FLOAT64, None)]
+    return out
+
+
+def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
+            bits: int | tuple[int, int, int] | None, watertight: bool = True) -> _Choice:
+    """Pick the cheapest coding whose decoded surfaces meet the tolerance; verify it.
+
+    Without ``watertight``, closed objects whose float64 decoding fails a
+    solid's checks (closed, Euler characteristic, volume) are held to an
+    open surface's checks when nothing else passes.
+    """
+    forced = coding is not None or bits is not None
+    simplified = any(o.simplified for o in objects)
+    offsets = np.cumsum([0] + [len(o.triplets) for o in objects])
+    spans = list(zip(offsets[:-1], offsets[1:]))
+    table = np.concatenate([o.triplets for o in objects])
+    diag_src = _diagonal(np.concatenate([transform_points(o.vertices, o.world) for o in objects]))
+    scale = [float(np.linalg.norm(o.world[:3, :3], 2)) for o in objects]
+    radius = max(float(np.linalg.norm(o.vertices, axis=1).max()) for o in objects)
+
+    base = [_decode_object(o.triplets, o, EXACT) for o in objects]
+    base_meshes = [_concatenate(d) for d in base]
+    if simplified:
+        # The tolerance bounds what the coding adds to the simplified planes' own error.
+        base_err = [_measure(m, o, tolerance * diag_src) for m, o in zip(base_meshes, objects)]
+        extra = max(base_err)
+    else:
+        # Lossless: what float64 planes lose is the polygon fit; measured with the chosen coding.
+        base_err = [(o.fit + o.mended) * s for o, s in zip(objects, scale)]
+        extra = 0.0
+
+    def limit(meshes: list[Mesh]) -> tuple[float, np.ndarray]:
+        world = np.concatenate([transform_points(m.vertices, o.world) for m, o in zip(meshes, objects)])
+        return extra + tolerance * min(diag_src, _diagonal(world)), world
+
+    allowance, _ = limit(base_meshes)
+    if not forced and max(base_err) > allowance:
+        raise _fit_error(max(base_err) / diag_src, tolerance)
+
+    # Lossless keeps the volume to STRUCTURE_TOLERANCE; a lossy tolerance lets it move with the surface.
+    band = tolerance if tolerance > LOSSLESS_TOLERANCE else 0.0
+
+    # Lower bounds (fractions of the bound) of quantized candidates whose verification ran out of pieces.
+    undecided: dict[int, float] = {}
+    # Why the float64 planes, the finest coding, failed: the reason given when nothing passes.
+    why: list[str] = []
+
+    def named(k: int) -> str:
+        return f"object {k}" + (f" ({objects[k].name!r})" if objects[k].name else "")
+
+    tried = [0]
+
+    def attempt(cod: Coding, q: Quantization | None, pieces: int | None = None, key: int = -1) -> _Choice | None:
+        """The choice of this coding if its decoding keeps the structure and verifies; None if not."""
+        # How many codings a search verifies is not known beforehand: a count, not a fraction.
+        progress.report("verifying codings", tried[0])
+        tried[0] += 1
+        if cod == Coding.FLOAT64:
+            decoded = base
+        else:
+            rt = quantize.roundtrip(table, cod, q)
+            try:
+                error = plane_error(cod, q, tolerance, diag_src)
+                decoded = [_decode_object(rt[a:b], o, error) for (a, b), o in zip(spans, objects)]
+            except GeometryError:
+                # Coarse planes can lose a face or the solid altogether: not this coding.
+                if forced:
+                    raise
+                return None
+        meshes = base_meshes if decoded is base else [_concatenate(d) for d in decoded]
+        if not forced and not simplified:
+            problems = [(k, structure_problem(m, o, band * diag_src / sc))
+                        for k, (m, o, sc) in enumerate(zip(meshes, objects, scale))]
+            problems = [(k, p) for k, p in problems if p is not None]
+            if problems:
+                if cod == Coding.FLOAT64:
+                    why[:] = [f"{named(k)}: {p}" for k, p in problems[:1]]
+                return None
+        bound, world = limit(meshes)
+        if forced:
+            errors = [_measure(m, o, bound) for m, o in zip(meshes, objects)]
+        else:
+            # Float64 is the finest coding, with no next one to certify sooner: it gets the full budget.
+            if pieces is None:
+                pieces = DEFAULT_MAX_PIECES if cod == Coding.FLOAT64 else _VERIFY_PIECES
+            checks = [_verify(m, o, bound, pieces, d) for m, o, d in zip(meshes, objects, decoded)]
+            errors = [c[0] for c in checks]
+            if max(errors) > bound:
+                if all(c[1] <= bound for c in checks):
+                    undecided[key] = max(c[1] for c in checks) / bound
+                if cod == Coding.FLOAT64:
+                    k = max(range(len(checks)), key=lambda i: checks[i][1])
+                    far = checks[k][1] > bound
+                    why[:] = [f"{named(k)}: " + (f"decodes {checks[k][1] / diag_src:.2g} of the diagonal from its "
+                                                 f"source" if far else
+                                                 f"its distance is not certified within {pieces:,} pieces")]
+                return None
+        diagonal = _diagonal(world)
+        error_bound = max(errors) / diagonal
+        return _Choice(coding=cod, quantization=q, meshes=meshes,
+                       bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,
+                       error_bound=error_bound, lossy=simplified or error_bound > tolerance)
+
+    candidates = _candidates(coding, bits, table, radius)
+    if forced:
+        return attempt(*candidates[0])
+    # Half the room for the prediction: the certified bound the verification needs comes quickly
+    # only with a margin between the true error and the target.
+    room = 0.5 * (allowance - extra)
+    own = [0.0 if simplified else e for e in base_err]
+    widths = [q for cod, q in candidates if cod == Coding.QUANTIZED]
+
+    incidences = [_Incidences.of(d, o) for d, o in zip(base, objects)]
+
+    def moved(q: Quantization) -> list[tuple[np.ndarray, float]]:
+        rt = quantize.roundtrip(table, Coding.QUANTIZED, q)
+        return [inc.moved(rt[a:b]) for inc, (a, b) in zip(incidences, spans)]
+
+    admitted = [i for i, q in enumerate(widths)
+                if max(e + s * max(_peak(np.linalg.norm(m - inc.vertices, axis=1)), floor)
+                       for e, s, (m, floor), inc in zip(own, scale, moved(q), incidences)) <= room]
+    # Where nearly parallel planes meet, a vertex slides far along the surface for a small turn of
+    # the planes; its distance from the surface is what the error sees (plate_holes.STL at 2e-5:
+    # 6.7e-4 of the diagonal moved, 2.5e-5 off the surface, 17 bits). Narrower widths than the
+    # displacement admits are admitted by that distance, down to the first that fails it.
+    indexes = None
+    for i in range(min(admitted, default=len(widths)) - 1, -1, -1):
+        indexes = indexes or [TriangleIndex(o.vertices, o.faces) for o in objects]
+        if max(e + s * max(_peak(ix.query(m)[0]), floor)
+               for e, s, (m, floor), ix in zip(own, scale, moved(widths[i]), indexes)) > room:
+            break
+        admitted.append(i)
+    quantized = [widths[i] for i in sorted(set(admitted))]
+    # The narrowest widths that pass, by bisection: finer planes decode closer to the source (the
+    # search assumes so; whatever it picks is verified like any other).
+    lo, hi, best = 0, len(quantized) - 1, None
+    failed: set[Quantization] = set()
+    while lo <= hi:
+        mid = (lo + hi) // 2
+        found = attempt(Coding.QUANTIZED, quantized[mid], key=mid)
+        if found is None:
+            failed.add(quantized[mid])
+            lo = mid + 1
+        else:
+            best, hi = found, mid - 1
+    if best is not None:
+        # The screen's margin and the bisection are conservative: narrower widths than the best
+        # found often verify as well (plate_holes.STL at 3.7e-5: 17 bits where the bisection stops at
+        # 19, 3,053 -> 2,706 bytes). Each is tried in turn down to the first that fails; one the
+        # bisection saw fail is not tried again.
+        i = widths.index(best.quantization)
+        while i > 0 and widths[i - 1] not in failed:
+            found = attempt(Coding.QUANTIZED, widths[i - 1])
+            if found is None:
+                break
+            best, i = found, i - 1
+        return best
+    # A width whose bound merely ran out of pieces, its lower bound far under the target, gets one
+    # more try with a larger budget before the float codings (1002_tray_bottom.STL at 1e-4).
+    # Not when lossless: there the float64 fallback is as small as it gets near the finest widths,
+    # and the retry cost 1002_tray_bottom.STL 302 s instead of 108 s.
+    likely = sorted(k for k, ratio in undecided.items() if ratio <= _LIKELY_PASS)
+    if likely and tolerance > LOSSLESS_TOLERANCE:
+        found = attempt(Coding.QUANTIZED, quantized[likely[0]], pieces=_RETRY_PIECES)
+        if found is not None:
+            return found
+    for cod, q in candidates:
+        if cod in (Coding.FLOAT32, Coding.FLOAT64):
+            found = attempt(cod, q, key=-2 if cod == Coding.FLOAT64 else -1)
+            if found is None and cod == Coding.FLOAT64 and undecided.get(-2, 1.0) <= _LIKELY_PASS:
+                found = attempt(cod, q, pieces=_FINAL_PIECES)
+            if found is not None:
+                return found
+    # Closed objects whose float64 decoding is no solid: what watertight=False would store open.
+    opened = [k for k, (m, o) in enumerate(zip(base_meshes, objects))
+              if o.closed and structure_problem(m, o) is not None]
+    if not watertight:
+        # Only when the solid cannot be had: coarser widths that open a solid that finer ones keep
+        # closed would otherwise win.
+        if opened:
+            found = _choose([replace(o, closed=False) if k in opened else o for k, o in enumerate(objects)],
+                            tolerance, coding, bits)
+            for k in opened:
+                warnings.warn(f"{named(k)} is closed but no coding keeps it a closed solid: stored as an open surface "
+                              f"(distance and area kept, not watertight), marked lossy", PlnWarning, stacklevel=4)
+            return replace(found, lossy=True)
+    hint = ""
+    if watertight and opened:
+        hint = "; watertight=False (pln convert --allow-open) would store it as an open surface"
+    raise GeometryError(f"no triplet coding meets the tolerance {tolerance:g} (two-sided Hausdorff distance; "
+                        f"closed sources must also decode closed, with their volume and Euler characteristic, "
+                        f"open ones with their area, within {STRUCTURE_TOLERANCE:g})"
+                        + (f"; with float64 planes {why[0]}" if why else "") + hint, code="TOLERANCE_NOT_MET")
+
+
+#: Plane widths (nu and phi; h follows) a shell scheme's coding is chosen among, by file size: every
+#: width is correct (a corner its planes cannot name within the budget is explicit), so the choice
+#: is one of bytes only.
+SHELL_WIDTHS = tuple(range(8, 33, 2))
+
+#: Times the corner budget is quartered when a decoding misses a lossless volume or area.
+_SHELL_TIGHTENINGS = 6
+
+
+def _shell_plans(obj: _Object) -> dict[int, ShellPlan]:
+    """The :class:`ShellPlan` of each shell group of ``obj`` (by position), from its exact planes."""
+    plans = {}
+    for k, g in enumerate(obj.groups):
+        if g.kind != GroupKind.SHELL:
+            continue
+        fp = obj.face_plane[g.faces]
+        # References are in the object's first-use order, not sorted.
+        by_value = np.argsort(g.refs)
+        at = np.minimum(np.searchsorted(g.refs[by_value], fp), len(g.refs) - 1)
+        local = np.where((fp >= 0) & (g.refs[by_value][at] == fp), by_value[at], FREE)
+        omega, _ = from_triplets(obj.triplets[g.refs])
+        plans[k] = plan_shell(obj.vertices, obj.faces[g.faces], local, omega)
+    return plans
+
+
+def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
+                budget: float) -> tuple[_Object, float]:
+    """``obj`` with its shell groups' corners named or made explicit for the coded ``planes`` (the
+    object's triplets as a reader decodes them) within ``budget`` (model units), and the largest
+    displacement of a decoded corner from its source vertex (model units), measured on the decoding."""
+    groups = list(obj.groups)
+    moved = 0.0
+    for k, plan in plans.items():
+        g = groups[k]
+        omega, h = from_triplets(planes[g.refs])
+        shell = encode_shell(plan, omega, h, budget)
+        decoded, _ = decode_shell(omega, h, shell)
+        moved = max(moved, float(np.linalg.norm(decoded - plan.points, axis=1).max(initial=0.0)))
+        groups[k] = replace(g, shell=shell)
+    return replace(obj, groups=tuple(groups)), moved
+
+
+def _planeless(obj: _Object) -> _Object | None:
+    """``obj`` with its shells stripped of their planes, or None where that changes it (it has
+    convex groups, or colours that ride on planes)."""
+    if any(g.kind != GroupKind.SHELL for g in obj.groups):
+        return None
+    if obj.face_colours is not None and (obj.face_colours != obj.face_colours[0]).any():
+        return None
+    # A group keeps one reference (spec §9: m >= 1), which its free triangles take their colour from.
+    return replace(obj, groups=tuple(replace(g, refs=g.refs[:1], bounding=g.bounding[:1]) for g in obj.groups))
+
+
+def _as_shells(obj: _Object) -> _Object:
+    """``obj`` with its convex groups turned into (one) shell over their planes."""
+    groups = [GroupSpec(GroupKind.SHELL, g.refs, np.zeros(len(g.refs), dtype=bool), faces=g.faces)
+              if g.kind == GroupKind.CONVEX else g for g in obj.groups]
+    return replace(obj, groups=tuple(_one_shell(groups)))
+
+
+def _convex_part(obj: _Object) -> _Object:
+    """The object reduced to its convex groups and their source faces, for the paper's verification."""
+    groups = tuple(g for g in obj.groups if g.kind == GroupKind.CONVEX)
+    faces = obj.faces[np.concatenate([g.faces for g in groups])]
+    planes = np.unique(np.concatenate([g.refs for g in groups]))
+    omega, h = from_triplets(obj.triplets[planes])
+    used = np.unique(faces)
+    fit = float(np.abs(omega @ obj.vertices[used].T - h[:, None]).min(axis=0).max(initial=0.0))
+    return replace(obj, faces=faces, groups=groups, fit=fit, closed=True,
+                   volume=signed_volume(obj.vertices, faces), euler=euler_characteristic(faces),
+                   area=_area(obj.vertices, faces), rim=0.0)
+
+
+def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | None,
+                   bits: int | tuple[int, int, int] | None,
+                   size: Callable[[list[_Object], _Choice], int]) -> tuple[list[_Object], _Choice]:
+    """The objects of the shell scheme with their shells built, and the coding, smallest file first.
+
+    Convex groups are verified as the paper's scheme verifies them (certified
+    Hausdorff distance on their bodies alone), which fixes the coding; with
+    none, every width of :data:`SHELL_WIDTHS` is tried and the smallest file
+    kept. A shell's error holds by construction: decoded and source
+    triangles correspond one to one, so the two-sided Hausdorff distance is at
+    most the largest corner displacement, measured on the decoding. A
+    decoding that misses a lossless volume or area (the Euler characteristic
+    and closedness are the source's by construction) is made again with a
+    quarter of the budget.
+    """
+    forced = coding is not None or bits is not None
+    scale = [float(np.linalg.norm(o.world[:3, :3], 2)) for o in objects]
+    diag_src = _diagonal(np.concatenate([transform_points(o.vertices, o.world) for o in objects]))
+    convex_error = 0.0
+    candidates: list[tuple[Coding, Quantization | None]] = []
+    if any(g.kind == GroupKind.CONVEX for o in objects for g in o.groups):
+        parts = [_convex_part(o) for o in objects if any(g.kind == GroupKind.CONVEX for g in o.groups)]
+        try:
+            c = _choose(parts, tolerance, coding, bits)
+        except GeometryError:
+            if forced:
+                raise
+            objects = [_as_shells(o) for o in objects]
+        else:
+            candidates = [(c.coding, c.quantization)]
+            convex_error = c.error_bound * c.diagonal
+    table = np.concatenate([o.triplets for o in objects])
+    if not candidates:
+        radius = max(float(np.linalg.norm(o.vertices, axis=1).max()) for o in objects)
+        every = _candidates(coding, bits, table, radius)
+        candidates = every if forced else \
+            [(cod, q) for cod, q in every if cod == Coding.QUANTIZED and q.bits_nu in SHELL_WIDTHS]
+    band = tolerance if tolerance > LOSSLESS_TOLERANCE else 0.0
+    best: tuple[int, list[_Object], _Choice] | None = None
+    why = ""
+    offsets = np.cumsum([0] + [len(o.triplets) for o in objects])
+    # Planes that name no corner within the budget only cost bytes: the same shells without them
+    # (every corner explicit, every triangle free) compete too, where colours do not ride on them.
+    freed = [_planeless(o) for o in objects]
+    variants = [(objects, candidates)]
+    if not forced and all(f is not None for f in freed):
+        variants.append((freed, candidates[:1]))
+    trials = [(objs, cod, q) for objs, cands in variants for cod, q in cands]
+    plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants}
+    for k, (objs, cod, q) in enumerate(trials):
+        progress.report("choosing a coding", k, len(trials))
+        rt = quantize.roundtrip(table, cod, q)
+        budget = tolerance * diag_src / (1.0 + 2.0 * tolerance)
+        for _ in range(_SHELL_TIGHTENINGS):
+            built, moved = zip(*(_shells_for(o, pl, rt[a:b], budget / sc)
+                                 for o, pl, a, b, sc in zip(objs, plans[id(objs)], offsets[:-1], offsets[1:], scale)))
+            error = plane_error(cod, q, tolerance, diag_src)
+            meshes = [_concatenate(_decode_object(rt[a:b], o, error))
+                      for o, a, b in zip(built, offsets[:-1], offsets[1:])]
+            # Shells alone keep the source's topology by construction: only volume or area can move.
+            problems = [structure_problem(m, o, band * diag_src / sc,
+                                          topology=any(g.kind != GroupKind.SHELL for g in o.groups))
+                        for m, o, sc in zip(meshes, built, scale)]
+            problems = [p for p in problems if p is not None]
+            if not problems:
+                break
+            why = problems[0]
+            budget /= 4.0
+        else:
+            continue
+        world = np.concatenate([transform_points(m.vertices, o.world) for m, o in zip(meshes, built)])
+        diagonal = _diagonal(world)
+        err = max([convex_error] + [d * sc for d, sc in zip(moved, scale)])
+        bound = err / diagonal if diagonal > 0 else 0.0
+        choice = _Choice(coding=cod, quantization=q, meshes=meshes,
+                         bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,
+                         error_bound=bound, lossy=any(o.simplified for o in objects) or bound > tolerance)
+        n = size(list(built), choice)
+        if best is None or n < best[0]:
+            best = (n, list(built), choice)
+    if best is None:
+        raise GeometryError(f"no coding keeps the source's structure with corners within the tolerance "
+                            f"{tolerance:g}: {why}", code="TOLERANCE_NOT_MET")
+    return best[1], best[2]

@@ -1,0 +1,266 @@
+"""A mesh prepared for coding (:class:`_Object`): welded, mended where the paper's scheme finds a
+cracked solid, polygonized, simplified by the lossy options, and split into bodies, each encoded
+by the scheme's strategies (:func:`_prepare`); and the structure a decoding must keep
+(:func:`structure_kept`: a closed source decodes closed with its volume, an open one keeps its area).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, replace
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from ..errors import GeometryError, PlnError
+from ..geometry.planes import to_triplets, transform_points
+from ..geometry.polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize, weld
+from ..geometry.repair import mend_cracks
+from ..geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
+from ..geometry.planetable import PlaneTable
+from ..groups.solids import STRATEGIES, Splitter
+from ..model import GroupKind, Mesh, Node
+from .lossy import drop_planes, merge_planes
+from .strategies import BODY_STRATEGIES, Body, GroupSpec, SCHEMES
+
+
+#: Closing the cracks of open meshes (:func:`planefmt.geometry.repair.mend_cracks`), as fractions of the tolerance: vertices
+#: closer than ``_MERGE`` of it (capped at the lossless tolerance) are one point written with two
+#: roundings (angle_block.STL: 46 pairs 6e-17 apart, so the solid looked open and took 24x the
+#: bytes as patches); T-vertices within ``_SPLIT`` of it of an edge split that edge.
+_MERGE = 1e-3
+
+_SPLIT = 0.1
+
+
+@dataclass(frozen=True)
+class _Object:
+    """A mesh prepared for coding: its planes, groups and source surface (local coordinates)."""
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    triplets: np.ndarray
+    groups: tuple[GroupSpec, ...]
+    world: np.ndarray
+    simplified: bool
+    fit: float  # model units
+    mended: float  # model units: how far closing cracks moved the source (planefmt.geometry.repair)
+    closed: bool  # the source is a closed 2-manifold: its decoding must be one, of the same volume
+    volume: float  # model units cubed, local coordinates
+    euler: int
+    area: float  # model units squared, local coordinates
+    rim: float  # model units, local coordinates: length of the edges on one face only (open sources)
+    plane_colours: np.ndarray | None  # (planes, 4) uint8 RGBA: a source face's colour on each plane
+    name: str = ""  # the scene node's, for messages
+    face_plane: np.ndarray | None = None  # (faces,) each face's plane in ``triplets``, -1 for none (shell scheme)
+    face_colours: np.ndarray | None = None  # (faces, 4) uint8 RGBA of ``faces`` (shell scheme)
+
+
+def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, tolerance: float,
+             delta: float | None, tau: float | None, face_colours: np.ndarray | None = None,
+             diagonal: float | None = None, splitters: tuple[Splitter, ...] = STRATEGIES,
+             scheme: str = "shell") -> _Object:
+    """One node's mesh polygonized and encoded body by body.
+
+    ``diagonal``: the diagonal of the whole source in world units (0 for a
+    single mesh: its own), when the polygon fit is to be held to the
+    tolerance before the bodies are encoded (an unforced lossless encode);
+    :func:`_choose` checks the same against a diagonal no larger, so this
+    only fails sooner. ``splitters``: the BSP splitter strategies of solids.
+    ``scheme``: ``shell`` (convex groups and one shell group of the other
+    bodies) or ``paper`` (convex groups, trees, sealed groups and patches).
+    """
+    if scheme not in SCHEMES:
+        raise PlnError(f"unknown scheme {scheme!r}: one of {', '.join(SCHEMES)}", code="UNSUPPORTED_CODING")
+    if not (math.isfinite(tolerance) and tolerance > 0):
+        raise GeometryError(f"tolerance must be a positive fraction of the diagonal, not {tolerance}")
+    for name, value in (("delta", delta), ("tau", tau)):
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise GeometryError(f"{name} must be a non-negative number, not {value}")
+    vertices, faces = weld(vertices, faces)
+    if scheme == "shell":
+        # A triangle with a repeated corner has no area: leaving it out changes no surface.
+        keep = (faces[:, 0] != faces[:, 1]) & (faces[:, 1] != faces[:, 2]) & (faces[:, 0] != faces[:, 2])
+        if not keep.any():
+            raise GeometryError(f"none of the {len(faces)} triangles has three distinct corners",
+                                code="DEGENERATE_GEOMETRY")
+        faces = faces[keep]
+        if face_colours is not None:
+            face_colours = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[keep]
+    closed = is_closed_manifold(faces, len(vertices))
+    mended = 0.0
+    if not closed and scheme == "paper":
+        # An open mesh may be a solid with cracks: closed, it can be stored as one. What it must
+        # keep is still an open mesh's (its area): a decoding as patches remains acceptable.
+        size = _diagonal(vertices)
+        repaired = mend_cracks(vertices, faces, merge=_MERGE * min(tolerance, LOSSLESS_TOLERANCE) * size,
+                               split=_SPLIT * tolerance * size)
+        vertices, faces, mended = repaired.vertices, repaired.faces, repaired.offset
+        if face_colours is not None:
+            face_colours = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[repaired.origin]
+    # A fit within the tolerance: King_geom.usd's gently curved quads fitted 1.42e-6 of the
+    # diagonal from their vertices with the default drift bound, over the lossless 1e-6.
+    poly = polygonize(vertices, faces, tolerance=min(COPLANAR_TOLERANCE, tolerance / 2), max_drift=tolerance)
+    omega, h, face_plane = poly.omega, poly.h, poly.face_plane
+    if tau:
+        omega, h, face_plane = merge_planes(poly, tau)
+    if delta:
+        face_plane = drop_planes(poly, face_plane, delta)
+    simplified = bool(tau) or bool(delta)
+    if diagonal is not None and not simplified and scheme == "paper":
+        world_diag = max(diagonal, _diagonal(transform_points(poly.vertices, world)))
+        fit = poly.max_distance * float(np.linalg.norm(world[:3, :3], 2))
+        if fit > tolerance * world_diag * (1.0 + 1e-9):
+            raise _fit_error(fit / world_diag, tolerance)
+    body_of_face = _bodies(poly)
+    by_body = np.argsort(body_of_face, kind="stable")
+    groups: list[GroupSpec] = []
+    table = PlaneTable(omega, h)
+    colours = None if face_colours is None else np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)
+    # A shell's free triangles take its last reference's colour: an object of several colours keeps
+    # the plane of every face (each plane takes its faces' colour).
+    every = colours is not None and bool((colours != colours[0]).any())
+    for b, faces_b in enumerate(np.split(by_body, np.cumsum(np.bincount(body_of_face))[:-1])):
+        body = Body(poly, faces_b, face_plane[faces_b], omega, h, tolerance, table, simplified, splitters, every)
+        groups.extend(_encode_body(body, b, SCHEMES[scheme]))
+    groups = _one_shell(groups)
+    omega, h = (np.array(a) for a in table.arrays())
+    # Keep only the planes the groups use, numbered in first-use order.
+    used = np.concatenate([g.refs for g in groups])
+    _, first = np.unique(used, return_index=True)
+    order = used[np.sort(first)]
+    index = np.full(len(h), -1, dtype=np.int64)
+    index[order] = np.arange(len(order))
+    groups = [replace(g, refs=index[g.refs]) for g in groups]
+    plane_colours = None
+    if face_colours is not None:
+        # Each plane takes the colour of the first source face on it; bounding planes have none.
+        plane_colours = np.zeros((len(order), 4), dtype=np.uint8)
+        on = np.flatnonzero(face_plane >= 0)[::-1]
+        mapped = index[face_plane[on]]
+        plane_colours[mapped[mapped >= 0]] = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[on][mapped >= 0]
+    kept = np.where(face_plane >= 0, index[np.maximum(face_plane, 0)], -1)
+    return _Object(vertices=poly.vertices, faces=poly.faces, triplets=to_triplets(omega[order], h[order]),
+                   groups=tuple(groups), world=world, simplified=simplified, fit=poly.max_distance,
+                   mended=mended, closed=closed or _mended_solid(poly, groups),
+                   volume=signed_volume(poly.vertices, poly.faces), euler=euler_characteristic(poly.faces),
+                   area=_area(poly.vertices, poly.faces), rim=_rim(poly.vertices, poly.faces),
+                   plane_colours=plane_colours, face_plane=kept, face_colours=colours)
+
+
+#: Kinds whose groups are closed surfaces when their source body is.
+SOLID_KINDS = frozenset({GroupKind.CONVEX, GroupKind.CELLS, GroupKind.BSP, GroupKind.SEALED})
+
+
+def _mended_solid(poly: Polygons, groups: Sequence[GroupSpec]) -> bool:
+    """Whether a mended mesh came out closed and every body of it a solid: its decoding is then held
+    to a closed source's structure (closed, Euler characteristic, volume), whose volume test lets
+    a lossy tolerance move the surface, rather than to an open one's area (octagonal_pocket.stl
+    fell back to float64 planes at every tolerance: quantized cells changed its area by more than
+    1e-6)."""
+    return all(int(g.kind) in SOLID_KINDS for g in groups) and \
+        is_closed_manifold(poly.faces, len(poly.vertices))
+
+
+def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
+    p = vertices[faces]
+    return float(np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()) / 2.0
+
+
+def _rim(vertices: np.ndarray, faces: np.ndarray) -> float:
+    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    unique, count = np.unique(edges, axis=0, return_counts=True)
+    rim = unique[count == 1]
+    return float(np.linalg.norm(vertices[rim[:, 0]] - vertices[rim[:, 1]], axis=1).sum())
+
+
+#: Relative volume (closed sources) or area (open ones) a lossless decoding must keep.
+STRUCTURE_TOLERANCE = 1e-6
+
+#: Tolerances up to this (fraction of the diagonal) are lossless: volume and area within STRUCTURE_TOLERANCE.
+LOSSLESS_TOLERANCE = 1e-6
+
+
+def structure_kept(mesh: Mesh, obj: _Object, distance: float = 0.0) -> bool:
+    """Whether a decoding keeps the source's structure: a closed source decodes closed, with its
+    Euler characteristic and volume; an open one keeps its area (both within
+    :data:`STRUCTURE_TOLERANCE`, relative).
+
+    ``distance`` (model units, local coordinates): the Hausdorff distance a lossy tolerance allows.
+    Two closed surfaces that far apart enclose volumes differing by at most the volume of the
+    band of that half-width around the source, about ``2 * area * distance``; the volume test
+    allows that much where it is more than the relative one. An open surface's rim may move that
+    far: the area test allows ``rim * distance`` likewise (RoughnessTest.usdz's open spheres at
+    1e-4: patches cut 1.6e-6 of their area, for an allowance of 1.5e-3).
+    """
+    return structure_problem(mesh, obj, distance) is None
+
+
+def structure_problem(mesh: Mesh, obj: _Object, distance: float = 0.0, topology: bool = True) -> str | None:
+    """How a decoding fails :func:`structure_kept`, in words; None if it keeps the structure. Without
+    ``topology``, closedness and the Euler characteristic are taken as kept (they are by construction)."""
+    if obj.closed:
+        if topology and not is_closed_manifold(mesh.faces, len(mesh.vertices)):
+            sides = np.sort(np.column_stack([mesh.faces.reshape(-1), mesh.faces[:, [1, 2, 0]].reshape(-1)]), axis=1)
+            _, count = np.unique(sides, axis=0, return_counts=True)
+            return f"a closed source decodes open ({int((count != 2).sum())} edges not on exactly two triangles)"
+        if topology and euler_characteristic(mesh.faces) != obj.euler:
+            return f"Euler characteristic {euler_characteristic(mesh.faces)}, the source's {obj.euler}"
+        allowed = max(STRUCTURE_TOLERANCE * abs(obj.volume), 2.0 * obj.area * distance)
+        off = abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume)
+        return None if off <= allowed else f"volume off by {off / abs(obj.volume):.2g} (relative)"
+    off = abs(_area(mesh.vertices, mesh.faces) - obj.area)
+    allowed = max(STRUCTURE_TOLERANCE * obj.area, obj.rim * distance)
+    return None if off <= allowed else f"area off by {off / obj.area:.2g} (relative)"
+
+
+def _bodies(poly: Polygons) -> np.ndarray:
+    """Body label per face: edge-connected components."""
+    edges = edge_adjacency(poly.faces, len(poly.vertices))
+    m = len(poly.faces)
+    graph = coo_matrix((np.ones(len(edges.a), dtype=np.int8), (edges.a // 3, edges.b // 3)), shape=(m, m))
+    return connected_components(graph, directed=False)[1]
+
+
+def _one_shell(groups: list[GroupSpec]) -> list[GroupSpec]:
+    """``groups`` with their shells joined into one, last: bodies that touch at a corner share it."""
+    shells = [g for g in groups if g.kind == GroupKind.SHELL]
+    if not shells:
+        return groups
+    refs = np.unique(np.concatenate([g.refs for g in shells]))
+    joined = GroupSpec(GroupKind.SHELL, refs, np.zeros(len(refs), dtype=bool),
+                       faces=np.concatenate([g.faces for g in shells]))
+    return [g for g in groups if g.kind != GroupKind.SHELL] + [joined]
+
+
+def _encode_body(body: Body, index: int,
+                 strategies: Sequence[tuple[str, Callable[[Body], list[GroupSpec] | None]]] = BODY_STRATEGIES
+                 ) -> list[GroupSpec]:
+    if strategies is BODY_STRATEGIES and not (body.face_plane >= 0).any():
+        raise GeometryError(f"body {index}: every plane was dropped (delta too large)")
+    for _, strategy in strategies:
+        groups = strategy(body)
+        if groups is not None:
+            return groups
+    raise GeometryError(f"body {index} ({len(body.faces)} triangles): no strategy encodes it")
+
+
+def _fit_error(relative: float, tolerance: float) -> GeometryError:
+    return GeometryError(f"the fitted polygon planes are {relative:.3g} of the diagonal from the source vertices, "
+                         f"above the tolerance {tolerance:g}", code="TOLERANCE_NOT_MET")
+
+
+def _diagonal(points: np.ndarray) -> float:
+    return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))) if len(points) else 0.0
+
+
+def _world_transforms(nodes: Sequence[Node]) -> list[np.ndarray]:
+    worlds: list[np.ndarray] = []
+    for i, n in enumerate(nodes):
+        local = np.eye(4) if n.transform is None else np.asarray(n.transform, dtype=np.float64)
+        if n.parent is not None and not 0 <= n.parent < i:
+            raise GeometryError(f"node {i} ({n.name!r}): parent {n.parent} does not precede it")
+        worlds.append(local if n.parent is None else worlds[n.parent] @ local)
+    return worlds
