@@ -27,6 +27,7 @@ import numpy as np
 from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
+from .assemble import at_float32
 from .atomic import atomic_paths, write_bytes
 from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
@@ -138,10 +139,9 @@ def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:
     if scene.units not in (Units.METRE, Units.UNSPECIFIED):
         notes.append(f"units ({scene.units.name.lower()}; glTF is in metres, "
                      "coordinates written unscaled)")
-    if any(node.mesh is not None and (node.mesh.vertices.astype(np.float32)
-                                      != node.mesh.vertices).any() for node in scene.nodes):
-        notes.append("coordinates rounded to float32")
     try:
+        scene, rounding = at_float32(scene)
+        notes += rounding
         tm_scene, names = to_trimesh_scene(scene)
 
         def restore_names(tree: dict[str, Any]) -> None:
