@@ -131,7 +131,8 @@ def at_float32(scene: Scene) -> tuple[Scene, list[str]]:
         flat = 0
         if welded is not None:
             faces, colours, flat = _flip_flat(welded.vertices, welded.faces, welded.face_colours)
-            welded = build_mesh(welded.vertices, faces, colours, what=node.name)[0] if len(faces) else None
+            if flat:
+                welded = build_mesh(welded.vertices, faces, colours, what=node.name)[0] if len(faces) else None
         if welded is None:
             raise ConversionError(f"{node.name + ': ' if node.name else ''}no triangle keeps an area at float32 "
                                   "precision")
