@@ -64,6 +64,8 @@ FLOAT32_ROUNDING = 1e-7
 #: Budget of each certified measure (the decoding against the source, a re-indexed output against the decoding).
 DECODING_PIECES = 8_000_000
 PLN = [sys.executable, "-m", "planefmt_converters.cli"]
+#: The CLI's exit code after Ctrl-C or SIGTERM.
+INTERRUPTED = 130
 
 
 def corpus_files() -> list[str]:
@@ -114,6 +116,9 @@ def _reencodes(path: str, work: str) -> str | None:
         code = main(["convert", "--force", path, os.path.join(work, "re.pln")])
     if code == 0:
         return None
+    if code == INTERRUPTED:
+        # The CLI turns Ctrl-C and SIGTERM into this exit code: they stop the run, not fail a file.
+        raise KeyboardInterrupt
     return f"re-encoding exits {code}: " + ((err.getvalue().strip().splitlines() or [""])[-1][:140])
 
 
