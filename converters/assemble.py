@@ -153,37 +153,45 @@ def _flip_flat(vertices: np.ndarray, faces: np.ndarray,
     together with its neighbour (b, a, d) across that edge, which is split at
     c into (b, c, d) and (c, a, d): the surface is the same point set and a
     closed mesh stays closed (dropping the flat triangle alone would leave a
-    T-junction at c). A flat triangle whose edge has no single neighbour, or
-    whose neighbour is flat or taken by another one, is only dropped.
+    T-junction at c). Flat triangles that share a neighbour are flipped in
+    turn, one per pass. One whose edge has no single neighbour, or whose
+    neighbour is flat too or would split into flat halves, is only dropped.
     """
-    flat = np.flatnonzero(~with_area(vertices, faces))
-    if not len(flat):
-        return faces, colours, 0
     n = len(vertices)
-    corners = vertices[faces[flat]]
-    k = np.argmax(np.linalg.norm(corners[:, [1, 2, 0]] - corners, axis=2), axis=1)
-    rows = np.arange(len(flat))[:, None]
-    a, b, c = faces[flat][rows, (k[:, None] + np.arange(3)) % 3].T
-    # Each directed edge once in a closed or open manifold: the neighbour across a->b holds b->a.
-    keys = (faces * n + faces[:, [1, 2, 0]]).ravel()
-    order = np.argsort(keys, kind="stable")
-    want = b * n + a
-    first = np.searchsorted(keys[order], want, side="left")
-    unique = np.searchsorted(keys[order], want, side="right") - first == 1
-    edge = order[np.minimum(first, len(keys) - 1)]
-    neighbour = edge // 3
-    d = faces[neighbour, (edge % 3 + 2) % 3]
-    split = np.stack([np.column_stack([b, c, d]), np.column_stack([c, a, d])], axis=1)
-    is_flat = np.zeros(len(faces), dtype=bool)
-    is_flat[flat] = True
-    ok = unique & ~is_flat[neighbour] & with_area(vertices, split.reshape(-1, 3)).reshape(-1, 2).all(axis=1)
-    ok &= np.bincount(neighbour[ok], minlength=len(faces))[neighbour] == 1
-    drop = is_flat.copy()
-    drop[neighbour[ok]] = True
-    out = np.concatenate([faces[~drop], split[ok].reshape(-1, 3)])
-    if colours is not None:
-        colours = np.concatenate([colours[~drop], np.repeat(colours[neighbour[ok]], 2, axis=0)])
-    return out, colours, len(flat)
+    count = int(len(faces) - np.count_nonzero(with_area(vertices, faces)))
+    while True:
+        flat = np.flatnonzero(~with_area(vertices, faces))
+        if not len(flat):
+            break
+        corners = vertices[faces[flat]]
+        k = np.argmax(np.linalg.norm(corners[:, [1, 2, 0]] - corners, axis=2), axis=1)
+        a, b, c = faces[flat][np.arange(len(flat))[:, None], (k[:, None] + np.arange(3)) % 3].T
+        # Each directed edge once in a manifold: the neighbour across a->b holds b->a.
+        keys = (faces * n + faces[:, [1, 2, 0]]).ravel()
+        order = np.argsort(keys, kind="stable")
+        want = b * n + a
+        first = np.searchsorted(keys[order], want, side="left")
+        unique = np.searchsorted(keys[order], want, side="right") - first == 1
+        edge = order[np.minimum(first, len(keys) - 1)]
+        neighbour = edge // 3
+        d = faces[neighbour, (edge % 3 + 2) % 3]
+        split = np.stack([np.column_stack([b, c, d]), np.column_stack([c, a, d])], axis=1)
+        is_flat = np.zeros(len(faces), dtype=bool)
+        is_flat[flat] = True
+        ok = np.flatnonzero(unique & ~is_flat[neighbour]
+                            & with_area(vertices, split.reshape(-1, 3)).reshape(-1, 2).all(axis=1))
+        # A neighbour split for one flat triangle is gone for the others: they wait for the next pass.
+        chosen = ok[np.unique(neighbour[ok], return_index=True)[1]]
+        if not len(chosen):
+            break
+        drop = np.zeros(len(faces), dtype=bool)
+        drop[flat[chosen]] = True
+        drop[neighbour[chosen]] = True
+        faces = np.concatenate([faces[~drop], split[chosen].reshape(-1, 3)])
+        if colours is not None:
+            colours = np.concatenate([colours[~drop], np.repeat(colours[neighbour[chosen]], 2, axis=0)])
+    keep = with_area(vertices, faces)
+    return faces[keep], None if colours is None else colours[keep], count
 
 
 def world_transforms(scene: Scene) -> list[np.ndarray]:

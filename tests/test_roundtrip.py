@@ -15,11 +15,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import trimesh
 
 from planefmt.bodies import is_closed_manifold
 from planefmt.model import Mesh, Node, Scene
 from planefmt_converters import registry
-from planefmt_converters.assemble import flatten, with_area
+from planefmt_converters.assemble import at_float32, flatten, with_area
 from planefmt_converters.cli import main
 
 from corpus import CORPUS
@@ -118,3 +119,34 @@ def test_a_float32_output_holds_what_its_readers_see(mesh: Mesh, welded: int, ex
     notes = registry.write(Scene(nodes=(Node(name="part", mesh=mesh),)), out)
     _check_output(out, closed, len(mesh.faces) - (welded if ext in FLOAT32 else 0), capsys)
     assert any("without area at float32 precision" in note for note in notes) == (ext in FLOAT32), notes
+
+
+def test_many_flat_triangles_leave_a_closed_mesh_closed() -> None:
+    """Folds on random edges of a subdivided cube, some on neighbouring triangles (whose flat
+    triangles then share a neighbour and are only dropped): none is left, and the cube stays closed."""
+    cube = trimesh.creation.box(extents=(1, 1, 1))
+    cube.apply_translation((1.5, 1.5, 1.5))
+    cube = cube.subdivide().subdivide()
+    v, faces = np.array(cube.vertices), [tuple(t) for t in cube.faces]
+    across = {(t[k], t[(k + 1) % 3]): i for i, t in enumerate(faces) for k in range(3)}
+    rng = np.random.default_rng(1)
+    taken: set[int] = set()
+    for i in rng.permutation(len(faces))[:60]:
+        x, y, q = np.roll(faces[i], -rng.integers(3))
+        if i in taken or across[y, x] in taken:
+            continue
+        taken.add(i)
+        # 1e-9 outwards from a point of the edge x-y: rounded to float32, it is back on the edge
+        m = v[x] + 0.37 * (v[y] - v[x])
+        v = np.vstack([v, m + 1e-9 * (m - 1.5) / np.linalg.norm(m - 1.5)])
+        faces[i] = (x, y, len(v) - 1)
+        faces += [(x, len(v) - 1, q), (len(v) - 1, y, q)]
+    mesh = Mesh(vertices=v, faces=np.array(faces))
+    assert is_closed_manifold(mesh.faces, len(v)) and with_area(v, mesh.faces).all()
+    flat = int((~with_area(v.astype(np.float32).astype(np.float64), mesh.faces)).sum())
+    assert flat == len(taken) > 20
+    scene, notes = at_float32(Scene(nodes=(Node(name="cube", mesh=mesh),)))
+    out = scene.nodes[0].mesh
+    assert f"{flat} triangles without area at float32 precision" in notes
+    assert with_area(out.vertices, out.faces).all()
+    assert is_closed_manifold(out.faces, len(out.vertices))
