@@ -22,8 +22,6 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote, unquote, urlsplit
 
-import numpy as np
-
 from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
