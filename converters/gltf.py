@@ -10,7 +10,8 @@ Writing keeps node names (repeated names too), hierarchy, transforms and
 instancing (nodes sharing one :class:`Mesh` share one glTF mesh). glTF has
 no face colours, so a coloured mesh is written with three vertices of its
 own per face carrying the face's ``COLOR_0``; the reader merges them back.
-Positions are float32. The ``.gltf`` writer puts all binary data in one
+Positions are float32 (welded after rounding, with no triangle left without
+area: :func:`.assemble.at_float32`). The ``.gltf`` writer puts all binary data in one
 ``<stem>.bin`` beside the JSON.
 """
 

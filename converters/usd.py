@@ -22,7 +22,8 @@ folds both markers back, so a scene survives a round trip node for node.
 Prim names are made valid identifiers and unique; a node name that had to
 change is kept as the prim's ``displayName``. Stage metadata: ``upAxis``
 (``Y`` unless asked), ``metersPerUnit`` (1 when the units are unspecified)
-and ``defaultPrim``. Points are float32 as the schema has them; face colours
+and ``defaultPrim``. Points are float32 as the schema has them (welded after
+rounding, with no triangle left without area: :func:`.assemble.at_float32`); face colours
 go to a uniform ``displayColor`` (and ``displayOpacity`` when not opaque),
 as the stored 8-bit values divided by 255.
 """
