@@ -326,6 +326,8 @@ class Reader:
                 fail("UNSUPPORTED_CODING", f"widths {bits}")
             if not all(math.isfinite(h) for h in h_range) or h_range[0] > h_range[1]:
                 fail("BAD_HEADER_VALUE", f"h range {h_range}")
+            if not math.isfinite(h_range[1] - h_range[0]):  # SPEC_NOTES 9: a range too wide for §7.3
+                fail("BAD_HEADER_VALUE", f"h range {h_range}: h_max - h_min overflows")
         if units > 7:
             fail("BAD_HEADER_VALUE", f"units {units}")
         if bbox is not None:
