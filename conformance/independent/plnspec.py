@@ -157,7 +157,7 @@ def decompress(method: int, raw_size: int, stored: bytes) -> bytes:
         out = inflater.decompress(stored, raw_size + 1)  # never more than raw size + 1 bytes
     except zlib.error as exc:
         fail("BAD_COMPRESSION", str(exc))
-    if len(out) != raw_size and len(out) > raw_size:
+    if len(out) > raw_size:
         fail("SIZE_MISMATCH", "inflates to more than raw size")
     if not inflater.eof:
         fail("SIZE_MISMATCH", "the stored bytes end inside the zlib stream")
@@ -200,7 +200,7 @@ class Reader:
             fail("TRUNCATED", "inside the signature")
         if d[:8] == SIGNATURE:
             return
-        if d[1:4] == b"PLN" and d[0] in (0x89, 0x09):
+        if d[1:4] == b"PLN" and d[0] in (0x89, 0x09):  # SPEC_NOTES 1: §3's rule, literally
             fail("TEXT_MODE_DAMAGE")
         fail("BAD_SIGNATURE")
 
@@ -231,7 +231,7 @@ class Reader:
                 fail("CRC_MISMATCH", repr(ctype))
             pos += 12 + length
             # §4.3 place, in the order of §12.1 item 3.2
-            if self.header is None and ctype != b"PHDR":
+            if self.header is None and ctype != b"PHDR":  # SPEC_NOTES 2: ancillary ones too
                 fail("MISSING_HEADER", repr(ctype))
             if after_index and ctype != b"PEND":
                 fail("CHUNK_ORDER", f"{ctype!r} after iNDX")
@@ -299,7 +299,8 @@ class Reader:
         self.header_checks(flags, coding, bits, units, h_range, bbox, tolerance, error_bound, counts)
 
     def phdr_v1(self, p: bytes):
-        # A.1: at least 108 bytes, after the version check; the coding check, then §5 steps 6-9.
+        # A.1: at least 108 bytes, after the version check; the coding check (SPEC_NOTES 4: after
+        # the length, as in §5 steps 3-4), then §5 steps 6-9.
         if len(p) < 108:
             fail("BAD_PAYLOAD", "version 1/2 PHDR under 108 bytes")
         c = Cursor(p, 2)
@@ -438,7 +439,7 @@ class Reader:
         return self.dequantize(qn, qp, qh)
 
     def predicted_planes(self, raw: bytes, count: int) -> list[list[float]]:
-        """§7.4, checks in its order."""
+        """§7.4, checks in its order, each over the whole block before the next (SPEC_NOTES 5)."""
         c = Cursor(raw)
         streams = [c.varints(count, "predicted plane data") for _ in range(3)]
         if c.left():
@@ -527,7 +528,7 @@ class Reader:
             if self.minor <= NEWEST_MINOR[self.major]:
                 fail("UNKNOWN_GROUP_KIND", f"kind {kind} in {self.major}.{self.minor}")
             skipped = True
-        body = decompress(method, raw_size, p[c.pos:])
+        body = decompress(method, raw_size, p[c.pos:])  # skipped kinds too (SPEC_NOTES 12)
         b = Cursor(body)
         if self.major == 1:
             refs, roles = self.common_body_v1(b)
@@ -595,12 +596,12 @@ class Reader:
     def cells(self, b: Cursor, m: int) -> list[list[int]]:
         kind_size = b.left()
         c = b.varint("cell_count")
-        if c > b.left() or c > REF_LIMIT:
+        if c > b.left() or c > REF_LIMIT:  # SPEC_NOTES 6 (bytes after cell_count), 8 (the code)
             fail("BAD_GROUP_STRUCTURE", f"cell_count {c}")
         sizes = b.varints(c, "the cell sizes")
         if c == 0 or 0 in sizes:
             fail("BAD_GROUP_STRUCTURE", "no cell, or an empty cell")
-        if any(s > kind_size for s in sizes) or sum(sizes) > b.left():
+        if any(s > kind_size for s in sizes) or sum(sizes) > b.left():  # SPEC_NOTES 7
             fail("BAD_GROUP_STRUCTURE", "cell sizes above the bytes left")
         cells = [b.varints(s, "the cell entries") for s in sizes]
         if b.left():
@@ -610,7 +611,7 @@ class Reader:
         return cells
 
     def cells_v1(self, b: Cursor, m: int) -> list[list[int]]:
-        c = b.u32("cell_count")
+        c = b.u32("cell_count")  # SPEC_NOTES 11: no limit but the body's size
         sizes = list(struct.unpack(f"<{c}I", b.take(4 * c, "the cell sizes")))
         if c == 0 or 0 in sizes:
             fail("BAD_GROUP_STRUCTURE", "no cell, or an empty cell")
@@ -634,7 +635,7 @@ class Reader:
 
     def tree(self, b: Cursor, m: int) -> list[int]:
         t = b.varint("token_count")
-        if t > b.left():
+        if t > b.left():  # SPEC_NOTES 6: the bytes after token_count
             fail("BAD_GROUP_STRUCTURE", f"token_count {t}")
         tokens = b.varints(t, "the tokens")
         if b.left():
@@ -645,7 +646,7 @@ class Reader:
         return [V1_IN if tok == 0 else V1_OUT if tok == 1 else tok - 2 for tok in tokens]
 
     def tree_v1(self, b: Cursor, m: int) -> list[int]:
-        t = b.u32("token_count")  # SPEC_NOTES: a body ending inside token_count is BAD_PAYLOAD
+        t = b.u32("token_count")  # SPEC_NOTES 10: ending inside it is BAD_PAYLOAD
         tokens = list(struct.unpack(f"<{t}I", b.take(4 * t, "the tokens")))
         if b.left():
             fail("BAD_GROUP_STRUCTURE", "bytes after the tokens")
@@ -673,7 +674,7 @@ class Reader:
         tri = b.varints(4 * t, "the triangles")
         if b.left():
             fail("BAD_GROUP_STRUCTURE", "bytes after the triangles")
-        facets, f, used = [], 0, [False] * v
+        facets, f, used = [], 0, [False] * v  # f never decreases (SPEC_NOTES 13)
         for k in range(t):
             d, i0, i1, i2 = tri[4 * k:4 * k + 4]
             f += d
@@ -802,7 +803,7 @@ class Reader:
             if len(p) != 8:
                 fail("BAD_PAYLOAD", f"version {self.major} PEND of {len(p)} bytes")
             off = struct.unpack("<Q", p)[0]
-            if off != 0 and off != self.index_offset:  # SPEC_NOTES: 0 after an iNDX
+            if off != 0 and off != self.index_offset:  # SPEC_NOTES 3: 0 is accepted after an iNDX
                 fail("BAD_INDEX", f"PEND index offset {off}")
         if self.counts is not None:
             got = {"planes": len(self.planes), "objects": len(self.objects), "groups": len(self.groups)}
