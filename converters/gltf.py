@@ -10,7 +10,8 @@ Writing keeps node names (repeated names too), hierarchy, transforms and
 instancing (nodes sharing one :class:`Mesh` share one glTF mesh). glTF has
 no face colours, so a coloured mesh is written with three vertices of its
 own per face carrying the face's ``COLOR_0``; the reader merges them back.
-Positions are float32. The ``.gltf`` writer puts all binary data in one
+Positions are float32 (welded after rounding, with no triangle left without
+area: :func:`.assemble.at_float32`). The ``.gltf`` writer puts all binary data in one
 ``<stem>.bin`` beside the JSON.
 """
 
@@ -22,11 +23,10 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote, unquote, urlsplit
 
-import numpy as np
-
 from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
+from .assemble import at_float32
 from .atomic import atomic_paths, write_bytes
 from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
@@ -138,10 +138,9 @@ def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:
     if scene.units not in (Units.METRE, Units.UNSPECIFIED):
         notes.append(f"units ({scene.units.name.lower()}; glTF is in metres, "
                      "coordinates written unscaled)")
-    if any(node.mesh is not None and (node.mesh.vertices.astype(np.float32)
-                                      != node.mesh.vertices).any() for node in scene.nodes):
-        notes.append("coordinates rounded to float32")
     try:
+        scene, rounding = at_float32(scene)
+        notes += rounding
         tm_scene, names = to_trimesh_scene(scene)
 
         def restore_names(tree: dict[str, Any]) -> None:

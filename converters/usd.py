@@ -22,7 +22,8 @@ folds both markers back, so a scene survives a round trip node for node.
 Prim names are made valid identifiers and unique; a node name that had to
 change is kept as the prim's ``displayName``. Stage metadata: ``upAxis``
 (``Y`` unless asked), ``metersPerUnit`` (1 when the units are unspecified)
-and ``defaultPrim``. Points are float32 as the schema has them; face colours
+and ``defaultPrim``. Points are float32 as the schema has them (welded after
+rounding, with no triangle left without area: :func:`.assemble.at_float32`); face colours
 go to a uniform ``displayColor`` (and ``displayOpacity`` when not opaque),
 as the stored 8-bit values divided by 255.
 """
@@ -41,7 +42,7 @@ import numpy as np
 from planefmt.errors import ConversionError
 from planefmt.model import Mesh, Node, Scene, Units
 
-from .assemble import build_mesh
+from .assemble import at_float32, build_mesh
 from .atomic import atomic_path
 from .failures import describe
 from .polygons import triangulate
@@ -364,7 +365,7 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
     stage = pxr.Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z if up_axis == "Z" else UsdGeom.Tokens.y)
     UsdGeom.SetStageMetersPerUnit(stage, METERS_PER_UNIT.get(scene.units, 1.0))
-    notes: list[str] = []
+    scene, notes = at_float32(scene)
 
     children: dict[int | None, int] = {}
     for node in scene.nodes:
@@ -378,7 +379,6 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
         stage.SetDefaultPrim(wrapper)
 
     paths: list[Any] = []
-    rounded = False
     for index, node in enumerate(scene.nodes):
         parent_path = root if node.parent is None else paths[node.parent]
         name = _unique_name(pxr, node.name, taken.setdefault(parent_path, set()))
@@ -386,7 +386,7 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
         paths.append(path)
         if node.mesh is not None and not children.get(index):
             prim = UsdGeom.Mesh.Define(stage, path).GetPrim()
-            rounded |= _write_mesh(pxr, UsdGeom.Mesh(prim), node.mesh)
+            _write_mesh(pxr, UsdGeom.Mesh(prim), node.mesh)
         else:
             prim = UsdGeom.Xform.Define(stage, path).GetPrim()
             if node.mesh is not None:
@@ -394,7 +394,7 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
                 mesh_path = path.AppendChild(own)
                 mesh_prim = UsdGeom.Mesh.Define(stage, mesh_path)
                 mesh_prim.GetPrim().SetCustomDataByKey(NODE_MESH_KEY, True)
-                rounded |= _write_mesh(pxr, mesh_prim, node.mesh)
+                _write_mesh(pxr, mesh_prim, node.mesh)
         if path.name != node.name:
             prim.SetDisplayName(node.name)
         if node.transform is not None:
@@ -403,8 +403,6 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
             UsdGeom.Xformable(prim).AddTransformOp().Set(pxr.Gf.Matrix4d(matrix.T.tolist()))
         if node.parent is None and children.get(None, 0) == 1:
             stage.SetDefaultPrim(prim)
-    if rounded:
-        notes.append("coordinates rounded to float32")
     return stage, notes
 
 
@@ -419,8 +417,8 @@ def _unique_name(pxr: SimpleNamespace, name: str, taken: set[str]) -> str:
     return candidate
 
 
-def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> bool:
-    """Author a triangle mesh on ``usd_mesh``; True if float32 rounding changed a point."""
+def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> None:
+    """Author a triangle mesh, its coordinates float32 already (:func:`.assemble.at_float32`), on ``usd_mesh``."""
     Vt, UsdGeom = pxr.Vt, pxr.UsdGeom
     points = np.ascontiguousarray(mesh.vertices, dtype=np.float32)
     usd_mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
@@ -439,4 +437,3 @@ def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> bool:
         if (mesh.face_colours[:, 3] != 255).any():
             usd_mesh.CreateDisplayOpacityPrimvar(UsdGeom.Tokens.uniform).Set(
                 Vt.FloatArray.FromNumpy(np.ascontiguousarray(rgba[:, 3])))
-    return bool((points != mesh.vertices).any())
