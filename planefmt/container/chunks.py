@@ -13,9 +13,9 @@ import stat
 from dataclasses import dataclass
 from typing import BinaryIO
 
+from ..errors import ChecksumError, FormatError, LimitError, TruncatedError
 from . import schema
 from .crc import crc32
-from ..errors import ChecksumError, FormatError, LimitError, TruncatedError
 
 #: Payloads are read in blocks of this size so that a declared length never
 #: allocates more than the bytes that actually arrive.

@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
-from . import varint
 from ..errors import FormatError, PlnError
 from ..model import Coding, Quantization
+from . import varint
 from .schema import PREDICTED_LIMIT
 
 TWO_PI = 2.0 * math.pi

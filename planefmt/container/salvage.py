@@ -18,11 +18,11 @@ from typing import BinaryIO
 
 import numpy as np
 
+from ..errors import FormatError, PlnError
+from ..model import Header, ObjectRecord, PartGroup, Record, UnknownChunk
 from . import records, schema
 from .chunks import Limits, RawChunk, check_signature, is_ancillary, type_name, valid_type
 from .crc import crc32
-from ..errors import FormatError, PlnError
-from ..model import Header, ObjectRecord, PartGroup, Record, UnknownChunk
 
 _KNOWN = (schema.PHDR, schema.OBJT, schema.PLNS, schema.GRUP, schema.COLR, schema.INDX, schema.PEND)
 

@@ -15,10 +15,10 @@ from collections.abc import Callable, Sequence
 from dataclasses import asdict, dataclass
 from typing import BinaryIO
 
-from . import reader
-from .chunks import Limits
 from ..errors import CODES, PlnError
 from ..model import PartGroup
+from . import reader
+from .chunks import Limits
 
 
 @dataclass(frozen=True)

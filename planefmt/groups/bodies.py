@@ -36,16 +36,16 @@ from scipy.spatial import QhullError
 from ..errors import GeometryError
 from ..geometry.halfspace import intersect
 from ..geometry.hausdorff import hausdorff
-from ..model import GroupKind
-from .patches import Patch, PatchReport, decode_patch_faces, encode_patches
 from ..geometry.planes import from_triplets, to_triplets
 from ..geometry.planetable import PlaneTable
 from ..geometry.polygonize import COPLANAR_TOLERANCE, edge_adjacency, polygonize
 from ..geometry.repair import merge_close_vertices
-from .sealed import decode_sealed, encode_sealed
-from .solids import STRATEGIES, Partition, Splitter, TreeSurface, decode_tree, partition
 from ..geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from ..geometry.trianglegeom import TriangleIndex
+from ..model import GroupKind
+from .patches import Patch, PatchReport, decode_patch_faces, encode_patches
+from .sealed import decode_sealed, encode_sealed
+from .solids import STRATEGIES, Partition, Splitter, TreeSurface, decode_tree, partition
 
 #: Splitter seeds tried before a closed body falls back to patches.
 SEEDS = (0, 1, 2)

@@ -31,11 +31,11 @@ from typing import Protocol, TypeVar
 
 import numpy as np
 
-from ..geometry.clipping import split_polygons
 from ..errors import GeometryError
+from ..geometry.clipping import split_polygons
 from ..geometry.halfspace import intersect
-from ..model import BSP_IN, BSP_MAX_SPLIT, BSP_OUT
 from ..geometry.planes import in_plane_basis
+from ..model import BSP_IN, BSP_MAX_SPLIT, BSP_OUT
 
 #: Leaf classes of :class:`Tree` nodes.
 SPLIT, IN, OUT = 0, 1, 2

@@ -35,9 +35,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .bsptree import SPLIT, Tree, inner_done, outer_done
 from ..errors import GeometryError
 from ..geometry.predicates import ExactPlanes
+from .bsptree import SPLIT, Tree, inner_done, outer_done
 from .seams import components, fan_rings
 
 #: Exact (integer) side tests one decoding may spend, about 40 s of them: King_geom's 4,608-triangle

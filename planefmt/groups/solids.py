@@ -53,12 +53,12 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from ..geometry.clipping import clip_triangles, vertex_sides
 from ..errors import GeometryError
+from ..geometry.clipping import clip_triangles, vertex_sides
+from ..geometry.polygonize import edge_adjacency
+from ..model import BSP_IN, BSP_OUT
 from .bsptree import boundary, parse
 from .exactbsp import exact_boundary
-from ..model import BSP_IN, BSP_OUT
-from ..geometry.polygonize import edge_adjacency
 from .seams import Planes, close_cracks, fill_slits, stitch
 
 #: A splitter strategy: (candidates evaluated per node, weight of a split fragment, hull planes first).
