@@ -4,13 +4,16 @@ Reading keeps trimesh's scene graph: every node (with or without a mesh)
 with its name, parent and local matrix. trimesh splits a mesh of several
 primitives into one child node per primitive. glTF's unit is the metre.
 A material's plain base colour becomes the face colour; textures, UVs,
-normals and other material properties are reported as dropped.
+normals and other material properties are reported as dropped. The scene
+is Y-up, as glTF says every file is.
 
 Writing keeps node names (repeated names too), hierarchy, transforms and
 instancing (nodes sharing one :class:`Mesh` share one glTF mesh). glTF has
 no face colours, so a coloured mesh is written with three vertices of its
 own per face carrying the face's ``COLOR_0``; the reader merges them back.
-Positions are float32. The ``.gltf`` writer puts all binary data in one
+Positions are float32. A Z-up scene is turned Y-up, glTF's convention, by
+rotating its root nodes (``assemble.reoriented``: (x, y, z) -> (x, z, -y));
+vertices are written as they are. The ``.gltf`` writer puts all binary data in one
 ``<stem>.bin`` beside the JSON.
 """
 
@@ -27,11 +30,14 @@ import numpy as np
 from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
+from .assemble import reoriented
 from .atomic import atomic_paths, write_bytes
 from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
 
 _GLB_MAGIC = b"glTF"
+#: glTF 2.0 §3.4: +Y is up.
+GLTF_UP_AXIS = "Y"
 
 
 def sniff_glb(head: bytes, size: int) -> bool:
@@ -68,13 +74,13 @@ def references(path: str | os.PathLike[str]) -> tuple[str, ...]:
 
 def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.glb`` file into ``(scene, dropped)``."""
-    return read_scene(path, "glb", "binary glTF", units=Units.METRE,
+    return read_scene(path, "glb", "binary glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS,
                       reversed_siblings=True)
 
 
 def read_gltf(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.gltf`` file (and the buffers and images it refers to) into ``(scene, dropped)``."""
-    return read_scene(path, "gltf", "glTF", units=Units.METRE, reversed_siblings=True,
+    return read_scene(path, "gltf", "glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS, reversed_siblings=True,
                       resolver=_uri_resolver(path))
 
 
@@ -142,7 +148,7 @@ def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:
                                       != node.mesh.vertices).any() for node in scene.nodes):
         notes.append("coordinates rounded to float32")
     try:
-        tm_scene, names = to_trimesh_scene(scene)
+        tm_scene, names = to_trimesh_scene(reoriented(scene, GLTF_UP_AXIS))
 
         def restore_names(tree: dict[str, Any]) -> None:
             for node in tree.get("nodes", []):

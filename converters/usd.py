@@ -6,9 +6,8 @@ local transforms survive. Polygons are triangulated (fans for convex faces,
 ear clipping for concave ones), hole faces removed, ``leftHanded`` winding
 flipped to the model's counter-clockwise-outward convention. Attributes are
 read at their earliest time sample (their default when not animated).
-``metersPerUnit`` becomes :class:`Units` where it matches one; ``upAxis`` is
-not applied (coordinates are kept as authored) and is reported when it is
-not Y. ``displayColor``/``displayOpacity`` with constant or uniform
+``metersPerUnit`` becomes :class:`Units` where it matches one; ``upAxis``
+becomes the scene's ``up_axis`` (coordinates are kept as authored). ``displayColor``/``displayOpacity`` with constant or uniform
 interpolation become face colours; the rest (UVs, normals, other primvars,
 materials, subdivision schemes: the cage is kept) is reported as dropped.
 Prims with purpose guide or proxy, and invisible prims, are skipped.
@@ -21,7 +20,8 @@ marked ``planefmt:sceneRoot`` (USD wants a single default prim). The reader
 folds both markers back, so a scene survives a round trip node for node.
 Prim names are made valid identifiers and unique; a node name that had to
 change is kept as the prim's ``displayName``. Stage metadata: ``upAxis``
-(``Y`` unless asked), ``metersPerUnit`` (1 when the units are unspecified)
+(the scene's, Y where it has none; another on request, the scene turned
+into it), ``metersPerUnit`` (1 when the units are unspecified)
 and ``defaultPrim``. Points are float32 as the schema has them; face colours
 go to a uniform ``displayColor`` (and ``displayOpacity`` when not opaque),
 as the stored 8-bit values divided by 255.
@@ -39,9 +39,9 @@ from typing import Any
 import numpy as np
 
 from planefmt.errors import ConversionError
-from planefmt.model import Mesh, Node, Scene, Units
+from planefmt.model import UP_AXES, Mesh, Node, Scene, Units
 
-from .assemble import build_mesh
+from .assemble import build_mesh, instancing_note, reoriented
 from .atomic import atomic_path
 from .failures import describe
 from .polygons import triangulate
@@ -165,14 +165,14 @@ class _StageReader:
 
         if not any(node.mesh is not None for node in nodes):
             raise ConversionError("no polygon mesh found in this USD stage", file=self.file)
-        up = self.pxr.UsdGeom.GetStageUpAxis(self.stage)
-        if up != self.pxr.UsdGeom.Tokens.y:
-            self.dropped.add(f"upAxis {up} (coordinates kept as authored)")
+        # The authored upAxis, else USD's fallback (Y unless a site configured otherwise): a stage always
+        # has one, unlike metersPerUnit, whose fallback (cm) is not the author's word.
+        up = str(self.pxr.UsdGeom.GetStageUpAxis(self.stage))
         units = self._units()
         notes = sorted(self.dropped)
         if self.degenerate:
             notes.append(f"{self.degenerate} degenerate faces")
-        return Scene(nodes=tuple(nodes), units=units), notes
+        return Scene(nodes=tuple(nodes), units=units, up_axis=up), notes
 
     def _wanted(self, prim: Any) -> bool:
         """False for meshes a renderer would not show as the asset's surface."""
@@ -321,18 +321,20 @@ def _array(value: Any, dtype: type) -> np.ndarray:
 
 # --------------------------------------------------------------------------- writing
 
-def write(scene: Scene, path: str | os.PathLike[str], *, up_axis: str = "Y") -> list[str]:
+def write(scene: Scene, path: str | os.PathLike[str], *, up_axis: str | None = None) -> list[str]:
     """Write ``scene`` as ``.usda``, ``.usdc``, ``.usd`` (crate) or ``.usdz``, atomically.
 
-    The format follows the extension. ``up_axis`` ("Y" or "Z") is stored as
-    stage metadata only; coordinates are not rotated.
+    The format follows the extension. The stage's ``upAxis`` is ``up_axis``
+    ("Y" or "Z"), else the scene's, else Y; a scene whose own up axis differs
+    is turned into it (its root nodes rotated, ``assemble.reoriented``).
     """
     pxr = _pxr()
     target = Path(path)
-    if up_axis not in ("Y", "Z"):
-        raise ConversionError(f"up_axis must be 'Y' or 'Z', not {up_axis!r}", file=str(target))
+    up_axis = up_axis or scene.up_axis or "Y"
+    if up_axis not in UP_AXES:
+        raise ConversionError(f"up_axis must be one of {', '.join(UP_AXES)}, not {up_axis!r}", file=str(target))
     try:
-        stage, notes = _build_stage(pxr, scene, up_axis)
+        stage, notes = _build_stage(pxr, reoriented(scene, up_axis), up_axis)
         layer = stage.GetRootLayer()
         with atomic_path(target) as temp:
             if target.suffix.lower() == ".usdz":
@@ -364,7 +366,8 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
     stage = pxr.Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z if up_axis == "Z" else UsdGeom.Tokens.y)
     UsdGeom.SetStageMetersPerUnit(stage, METERS_PER_UNIT.get(scene.units, 1.0))
-    notes: list[str] = []
+    instancing = instancing_note(scene)
+    notes = [instancing] if instancing else []
 
     children: dict[int | None, int] = {}
     for node in scene.nodes:
