@@ -622,6 +622,8 @@ def encode_metadata(m: Metadata) -> bytes:
 
 def decode_metadata(payload: bytes) -> Metadata:
     """A mETA chunk: the keyword and its value, checked (the value too, for a keyword the spec defines)."""
+    if b"\x00" not in payload:
+        raise FormatError("mETA payload has no 0x00 byte after its keyword", code="BAD_METADATA")
     r = _parse(schema.Metadata, payload, "mETA")
     low, high = schema.METADATA_KEYWORD_BYTES
     raw = np.frombuffer(r.keyword, dtype=np.uint8)
