@@ -1,0 +1,76 @@
+"""Outputs do not grow without a word (issue 35, item 14): triangles stay one to one with the source's,
+and a mesh that several nodes share (instancing), which a .pln file stores once per node, is named in
+a warning with the factor the output grows by."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from planefmt.model import Mesh, Node, Scene
+from planefmt_converters import registry
+from planefmt_converters.cli import main
+
+import corpus
+
+GLTF_SCENES = corpus.files("gltf_scene")
+
+
+def _mesh(m: trimesh.Trimesh) -> Mesh:
+    return Mesh(np.asarray(m.vertices, dtype=np.float64), np.asarray(m.faces, dtype=np.int64))
+
+
+def _moved(x: float) -> np.ndarray:
+    t = np.eye(4)
+    t[0, 3] = x
+    return t
+
+
+def shared_scene() -> Scene:
+    """Three nodes placing one 12-triangle box, and a tetrahedron of its own: 40 triangles placed, 16 stored."""
+    box = _mesh(trimesh.creation.box())
+    tetra = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]),
+                 np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+    return Scene((*(Node(f"box{k}", transform=_moved(3.0 * k), mesh=box) for k in range(3)),
+                  Node("tetra", transform=_moved(-3.0), mesh=tetra)), up_axis="Y")
+
+
+def _instancing_lines(err: str) -> list[str]:
+    return [line for line in err.splitlines() if "instancing" in line]
+
+
+@pytest.mark.parametrize("suffix", [".pln", ".usda", ".obj"])
+def test_flattened_instancing_is_named_with_its_factor(suffix: str, tmp_path: Path,
+                                                       capsys: pytest.CaptureFixture) -> None:
+    registry.write(shared_scene(), tmp_path / "shared.glb")
+    assert main(["convert", str(tmp_path / "shared.glb"), str(tmp_path / f"out{suffix}")]) == 0
+    lines = _instancing_lines(capsys.readouterr().err)
+    assert len(lines) == 1, lines
+    assert "instancing flattened (3 nodes share 1 mesh; output 2.5× the source's triangles)" in lines[0]
+
+
+def test_gltf_keeps_instancing_without_a_word(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    registry.write(shared_scene(), tmp_path / "shared.glb")
+    assert main(["convert", str(tmp_path / "shared.glb"), str(tmp_path / "again.glb")]) == 0
+    assert _instancing_lines(capsys.readouterr().err) == []
+    again, _ = registry.read(tmp_path / "again.glb")
+    assert len({id(n.mesh) for n in again.nodes if n.mesh is not None}) == 2
+
+
+@pytest.mark.parametrize("path", GLTF_SCENES, ids=corpus.ids(GLTF_SCENES))
+def test_corpus_scenes_keep_their_triangles(path: Path, tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    source, _ = registry.read(path)
+    meshes = {id(n.mesh): len(n.mesh.faces) for n in source.nodes if n.mesh is not None}
+    placed = sum(len(n.mesh.faces) for n in source.nodes if n.mesh is not None)
+    assert main(["convert", str(path), str(tmp_path / "out.pln")]) == 0
+    lines = _instancing_lines(capsys.readouterr().err)
+    decoded, _ = registry.read(tmp_path / "out.pln")
+    # Shells keep the source's triangles one to one (zero-area ones left out, with a warning of their own).
+    assert sum(len(n.mesh.faces) for n in decoded.nodes if n.mesh is not None) <= placed
+    if placed > sum(meshes.values()):
+        assert len(lines) == 1 and f"output {placed / sum(meshes.values()):.3g}×" in lines[0], lines
+    else:
+        assert lines == []
