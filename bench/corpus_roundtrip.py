@@ -73,7 +73,7 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
     import planefmt
     from planefmt.hausdorff import hausdorff
     from planefmt_converters import registry
-    from planefmt_converters.assemble import flatten
+    from planefmt_converters.assemble import flatten, reoriented
 
     name = os.path.relpath(path, CORPUS)
     pln = os.path.join(work, os.path.basename(path) + ".pln")
@@ -84,7 +84,8 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
         return f"| {name} | – | {seconds:.0f} | " + " | ".join("–" for _ in FORMATS) + f" | {failed} |", [failed]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        source = flatten(registry.read(path)[0])
+        source_scene = registry.read(path)[0]
+        source = flatten(source_scene)
         decoded, _ = registry.read(pln)
     with planefmt.open(pln) as f:
         bound, box = f.header.error_bound, np.asarray(f.header.bbox, dtype=np.float64)
@@ -113,6 +114,9 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
                 warnings.simplefilter("ignore")
                 again, _ = registry.read(out)
             back = flatten(again)
+            # A format with an up axis of its own (glTF: Y) holds the decoding turned into it.
+            dec, src = (flatten(decoded), source) if again.up_axis is None else (
+                flatten(reoriented(decoded, again.up_axis)), flatten(reoriented(source_scene, again.up_axis)))
             if back.vertices.shape == dec.vertices.shape and np.array_equal(back.faces, dec.faces):
                 moved = float(np.linalg.norm(back.vertices - dec.vertices, axis=1).max(initial=0.0))
                 if moved > rounding:
@@ -125,7 +129,8 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
                     # Not shown within float32 rounding of the decoding: then held to what the header
                     # promises, the requested tolerance, against the source itself.
                     allowed = tolerance * float(np.linalg.norm(box[1] - box[0]))
-                    s = hausdorff(back.vertices, back.faces, v, faces, target=allowed, max_pieces=DECODING_PIECES)
+                    s = hausdorff(back.vertices, back.faces, src.vertices, src.faces, target=allowed,
+                                  max_pieces=DECODING_PIECES)
                     if s.certified and s.upper <= allowed:
                         loose.append(ext)
                     else:
