@@ -2,7 +2,7 @@
 
 Reading composes the stage (references, payloads, instancing) and keeps
 every ``UsdGeom.Mesh`` with the prims above it, so the hierarchy and the
-local transforms survive. Polygons are triangulated (fans for convex faces,
+local transforms survive; the instances of one prototype share one mesh. Polygons are triangulated (fans for convex faces,
 ear clipping for concave ones), hole faces removed, ``leftHanded`` winding
 flipped to the model's counter-clockwise-outward convention. Attributes are
 read at their earliest time sample (their default when not animated).
@@ -12,7 +12,8 @@ interpolation become face colours; the rest (UVs, normals, other primvars,
 materials, subdivision schemes: the cage is kept) is reported as dropped.
 Prims with purpose guide or proxy, and invisible prims, are skipped.
 
-Writing makes one prim per node: an ``Xform`` (or a ``Mesh`` for a childless
+Writing makes one prim per node (a mesh several nodes share is written
+once per node, and the notes say so): an ``Xform`` (or a ``Mesh`` for a childless
 mesh node) with its local transform as a single ``xformOp:transform``; a node
 with both a mesh and children becomes an ``Xform`` holding a ``Mesh`` child
 marked ``planefmt:nodeMesh``. Several root nodes are wrapped in one ``Xform``
@@ -122,6 +123,7 @@ class _StageReader:
         self.xforms = pxr.UsdGeom.XformCache(self.time)
         self.dropped: set[str] = set()
         self.degenerate = 0
+        self.prototypes: dict[Any, Mesh | None] = {}
 
     def read(self) -> tuple[Scene, list[str]]:
         UsdGeom = self.pxr.UsdGeom
@@ -151,7 +153,7 @@ class _StageReader:
                     and self._local(prim, parent_path) is None:
                 index[path] = None
                 continue
-            mesh = self._mesh(prim) if path in meshes else None
+            mesh = self._shared_mesh(prim) if path in meshes else None
             transform = self._local(prim, parent_path)
             if (self._marked(prim, NODE_MESH_KEY) and parent is not None and transform is None
                     and nodes[parent].mesh is None):
@@ -173,6 +175,16 @@ class _StageReader:
         if self.degenerate:
             notes.append(f"{self.degenerate} degenerate faces")
         return Scene(nodes=tuple(nodes), units=units, up_axis=up), notes
+
+    def _shared_mesh(self, prim: Any) -> Mesh | None:
+        """The prim's mesh; instance proxies of one prototype prim share one (scenegraph instancing), as
+        the nodes of a glTF mesh do, so that writers keep or report the sharing."""
+        if not prim.IsInstanceProxy():
+            return self._mesh(prim)
+        key = prim.GetPrimInPrototype().GetPath()
+        if key not in self.prototypes:
+            self.prototypes[key] = self._mesh(prim)
+        return self.prototypes[key]
 
     def _wanted(self, prim: Any) -> bool:
         """False for meshes a renderer would not show as the asset's surface."""

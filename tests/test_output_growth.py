@@ -74,3 +74,54 @@ def test_corpus_scenes_keep_their_triangles(path: Path, tmp_path: Path, capsys: 
         assert len(lines) == 1 and f"output {placed / sum(meshes.values()):.3g}×" in lines[0], lines
     else:
         assert lines == []
+
+
+USD_INSTANCES = """#usda 1.0
+(
+    defaultPrim = "World"
+    upAxis = "Z"
+)
+class Xform "Proto"
+{
+    def Mesh "tri"
+    {
+        point3f[] points = [(0,0,0),(1,0,0),(0,1,0),(0,0,1)]
+        int[] faceVertexCounts = [3, 3, 3, 3]
+        int[] faceVertexIndices = [0,2,1, 0,1,3, 0,3,2, 1,2,3]
+        uniform token subdivisionScheme = "none"
+    }
+}
+def Xform "World"
+{
+    def Xform "A" (
+        instanceable = true
+        references = </Proto>
+    )
+    {
+        double3 xformOp:translate = (2, 0, 0)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+    def Xform "B" (
+        instanceable = true
+        references = </Proto>
+    )
+    {
+        double3 xformOp:translate = (-2, 0, 0)
+        uniform token[] xformOpOrder = ["xformOp:translate"]
+    }
+}
+"""
+
+
+def test_usd_instances_share_a_mesh(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    (tmp_path / "inst.usda").write_text(USD_INSTANCES)
+    scene, _ = registry.read(tmp_path / "inst.usda")
+    placed = [n.mesh for n in scene.nodes if n.mesh is not None]
+    assert len(placed) == 2 and placed[0] is placed[1]
+    assert main(["convert", str(tmp_path / "inst.usda"), str(tmp_path / "inst.glb")]) == 0
+    assert _instancing_lines(capsys.readouterr().err) == []  # glTF instances it
+    again, _ = registry.read(tmp_path / "inst.glb")
+    assert len({id(n.mesh) for n in again.nodes if n.mesh is not None}) == 1
+    assert main(["convert", str(tmp_path / "inst.usda"), str(tmp_path / "inst.pln")]) == 0
+    assert "instancing flattened (2 nodes share 1 mesh; output 2× the source's triangles)" in \
+        capsys.readouterr().err
