@@ -9,8 +9,9 @@ is Y-up, as glTF says every file is.
 
 Writing keeps node names (repeated names too), hierarchy, transforms and
 instancing (nodes sharing one :class:`Mesh` share one glTF mesh). glTF has
-no face colours, so a coloured mesh is written with three vertices of its
-own per face carrying the face's ``COLOR_0``; the reader merges them back.
+no face colours: a mesh of one colour is written with a material of that
+base colour, one of several colours with three vertices of its own per face
+carrying the face's ``COLOR_0``; the reader turns both back into face colours.
 Positions are float32. A Z-up scene is turned Y-up, glTF's convention, by
 rotating its root nodes (``assemble.reoriented``: (x, y, z) -> (x, z, -y));
 vertices are written as they are. The ``.gltf`` writer puts all binary data in one

@@ -181,13 +181,22 @@ def _face_colours(geometry: Any, faces: np.ndarray) -> tuple[np.ndarray | None, 
 def to_trimesh(mesh: Mesh, *, colours_per_vertex: bool = False) -> "trimesh.Trimesh":
     """A trimesh mesh for ``mesh``; face colours as trimesh face colours.
 
-    With ``colours_per_vertex`` each face gets its own three vertices carrying
-    the face's colour: formats without face colours (glTF) keep them exactly
-    that way, and :func:`build_mesh` merges the copies again on reading.
+    With ``colours_per_vertex`` (formats without face colours: glTF) a mesh of
+    one colour gets a material of that base colour, which :func:`_face_colours`
+    reads back as that face colour; any other gets three vertices of its own
+    per face carrying the face's colour, which :func:`build_mesh` merges again
+    on reading (three times the vertices: kept for meshes that need it).
     """
     tm = require_trimesh("mesh export")
     if mesh.face_colours is None:
         return tm.Trimesh(vertices=mesh.vertices, faces=mesh.faces, process=False)
+    if colours_per_vertex and (mesh.face_colours == mesh.face_colours[0]).all():
+        rgba = mesh.face_colours[0]
+        # Metallic 0: glTF's default of 1 would show a plain colour as metal.
+        material = tm.visual.material.PBRMaterial(baseColorFactor=rgba, metallicFactor=0.0,
+                                                   alphaMode="BLEND" if rgba[3] < 255 else None)
+        return tm.Trimesh(vertices=mesh.vertices, faces=mesh.faces,
+                          visual=tm.visual.TextureVisuals(material=material), process=False)
     if colours_per_vertex:
         return tm.Trimesh(vertices=mesh.vertices[mesh.faces].reshape(-1, 3),
                           faces=np.arange(3 * len(mesh.faces)).reshape(-1, 3),

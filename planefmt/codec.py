@@ -44,6 +44,7 @@ Decoding dispatches on ``group.kind`` through :data:`DECODERS`.
 
 from __future__ import annotations
 
+import hashlib
 import io
 import math
 import os
@@ -1773,10 +1774,32 @@ def _assemble(objects: Sequence[ObjectRecord], parts: dict[int, list[tuple[int, 
               colours: dict[int, np.ndarray], up_axis: str | None) -> Scene:
     # Salvaged objects may have gaps in their indices; nodes are numbered by position.
     position = {o.index: i for i, o in enumerate(objects)}
+    # A mesh its source placed at several nodes is stored once per object (a .pln file has no shared part
+    # groups) and decodes to the same triangles each time: those objects share one Mesh again, as the
+    # source's nodes did, so that writers can instance it.
+    decoded: dict[bytes, Mesh] = {}
+
+    def shared(mesh: Mesh) -> Mesh:
+        kept = decoded.setdefault(_digest(mesh), mesh)
+        return kept if kept is mesh or _same_mesh(kept, mesh) else mesh
+
     nodes = tuple(Node(name=o.name, parent=None if o.parent is None else position[o.parent], transform=o.transform,
-                       mesh=_object_mesh(parts[o.index], colours) if o.index in parts else None)
+                       mesh=shared(_object_mesh(parts[o.index], colours)) if o.index in parts else None)
                   for o in objects)
     return Scene(nodes=nodes, units=units, up_axis=up_axis)
+
+
+def _digest(mesh: Mesh) -> bytes:
+    h = hashlib.blake2b(digest_size=16)
+    for a in (mesh.vertices, mesh.faces, mesh.face_colours):
+        h.update(b"-" if a is None else repr(a.shape).encode() + np.ascontiguousarray(a).tobytes())
+    return h.digest()
+
+
+def _same_mesh(a: Mesh, b: Mesh) -> bool:
+    return (np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+            and (a.face_colours is None) == (b.face_colours is None)
+            and (a.face_colours is None or np.array_equal(a.face_colours, b.face_colours)))
 
 
 def _object_mesh(parts: list[tuple[int, DecodedGroup]], colours: dict[int, np.ndarray]) -> Mesh:

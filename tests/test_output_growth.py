@@ -125,3 +125,28 @@ def test_usd_instances_share_a_mesh(tmp_path: Path, capsys: pytest.CaptureFixtur
     assert main(["convert", str(tmp_path / "inst.usda"), str(tmp_path / "inst.pln")]) == 0
     assert "instancing flattened (2 nodes share 1 mesh; output 2× the source's triangles)" in \
         capsys.readouterr().err
+
+
+def _distinct_meshes(scene: Scene) -> int:
+    return len({id(n.mesh) for n in scene.nodes if n.mesh is not None})
+
+
+def test_pln_decoding_shares_the_instances_again(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    registry.write(shared_scene(), tmp_path / "shared.glb")
+    assert main(["convert", str(tmp_path / "shared.glb"), str(tmp_path / "shared.pln")]) == 0
+    capsys.readouterr()
+    # The .pln holds the box once per node; its three objects decode to the same triangles.
+    decoded, _ = registry.read(tmp_path / "shared.pln")
+    assert _distinct_meshes(decoded) == 2
+    assert main(["convert", str(tmp_path / "shared.pln"), str(tmp_path / "back.glb")]) == 0
+    assert _instancing_lines(capsys.readouterr().err) == []
+    assert _distinct_meshes(registry.read(tmp_path / "back.glb")[0]) == 2
+
+
+def test_instanced_coloured_corpus_scene_does_not_grow_through_pln(tmp_path: Path) -> None:
+    # pins.glb: six nodes place one dowel, every mesh one base colour (the 35 KB -> 330 KB .glb).
+    source = corpus.CORPUS / "gltf_scene" / "pins.glb"
+    assert main(["convert", str(source), str(tmp_path / "pins.pln")]) == 0
+    assert main(["convert", str(tmp_path / "pins.pln"), str(tmp_path / "pins.glb")]) == 0
+    assert _distinct_meshes(registry.read(tmp_path / "pins.glb")[0]) == _distinct_meshes(registry.read(source)[0])
+    assert (tmp_path / "pins.glb").stat().st_size <= 1.05 * source.stat().st_size
