@@ -125,17 +125,21 @@ def reoriented(scene: Scene, up_axis: str) -> Scene:
     return replace(scene, nodes=nodes, up_axis=up_axis)
 
 
-def instancing_note(scene: Scene) -> str | None:
-    """For writers that store every node's mesh apart: how many nodes share how many meshes and how many
-    times the source's triangles the output holds; None if no mesh is shared."""
-    users = Counter(id(node.mesh) for node in scene.nodes if node.mesh is not None)
-    shared = [key for key, count in users.items() if count > 1]
-    if not shared:
-        return None
+def instancing_note(scene: Scene, instanced: frozenset[int] = frozenset()) -> str | None:
+    """For writers that store a node's mesh with the node: how many nodes share how many meshes that are
+    stored more than once, and how many times the source's triangles the output holds; None if no mesh
+    is. ``instanced``: the nodes whose mesh the writer stores once for all of them (USD instances)."""
     faces = {id(node.mesh): len(node.mesh.faces) for node in scene.nodes if node.mesh is not None}
-    placed = sum(count * faces[key] for key, count in users.items())
-    return (f"instancing flattened ({sum(users[key] for key in shared)} nodes share {len(shared)} "
-            f"mesh{'es' if len(shared) > 1 else ''}; output {placed / max(sum(faces.values()), 1):.3g}× the "
+    copies = Counter(id(node.mesh) for k, node in enumerate(scene.nodes)
+                     if node.mesh is not None and k not in instanced)
+    copies.update({id(scene.nodes[k].mesh) for k in instanced})  # the one copy the instances share
+    flattened = [key for key, count in copies.items() if count > 1]
+    if not flattened:
+        return None
+    nodes = sum(1 for node in scene.nodes if node.mesh is not None and id(node.mesh) in flattened)
+    stored = sum(count * faces[key] for key, count in copies.items())
+    return (f"instancing flattened ({nodes} nodes share {len(flattened)} "
+            f"mesh{'es' if len(flattened) > 1 else ''}; output {stored / max(sum(faces.values()), 1):.3g}× the "
             "source's triangles)")
 
 

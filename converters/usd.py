@@ -12,11 +12,14 @@ interpolation become face colours; the rest (UVs, normals, other primvars,
 materials, subdivision schemes: the cage is kept) is reported as dropped.
 Prims with purpose guide or proxy, and invisible prims, are skipped.
 
-Writing makes one prim per node (a mesh several nodes share is written
-once per node, and the notes say so): an ``Xform`` (or a ``Mesh`` for a childless
+Writing makes one prim per node: an ``Xform`` (or a ``Mesh`` for a childless
 mesh node) with its local transform as a single ``xformOp:transform``; a node
 with both a mesh and children becomes an ``Xform`` holding a ``Mesh`` child
-marked ``planefmt:nodeMesh``. Several root nodes are wrapped in one ``Xform``
+marked ``planefmt:nodeMesh``. A mesh several childless nodes share is
+written once, as the ``mesh`` child of a root ``class`` prim, and each of
+those nodes is an instanceable ``Xform`` referencing it (the reader folds
+the instance's mesh back, shared); a node with children keeps a copy of its
+own, which the notes report. Several root nodes are wrapped in one ``Xform``
 marked ``planefmt:sceneRoot`` (USD wants a single default prim). The reader
 folds both markers back, so a scene survives a round trip node for node.
 Prim names are made valid identifiers and unique; a node name that had to
@@ -33,6 +36,7 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+from collections import Counter
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -378,15 +382,23 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
     stage = pxr.Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z if up_axis == "Z" else UsdGeom.Tokens.y)
     UsdGeom.SetStageMetersPerUnit(stage, METERS_PER_UNIT.get(scene.units, 1.0))
-    instancing = instancing_note(scene)
-    notes = [instancing] if instancing else []
-
     children: dict[int | None, int] = {}
     for node in scene.nodes:
         children[node.parent] = children.get(node.parent, 0) + 1
+    # A mesh that several childless nodes place is written once, as a prototype those nodes instance
+    # (an instance's own children would be ignored: nodes with children keep a copy of their own).
+    leaves = Counter(id(node.mesh) for k, node in enumerate(scene.nodes) if node.mesh is not None
+                     and not children.get(k))
+    instanced = frozenset(k for k, node in enumerate(scene.nodes) if node.mesh is not None
+                          and not children.get(k) and leaves[id(node.mesh)] > 1)
+    instancing = instancing_note(scene, instanced)
+    notes = [instancing] if instancing else []
+    prototypes: dict[int, Any] = {}
+
     taken: dict[Any, set[str]] = {}
     root = Sdf.Path.absoluteRootPath
     if children.get(None, 0) != 1:
+        taken[root] = {"Scene"}
         wrapper = UsdGeom.Xform.Define(stage, root.AppendChild("Scene")).GetPrim()
         wrapper.SetCustomDataByKey(SCENE_ROOT_KEY, True)
         root = wrapper.GetPath()
@@ -399,7 +411,17 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
         name = _unique_name(pxr, node.name, taken.setdefault(parent_path, set()))
         path = parent_path.AppendChild(name)
         paths.append(path)
-        if node.mesh is not None and not children.get(index):
+        if index in instanced:
+            prototype = prototypes.get(id(node.mesh))
+            if prototype is None:
+                prototype = _prototype(pxr, stage, len(prototypes), taken.setdefault(Sdf.Path.absoluteRootPath, set()))
+                rounded |= _write_mesh(pxr, UsdGeom.Mesh(stage.GetPrimAtPath(prototype.AppendChild("mesh"))),
+                                       node.mesh)
+                prototypes[id(node.mesh)] = prototype
+            prim = UsdGeom.Xform.Define(stage, path).GetPrim()
+            prim.GetReferences().AddInternalReference(prototype)
+            prim.SetInstanceable(True)
+        elif node.mesh is not None and not children.get(index):
             prim = UsdGeom.Mesh.Define(stage, path).GetPrim()
             rounded |= _write_mesh(pxr, UsdGeom.Mesh(prim), node.mesh)
         else:
@@ -421,6 +443,15 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
     if rounded:
         notes.append("coordinates rounded to float32")
     return stage, notes
+
+
+def _prototype(pxr: SimpleNamespace, stage: Any, number: int, taken: set[str]) -> Any:
+    """A root class prim (abstract: not traversed, not drawn) holding an empty Mesh ``mesh`` marked as its
+    node's own, for instances to reference; its path."""
+    path = pxr.Sdf.Path.absoluteRootPath.AppendChild(_unique_name(pxr, f"Prototype{number}", taken))
+    stage.CreateClassPrim(path).SetTypeName("Xform")
+    pxr.UsdGeom.Mesh.Define(stage, path.AppendChild("mesh")).GetPrim().SetCustomDataByKey(NODE_MESH_KEY, True)
+    return path
 
 
 def _unique_name(pxr: SimpleNamespace, name: str, taken: set[str]) -> str:

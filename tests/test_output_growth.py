@@ -42,7 +42,7 @@ def _instancing_lines(err: str) -> list[str]:
     return [line for line in err.splitlines() if "instancing" in line]
 
 
-@pytest.mark.parametrize("suffix", [".pln", ".usda", ".obj"])
+@pytest.mark.parametrize("suffix", [".pln", ".obj"])
 def test_flattened_instancing_is_named_with_its_factor(suffix: str, tmp_path: Path,
                                                        capsys: pytest.CaptureFixture) -> None:
     registry.write(shared_scene(), tmp_path / "shared.glb")
@@ -52,12 +52,15 @@ def test_flattened_instancing_is_named_with_its_factor(suffix: str, tmp_path: Pa
     assert "instancing flattened (3 nodes share 1 mesh; output 2.5× the source's triangles)" in lines[0]
 
 
-def test_gltf_keeps_instancing_without_a_word(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+@pytest.mark.parametrize("suffix", [".glb", ".usda", ".usdz"])
+def test_scene_formats_keep_instancing_without_a_word(suffix: str, tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture) -> None:
     registry.write(shared_scene(), tmp_path / "shared.glb")
-    assert main(["convert", str(tmp_path / "shared.glb"), str(tmp_path / "again.glb")]) == 0
+    assert main(["convert", str(tmp_path / "shared.glb"), str(tmp_path / f"again{suffix}")]) == 0
     assert _instancing_lines(capsys.readouterr().err) == []
-    again, _ = registry.read(tmp_path / "again.glb")
+    again, _ = registry.read(tmp_path / f"again{suffix}")
     assert len({id(n.mesh) for n in again.nodes if n.mesh is not None}) == 2
+    assert [n.name for n in again.nodes] == [n.name for n in shared_scene().nodes]
 
 
 @pytest.mark.parametrize("path", GLTF_SCENES, ids=corpus.ids(GLTF_SCENES))
