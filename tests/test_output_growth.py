@@ -35,7 +35,7 @@ def shared_scene() -> Scene:
     tetra = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]),
                  np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
     return Scene((*(Node(f"box{k}", transform=_moved(3.0 * k), mesh=box) for k in range(3)),
-                  Node("tetra", transform=_moved(-3.0), mesh=tetra)), up_axis="Y")
+                  Node("tetra", transform=_moved(-3.0), mesh=tetra)))
 
 
 def _instancing_lines(err: str) -> list[str]:
