@@ -2,13 +2,14 @@
 
 Reading composes the stage (references, payloads, instancing) and keeps
 every ``UsdGeom.Mesh`` with the prims above it, so the hierarchy and the
-local transforms survive; the instances of one prototype share one mesh. Polygons are triangulated (fans for convex faces,
-ear clipping for concave ones), hole faces removed, ``leftHanded`` winding
-flipped to the model's counter-clockwise-outward convention. Attributes are
-read at their earliest time sample (their default when not animated).
-``metersPerUnit`` becomes :class:`Units` where it matches one; ``upAxis``
-becomes the scene's ``up_axis`` (coordinates are kept as authored). ``displayColor``/``displayOpacity`` with constant or uniform
-interpolation become face colours; the rest (UVs, normals, other primvars,
+local transforms survive; the instances of one prototype share one mesh.
+Polygons are triangulated (fans for convex faces, ear clipping for concave
+ones), hole faces removed, ``leftHanded`` winding flipped to the model's
+counter-clockwise-outward convention. Attributes are read at their earliest
+time sample (their default when not animated). ``metersPerUnit`` becomes
+:class:`Units` where it matches one; ``upAxis`` becomes the scene's
+``up_axis`` (coordinates are kept as authored). ``displayColor`` and
+``displayOpacity`` with constant or uniform interpolation become face colours; the rest (UVs, normals, other primvars,
 materials, subdivision schemes: the cage is kept) is reported as dropped.
 Prims with purpose guide or proxy, and invisible prims, are skipped.
 
