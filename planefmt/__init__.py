@@ -32,6 +32,6 @@ __all__ = [
     "CODES", "ChecksumError", "Coding", "Colours", "ConversionError", "FormatError", "GeometryError",
     "GroupKind", "Header", "Limits", "LimitError", "Mesh", "Metadata", "Node", "ObjectRecord", "PartGroup",
     "PlaneBlock", "PlnError", "PlnWarning", "Quantization", "Reader", "Scene", "SkippedGroupsWarning",
-    "TruncatedError", "UP_AXES", "UP_AXIS", "UnknownChunk", "Units", "VersionError", "Writer", "chunk_bytes", "decode_mesh",
-    "decode_scene", "encode_mesh", "encode_scene", "open", "salvage_scene",
+    "TruncatedError", "UP_AXES", "UP_AXIS", "UnknownChunk", "Units", "VersionError", "Writer", "chunk_bytes",
+    "decode_mesh", "decode_scene", "encode_mesh", "encode_scene", "open", "salvage_scene",
 ]
