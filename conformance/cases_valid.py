@@ -623,7 +623,7 @@ CASES = [
               (Obj("pyramid"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL, (0,), shell=SHELL_PYRAMID),
                Colour(0, np.array([[0, 128, 0, 255]], dtype=np.uint8))), decoded_bbox=True),
     ValidCase("cube_meta_up_z", "version 3.0: the cube of cube_v3 with a mETA chunk up_axis = Z right after PHDR "
-              "(spec 3.2 §8.10: any version may hold it; its version stays 3.0)", V3_CUBE,
+              "(spec §10.3: any version may hold it; its version stays 3.0)", V3_CUBE,
               (Meta(UP_AXIS, "Z"), *cube_ops())),
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),

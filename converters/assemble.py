@@ -99,7 +99,7 @@ def world_transforms(scene: Scene) -> list[np.ndarray]:
     return world
 
 
-#: A Z-up scene turned Y-up (spec 3.2 §8.10): (x, y, z) -> (x, z, -y), a right-handed quarter turn about
+#: A Z-up scene turned Y-up (spec §10.3): (x, y, z) -> (x, z, -y), a right-handed quarter turn about
 #: +x that keeps x and brings +z up to +y, as Blender's and USD's glTF exporters turn it; its transpose
 #: turns a Y-up scene Z-up.
 Z_UP_TO_Y_UP = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])

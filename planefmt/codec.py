@@ -1493,7 +1493,7 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     One object per node, keeping name, parent and transform; each node's
     mesh is encoded in its local coordinates (a mesh several nodes share is
     stored once per node: the format has no shared part groups). The scene's
-    ``up_axis``, if any, is a mETA chunk (spec 3.2 §8.10). One coding serves the whole
+    ``up_axis``, if any, is a mETA chunk (spec §10.3). One coding serves the whole
     file; the tolerance is a fraction of the diagonal of the decoded scene's
     world bbox, and errors are measured in world coordinates. Identical
     planes (after coding) are stored once, written just before the first

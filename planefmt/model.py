@@ -212,14 +212,14 @@ class Colours:
     rgba: np.ndarray  # (m, 4) uint8
 
 
-#: The mETA keyword naming the axis that points up (spec 3.2 §8.10), and its values.
+#: The mETA keyword naming the axis that points up (spec §10.3), and its values.
 UP_AXIS = "up_axis"
 UP_AXES = ("Y", "Z")
 
 
 @dataclass(frozen=True)
 class Metadata:
-    """A mETA chunk: one keyword and its text value (spec 3.2 §8.10).
+    """A mETA chunk: one keyword and its text value (spec §10.3).
 
     ``key`` is 1 to 79 characters of printable ASCII without space; ``value`` any text. The
     keyword :data:`UP_AXIS` has the value ``"Y"`` or ``"Z"``.
@@ -278,7 +278,7 @@ class Node:
 class Scene:
     """Nodes in an order where every parent precedes its children.
 
-    ``up_axis`` is the world axis that points up, away from the ground (spec 3.2 §8.10): ``"Y"``
+    ``up_axis`` is the world axis that points up, away from the ground (spec §10.3): ``"Y"``
     (+y up: glTF's convention, USD's default) or ``"Z"`` (+z up: USD ``upAxis = "Z"``, most CAD),
     or None where the source does not say (OBJ, PLY, STL, OFF). Coordinates are right-handed and
     kept as authored whatever the axis: it tells viewers which way is up, and converters to a

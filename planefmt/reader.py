@@ -87,7 +87,7 @@ class Reader:
 
     @property
     def up_axis(self) -> str | None:
-        """The world axis that points up, ``"Y"`` or ``"Z"`` (spec 3.2 §8.10), None where the file does not
+        """The world axis that points up, ``"Y"`` or ``"Z"`` (spec §10.3), None where the file does not
         say; known once the first object, plane block or part group has been read."""
         return self.metadata.get(UP_AXIS)
 

@@ -199,7 +199,7 @@ class Writer:
         self._emit(schema.COLR, records.encode_colours(Colours(group, rgba)))
 
     def add_metadata(self, key: str, value: str) -> None:
-        """Write a mETA chunk (spec 3.2 §8.10): ``key`` = ``value``, each key once, before any object,
+        """Write a mETA chunk (spec §10.3): ``key`` = ``value``, each key once, before any object,
         plane or group. ``add_metadata(planefmt.UP_AXIS, "Z")`` records that +z points up."""
         if self._entries:
             raise PlnError("metadata is written before the first object, plane block and part group",

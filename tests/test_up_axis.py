@@ -1,4 +1,4 @@
-"""The up axis (issue 35, item 8): kept through .pln as a mETA chunk (spec 3.2 §8.10), read from and
+"""The up axis (issue 35, item 8): kept through .pln as a mETA chunk (spec §10.3), read from and
 written to USD's upAxis, and glTF's +Y up reached by turning a Z-up scene."""
 
 from __future__ import annotations

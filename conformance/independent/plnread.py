@@ -10,7 +10,7 @@ document says).  Its version 3.1 part, the sealed groups of pln-3 §8.8, was
 added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
 text and the golden files' JSON, not planefmt's shell code.  Its mETA part
-(pln-3 §8.10, ancillary metadata of any version) was added with that
+(pln.md §10.3, ancillary metadata of any version) was added with that
 section, from its text; a valid file's JSON lists the chunks as
 "metadata": {keyword: value}.
 
@@ -93,7 +93,7 @@ READ_BLOCK = 1 << 20  # payloads are read in bounded blocks (§4.1)
 
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 
-# pln-3 §8.10: a keyword is 1-79 bytes of 0x21-0x7E; the values of the keywords it defines
+# pln.md §10.3: a keyword is 1-79 bytes of 0x21-0x7E; the values of the keywords it defines
 META_KEYWORD_MAX = 79
 META_VALUES = {"up_axis": ("Y", "Z")}
 
@@ -1153,7 +1153,7 @@ class Reader:
         rgba = [list(p[8 + 4 * i:12 + 4 * i]) for i in range(count)]
         self.colours.append({"group": group, "rgba": rgba})
 
-    # -- pln-3 §8.10 metadata ---------------------------------------------
+    # -- pln.md §10.3 metadata ---------------------------------------------
 
     def read_metadata(self, p):
         if self.chunk_list:

@@ -25,7 +25,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", required=True, help="the PNG to write")
     p.add_argument("--size", type=int, default=640, help="image width and height in pixels (default 640)")
     p.add_argument("--up", choices=UP_AXES,
-                   help="the model axis drawn upwards (default: the file's up axis, spec 3.2 §8.10; Z where it "
+                   help="the model axis drawn upwards (default: the file's up axis, spec §10.3; Z where it "
                         "names none)")
     p.add_argument("--view", type=float, nargs=3, metavar=("X", "Y", "Z"),
                    help="direction from the model towards the eye, in model coordinates (default 1 -1.4 0.9 "
