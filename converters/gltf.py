@@ -14,7 +14,8 @@ base colour, one of several colours with three vertices of its own per face
 carrying the face's ``COLOR_0``; the reader turns both back into face colours.
 Positions are float32. A Z-up scene is turned Y-up, glTF's convention, by
 rotating its root nodes (``assemble.reoriented``: (x, y, z) -> (x, z, -y));
-vertices are written as they are. The ``.gltf`` writer puts all binary data in one
+vertices are written as they are, welded after rounding, with no triangle left
+without area (:func:`.assemble.at_float32`). The ``.gltf`` writer puts all binary data in one
 ``<stem>.bin`` beside the JSON.
 """
 
@@ -26,12 +27,10 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote, unquote, urlsplit
 
-import numpy as np
-
 from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
-from .assemble import reoriented
+from .assemble import at_float32, reoriented
 from .atomic import atomic_paths, write_bytes
 from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
@@ -145,11 +144,10 @@ def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:
     if scene.units not in (Units.METRE, Units.UNSPECIFIED):
         notes.append(f"units ({scene.units.name.lower()}; glTF is in metres, "
                      "coordinates written unscaled)")
-    if any(node.mesh is not None and (node.mesh.vertices.astype(np.float32)
-                                      != node.mesh.vertices).any() for node in scene.nodes):
-        notes.append("coordinates rounded to float32")
     try:
-        tm_scene, names = to_trimesh_scene(reoriented(scene, GLTF_UP_AXIS))
+        scene, rounding = at_float32(reoriented(scene, GLTF_UP_AXIS))
+        notes += rounding
+        tm_scene, names = to_trimesh_scene(scene)
 
         def restore_names(tree: dict[str, Any]) -> None:
             for node in tree.get("nodes", []):

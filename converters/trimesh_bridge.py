@@ -22,7 +22,7 @@ import numpy as np
 from planefmt.errors import ConversionError
 from planefmt.model import Mesh, Node, Scene, Units
 
-from .assemble import build_mesh, flatten, instancing_note
+from .assemble import at_float32, build_mesh, flatten, instancing_note
 from .atomic import write_bytes
 from .failures import describe
 
@@ -264,8 +264,13 @@ def write_flat(scene: Scene, path: str | os.PathLike[str], *, what: str,
     if mesh.face_colours is not None and not colours:
         notes.append("face colours")
         mesh = Mesh(vertices=mesh.vertices, faces=mesh.faces)
-    if float32 and (mesh.vertices.astype(np.float32) != mesh.vertices).any():
-        notes.append("coordinates rounded to float32")
+    if float32:
+        try:
+            flat, rounding = at_float32(Scene(nodes=(Node(name="", mesh=mesh),), units=scene.units))
+        except ConversionError as exc:
+            raise exc.located(file=file)
+        mesh = flat.nodes[0].mesh
+        notes += rounding
     try:
         data = export(to_trimesh(mesh))
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything

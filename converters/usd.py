@@ -27,7 +27,8 @@ Prim names are made valid identifiers and unique; a node name that had to
 change is kept as the prim's ``displayName``. Stage metadata: ``upAxis``
 (the scene's, Y where it has none; another on request, the scene turned
 into it), ``metersPerUnit`` (1 when the units are unspecified)
-and ``defaultPrim``. Points are float32 as the schema has them; face colours
+and ``defaultPrim``. Points are float32 as the schema has them (welded after
+rounding, with no triangle left without area: :func:`.assemble.at_float32`); face colours
 go to a uniform ``displayColor`` (and ``displayOpacity`` when not opaque),
 as the stored 8-bit values divided by 255.
 """
@@ -47,7 +48,7 @@ import numpy as np
 from planefmt.errors import ConversionError
 from planefmt.model import UP_AXES, Mesh, Node, Scene, Units
 
-from .assemble import build_mesh, instancing_note, reoriented
+from .assemble import at_float32, build_mesh, instancing_note, reoriented
 from .atomic import atomic_path
 from .failures import describe
 from .polygons import triangulate
@@ -383,6 +384,8 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
     stage = pxr.Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z if up_axis == "Z" else UsdGeom.Tokens.y)
     UsdGeom.SetStageMetersPerUnit(stage, METERS_PER_UNIT.get(scene.units, 1.0))
+    scene, notes = at_float32(scene)
+
     children: dict[int | None, int] = {}
     for node in scene.nodes:
         children[node.parent] = children.get(node.parent, 0) + 1
@@ -393,7 +396,7 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
     instanced = frozenset(k for k, node in enumerate(scene.nodes) if node.mesh is not None
                           and not children.get(k) and leaves[id(node.mesh)] > 1)
     instancing = instancing_note(scene, instanced)
-    notes = [instancing] if instancing else []
+    notes += [instancing] if instancing else []
     prototypes: dict[int, Any] = {}
 
     taken: dict[Any, set[str]] = {}
@@ -406,7 +409,6 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
         stage.SetDefaultPrim(wrapper)
 
     paths: list[Any] = []
-    rounded = False
     for index, node in enumerate(scene.nodes):
         parent_path = root if node.parent is None else paths[node.parent]
         name = _unique_name(pxr, node.name, taken.setdefault(parent_path, set()))
@@ -416,15 +418,14 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
             prototype = prototypes.get(id(node.mesh))
             if prototype is None:
                 prototype = _prototype(pxr, stage, len(prototypes), taken.setdefault(Sdf.Path.absoluteRootPath, set()))
-                rounded |= _write_mesh(pxr, UsdGeom.Mesh(stage.GetPrimAtPath(prototype.AppendChild("mesh"))),
-                                       node.mesh)
+                _write_mesh(pxr, UsdGeom.Mesh(stage.GetPrimAtPath(prototype.AppendChild("mesh"))), node.mesh)
                 prototypes[id(node.mesh)] = prototype
             prim = UsdGeom.Xform.Define(stage, path).GetPrim()
             prim.GetReferences().AddInternalReference(prototype)
             prim.SetInstanceable(True)
         elif node.mesh is not None and not children.get(index):
             prim = UsdGeom.Mesh.Define(stage, path).GetPrim()
-            rounded |= _write_mesh(pxr, UsdGeom.Mesh(prim), node.mesh)
+            _write_mesh(pxr, UsdGeom.Mesh(prim), node.mesh)
         else:
             prim = UsdGeom.Xform.Define(stage, path).GetPrim()
             if node.mesh is not None:
@@ -432,7 +433,7 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
                 mesh_path = path.AppendChild(own)
                 mesh_prim = UsdGeom.Mesh.Define(stage, mesh_path)
                 mesh_prim.GetPrim().SetCustomDataByKey(NODE_MESH_KEY, True)
-                rounded |= _write_mesh(pxr, mesh_prim, node.mesh)
+                _write_mesh(pxr, mesh_prim, node.mesh)
         if path.name != node.name:
             prim.SetDisplayName(node.name)
         if node.transform is not None:
@@ -441,8 +442,6 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
             UsdGeom.Xformable(prim).AddTransformOp().Set(pxr.Gf.Matrix4d(matrix.T.tolist()))
         if node.parent is None and children.get(None, 0) == 1:
             stage.SetDefaultPrim(prim)
-    if rounded:
-        notes.append("coordinates rounded to float32")
     return stage, notes
 
 
@@ -466,8 +465,8 @@ def _unique_name(pxr: SimpleNamespace, name: str, taken: set[str]) -> str:
     return candidate
 
 
-def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> bool:
-    """Author a triangle mesh on ``usd_mesh``; True if float32 rounding changed a point."""
+def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> None:
+    """Author a triangle mesh, its coordinates float32 already (:func:`.assemble.at_float32`), on ``usd_mesh``."""
     Vt, UsdGeom = pxr.Vt, pxr.UsdGeom
     points = np.ascontiguousarray(mesh.vertices, dtype=np.float32)
     usd_mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
@@ -486,4 +485,3 @@ def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> bool:
         if (mesh.face_colours[:, 3] != 255).any():
             usd_mesh.CreateDisplayOpacityPrimvar(UsdGeom.Tokens.uniform).Set(
                 Vt.FloatArray.FromNumpy(np.ascontiguousarray(rgba[:, 3])))
-    return bool((points != mesh.vertices).any())
