@@ -44,6 +44,7 @@ Decoding dispatches on ``group.kind`` through :data:`DECODERS`.
 
 from __future__ import annotations
 
+import hashlib
 import io
 import math
 import os
@@ -61,8 +62,8 @@ from . import progress, quantize, records
 from .errors import CODES, FormatError, GeometryError, PlnError, PlnWarning, SkippedGroupsWarning
 from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
-from .model import (BSP_MAX_SPLIT, Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup,
-                    Quantization, Scene, Units)
+from .model import (BSP_MAX_SPLIT, UP_AXIS, Coding, Colours, GroupKind, Header, Mesh, Metadata, Node, ObjectRecord,
+                    PartGroup, Quantization, Scene, Units)
 from .convexbound import convex_hausdorff
 from .bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
 from .cells import decode_cells_group
@@ -1490,7 +1491,9 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
     One object per node, keeping name, parent and transform; each node's
-    mesh is encoded in its local coordinates. One coding serves the whole
+    mesh is encoded in its local coordinates (a mesh several nodes share is
+    stored once per node: the format has no shared part groups). The scene's
+    ``up_axis``, if any, is a mETA chunk (spec §10.3). One coding serves the whole
     file; the tolerance is a fraction of the diagonal of the decoded scene's
     world bbox, and errors are measured in world coordinates. Identical
     planes (after coding) are stored once, written just before the first
@@ -1611,6 +1614,8 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
     index = True if not compact else None
     with _writer(target, header, compress, index) as w:
+        if scene.up_axis is not None:
+            w.add_metadata(UP_AXIS, scene.up_axis)
         for i, node in enumerate(scene.nodes):
             obj_index = w.add_object(node.name, node.parent, node.transform)
             if i not in by_node:
@@ -1721,7 +1726,7 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
         flush()
         if skipped:
             warnings.warn(SkippedGroupsWarning(skipped_groups(skipped), r.name), stacklevel=2)
-        return _assemble(r.objects, parts, r.header.units, colours)
+        return _assemble(r.objects, parts, r.header.units, colours, r.up_axis)
 
 
 def skipped_groups(groups: Sequence[GroupLike]) -> str:
@@ -1757,7 +1762,8 @@ def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str
         except GeometryError as exc:
             lost.append(f"part group {g.index} lost: {exc.reason}")
     colours = {r.group: r.rgba for r in got.records if isinstance(r, Colours)}
-    return _assemble(objects, parts, got.header.units, colours), lost
+    up = [r.value for r in got.records if isinstance(r, Metadata) and r.key == UP_AXIS]
+    return _assemble(objects, parts, got.header.units, colours, up[0] if up else None), lost
 
 
 #: Face colour of decoded triangles whose group has no cOLR, in an object where others have one.
@@ -1765,13 +1771,35 @@ UNCOLOURED = np.array([200, 200, 200, 255], dtype=np.uint8)
 
 
 def _assemble(objects: Sequence[ObjectRecord], parts: dict[int, list[tuple[int, DecodedGroup]]], units: Units,
-              colours: dict[int, np.ndarray]) -> Scene:
+              colours: dict[int, np.ndarray], up_axis: str | None) -> Scene:
     # Salvaged objects may have gaps in their indices; nodes are numbered by position.
     position = {o.index: i for i, o in enumerate(objects)}
+    # A mesh its source placed at several nodes is stored once per object (a .pln file has no shared part
+    # groups) and decodes to the same triangles each time: those objects share one Mesh again, as the
+    # source's nodes did, so that writers can instance it.
+    decoded: dict[bytes, Mesh] = {}
+
+    def shared(mesh: Mesh) -> Mesh:
+        kept = decoded.setdefault(_digest(mesh), mesh)
+        return kept if kept is mesh or _same_mesh(kept, mesh) else mesh
+
     nodes = tuple(Node(name=o.name, parent=None if o.parent is None else position[o.parent], transform=o.transform,
-                       mesh=_object_mesh(parts[o.index], colours) if o.index in parts else None)
+                       mesh=shared(_object_mesh(parts[o.index], colours)) if o.index in parts else None)
                   for o in objects)
-    return Scene(nodes=nodes, units=units)
+    return Scene(nodes=nodes, units=units, up_axis=up_axis)
+
+
+def _digest(mesh: Mesh) -> bytes:
+    h = hashlib.blake2b(digest_size=16)
+    for a in (mesh.vertices, mesh.faces, mesh.face_colours):
+        h.update(b"-" if a is None else repr(a.shape).encode() + np.ascontiguousarray(a).tobytes())
+    return h.digest()
+
+
+def _same_mesh(a: Mesh, b: Mesh) -> bool:
+    return (np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+            and (a.face_colours is None) == (b.face_colours is None)
+            and (a.face_colours is None or np.array_equal(a.face_colours, b.face_colours)))
 
 
 def _object_mesh(parts: list[tuple[int, DecodedGroup]], colours: dict[int, np.ndarray]) -> Mesh:
