@@ -1011,6 +1011,49 @@ def _():
     return file(cube() + [(schema.COLR, colr(count=5))])
 
 
+# -- metadata (spec §10.3) ------------------------------------------------------------------
+
+def with_meta(*payloads: bytes, at: int = 1) -> bytes:
+    """The cube with raw mETA payloads (what the writer refuses to write) inserted at layout position ``at``."""
+    layout = cube()
+    return file(layout[:at] + [(schema.META, p) for p in payloads] + layout[at:])
+
+
+@case("xmeta_no_separator", "BAD_METADATA", "a mETA payload up_axisZ without the 0x00 after its keyword")
+def _():
+    return with_meta(b"up_axisZ")
+
+
+@case("xmeta_empty_keyword", "BAD_METADATA", "a mETA whose keyword is empty (the payload starts with 0x00)")
+def _():
+    return with_meta(b"\x00Z")
+
+
+@case("xmeta_keyword_space", "BAD_METADATA", "a mETA keyword with a space, 'up axis'")
+def _():
+    return with_meta(b"up axis\x00Z")
+
+
+@case("xmeta_value_utf8", "BAD_METADATA", "a mETA value that is not UTF-8 (ff fe) under a keyword no spec defines")
+def _():
+    return with_meta(b"title\x00\xff\xfe")
+
+
+@case("xmeta_up_axis_x", "BAD_METADATA", "mETA up_axis = X: only Y and Z are defined")
+def _():
+    return with_meta(b"up_axis\x00X")
+
+
+@case("xmeta_repeated", "BAD_METADATA", "two mETA chunks up_axis = Z: a keyword appears once")
+def _():
+    return with_meta(b"up_axis\x00Z", b"up_axis\x00Z")
+
+
+@case("xmeta_after_object", "BAD_METADATA", "mETA up_axis = Z after the OBJT: metadata precedes the geometry")
+def _():
+    return with_meta(b"up_axis\x00Z", at=2)
+
+
 # -- index and end (spec §4.4, §10.2) -----------------------------------------------------------
 
 def with_index(entries: list[tuple[int, bytes, int]], layout: Layout | None = None,

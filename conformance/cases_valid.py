@@ -21,8 +21,8 @@ import numpy as np
 import planefmt
 import planefmt.container.quantize
 from planefmt.container import records, schema
-from planefmt.model import (Coding, Colours, GroupKind, Header, ObjectRecord, PartGroup, Quantization, Shell,
-                            Units)
+from planefmt.model import (UP_AXIS, Coding, Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup,
+                            Quantization, Shell, Units)
 
 from . import reference
 from .build import (CUBE, SPEC_HEADER, box, finish, frame, header_json, rounded, shell_json, stored_header, stored_planes,
@@ -63,6 +63,12 @@ class Group:
 class Colour:
     group: int
     rgba: np.ndarray
+
+
+@dataclass(frozen=True)
+class Meta:
+    key: str
+    value: str
 
 
 @dataclass(frozen=True)
@@ -162,6 +168,8 @@ def written(case: ValidCase, header: Header) -> bytes:
                             extra=op.extra, vertex_planes=_vertex_planes(op), facets=_facets(op), shell=op.shell)
             elif isinstance(op, Colour):
                 w.add_colours(op.group, op.rgba)
+            elif isinstance(op, Meta):
+                w.add_metadata(op.key, op.value)
             else:
                 w.add_chunk(op.type, op.payload)
     return bytes(sink.data) if case.stream else sink.getvalue()
@@ -191,6 +199,8 @@ def assembled(case: ValidCase, header: Header) -> bytes:
             groups += 1
         elif isinstance(op, Colour):
             layout.append((schema.COLR, records.encode_colours(Colours(op.group, op.rgba))))
+        elif isinstance(op, Meta):
+            layout.append((schema.META, records.encode_metadata(Metadata(op.key, op.value))))
         else:
             layout.append((op.type, op.payload))
     if case.edit is not None:
@@ -239,7 +249,7 @@ def expected(case: ValidCase, header: Header, geo: dict) -> dict:
         groups.append(entry)
     colours = [{"group": op.group, "rgba": np.asarray(op.rgba).tolist()} for op in case.ops
                if isinstance(op, Colour)]
-    return {
+    result = {
         "header": header_json(header, case.counts),
         "planes": case.table.tolist(),
         "objects": objects,
@@ -249,6 +259,11 @@ def expected(case: ValidCase, header: Header, geo: dict) -> dict:
         "findings_optional": sorted(set(case.findings_optional)),
         "geometry": geo,
     }
+    metadata = {op.key: op.value for op in case.ops if isinstance(op, Meta)}
+    if metadata:
+        # Only here: the results of the cases before mETA stay as they were.
+        result["metadata"] = metadata
+    return result
 
 
 def build(case: ValidCase) -> tuple[bytes, dict]:
@@ -607,6 +622,9 @@ CASES = [
               V32_CUBE,
               (Obj("pyramid"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL, (0,), shell=SHELL_PYRAMID),
                Colour(0, np.array([[0, 128, 0, 255]], dtype=np.uint8))), decoded_bbox=True),
+    ValidCase("cube_meta_up_z", "version 3.0: the cube of cube_v3 with a mETA chunk up_axis = Z right after PHDR "
+              "(spec §10.3: any version may hold it; its version stays 3.0)", V3_CUBE,
+              (Meta(UP_AXIS, "Z"), *cube_ops())),
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),
     # -- rules spec/pln.md decides (issue 32)

@@ -12,6 +12,9 @@ writers call :func:`flatten` to bake the scene's transforms into one mesh.
 
 from __future__ import annotations
 
+from collections import Counter
+from dataclasses import replace
+
 import numpy as np
 
 from dataclasses import replace
@@ -201,6 +204,50 @@ def world_transforms(scene: Scene) -> list[np.ndarray]:
         local = np.eye(4) if node.transform is None else np.asarray(node.transform, np.float64)
         world.append(local if node.parent is None else world[node.parent] @ local)
     return world
+
+
+#: A Z-up scene turned Y-up (spec §10.3): (x, y, z) -> (x, z, -y), a right-handed quarter turn about
+#: +x that keeps x and brings +z up to +y, as Blender's and USD's glTF exporters turn it; its transpose
+#: turns a Y-up scene Z-up.
+Z_UP_TO_Y_UP = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0], [0.0, -1.0, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0]])
+
+
+def up_rotation(source: str, target: str) -> np.ndarray:
+    """The 4x4 rotation taking a scene whose ``source`` axis points up to one whose ``target`` axis does."""
+    if source == target:
+        return np.eye(4)
+    return Z_UP_TO_Y_UP if (source, target) == ("Z", "Y") else Z_UP_TO_Y_UP.T
+
+
+def reoriented(scene: Scene, up_axis: str) -> Scene:
+    """``scene`` with ``up_axis`` pointing up: its root nodes turned by :func:`up_rotation` where its own
+    up axis differs. Meshes are untouched, so nodes sharing one still share it. A scene that does not
+    say which way is up is taken as it is, now said to be ``up_axis`` up."""
+    if scene.up_axis in (None, up_axis):
+        return replace(scene, up_axis=up_axis)
+    turn = up_rotation(scene.up_axis, up_axis)
+    nodes = tuple(node if node.parent is not None else
+                  replace(node, transform=turn if node.transform is None else turn @ node.transform)
+                  for node in scene.nodes)
+    return replace(scene, nodes=nodes, up_axis=up_axis)
+
+
+def instancing_note(scene: Scene, instanced: frozenset[int] = frozenset()) -> str | None:
+    """For writers that store a node's mesh with the node: how many nodes share how many meshes that are
+    stored more than once, and how many times the source's triangles the output holds; None if no mesh
+    is. ``instanced``: the nodes whose mesh the writer stores once for all of them (USD instances)."""
+    faces = {id(node.mesh): len(node.mesh.faces) for node in scene.nodes if node.mesh is not None}
+    copies = Counter(id(node.mesh) for k, node in enumerate(scene.nodes)
+                     if node.mesh is not None and k not in instanced)
+    copies.update({id(scene.nodes[k].mesh) for k in instanced})  # the one copy the instances share
+    flattened = [key for key, count in copies.items() if count > 1]
+    if not flattened:
+        return None
+    nodes = sum(1 for node in scene.nodes if node.mesh is not None and id(node.mesh) in flattened)
+    stored = sum(count * faces[key] for key, count in copies.items())
+    return (f"instancing flattened ({nodes} nodes share {len(flattened)} "
+            f"mesh{'es' if len(flattened) > 1 else ''}; output {stored / max(sum(faces.values()), 1):.3g}× the "
+            "source's triangles)")
 
 
 def transform_mesh(mesh: Mesh, matrix: np.ndarray) -> Mesh:

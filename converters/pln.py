@@ -11,7 +11,7 @@ import numpy as np
 from planefmt.errors import GeometryError, PlnWarning, SkippedGroupsWarning
 from planefmt.model import Mesh, Scene
 
-from .assemble import build_mesh, with_area, world_transforms
+from .assemble import build_mesh, instancing_note, with_area, world_transforms
 
 SIGNATURE_TAIL = b"PLN"
 
@@ -49,6 +49,9 @@ def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6
                                     tau=tau, compress=compress, compact=compact, watertight=watertight,
                                     scheme=scheme)
     notes = [f"{dropped} zero-area triangle{'s' if dropped > 1 else ''} (no plane to store)"] if dropped else []
+    instancing = instancing_note(scene)
+    if instancing:
+        notes.append(instancing)
     if header.error_bound > header.tolerance:
         # Only a forced coding gets here: the codec refuses any other that misses the tolerance.
         notes.append(f"the tolerance {header.tolerance:g} (the forced coding measured {header.error_bound:.3g} of "

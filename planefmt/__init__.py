@@ -8,8 +8,8 @@ h the signed distance in model units; the solid lies where omega . x <= h.
 from .container.chunks import Limits, chunk_bytes
 from .errors import (CODES, ChecksumError, ConversionError, FormatError, GeometryError, LimitError,
                      PlnError, PlnWarning, SkippedGroupsWarning, TruncatedError, VersionError)
-from .model import (Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup, PlaneBlock,
-                    Quantization, Scene, UnknownChunk, Units)
+from .model import (UP_AXES, UP_AXIS, Coding, Colours, GroupKind, Header, Mesh, Metadata, Node, ObjectRecord,
+                    PartGroup, PlaneBlock, Quantization, Scene, UnknownChunk, Units)
 from .container.reader import Reader, open
 from .container.writer import Writer
 
@@ -30,8 +30,8 @@ def __getattr__(name: str):
 
 __all__ = [
     "CODES", "ChecksumError", "Coding", "Colours", "ConversionError", "FormatError", "GeometryError",
-    "GroupKind", "Header", "Limits", "LimitError", "Mesh", "Node", "ObjectRecord", "PartGroup",
+    "GroupKind", "Header", "Limits", "LimitError", "Mesh", "Metadata", "Node", "ObjectRecord", "PartGroup",
     "PlaneBlock", "PlnError", "PlnWarning", "Quantization", "Reader", "Scene", "SkippedGroupsWarning",
-    "TruncatedError", "UnknownChunk", "Units", "VersionError", "Writer", "chunk_bytes", "decode_mesh",
-    "decode_scene", "encode_mesh", "encode_scene", "open", "salvage_scene",
+    "TruncatedError", "UP_AXES", "UP_AXIS", "UnknownChunk", "Units", "VersionError", "Writer", "chunk_bytes",
+    "decode_mesh", "decode_scene", "encode_mesh", "encode_scene", "open", "salvage_scene",
 ]

@@ -56,6 +56,7 @@ _CATALOGUE = [
     Code("SKIPPED_GROUP_KIND", "warning", "a part group of a kind from a newer minor version was skipped"),
     Code("BAD_GROUP_STRUCTURE", "error", "cells, tree or sealed triangles of a part group are malformed"),
     Code("BAD_COLOURS", "error", "a cOLR chunk does not match its part group"),
+    Code("BAD_METADATA", "error", "a mETA chunk is malformed, repeats a keyword, follows geometry or has a bad value"),
     Code("BAD_INDEX", "error", "the iNDX chunk points outside the file or at the wrong chunk"),
     # geometry (spec §11)
     Code("EMPTY_POLYTOPE", "error", "the half-spaces of a part group have an empty intersection"),

@@ -212,6 +212,23 @@ class Colours:
     rgba: np.ndarray  # (m, 4) uint8
 
 
+#: The mETA keyword naming the axis that points up (spec §10.3), and its values.
+UP_AXIS = "up_axis"
+UP_AXES = ("Y", "Z")
+
+
+@dataclass(frozen=True)
+class Metadata:
+    """A mETA chunk: one keyword and its text value (spec §10.3).
+
+    ``key`` is 1 to 79 characters of printable ASCII without space; ``value`` any text. The
+    keyword :data:`UP_AXIS` has the value ``"Y"`` or ``"Z"``.
+    """
+
+    key: str
+    value: str
+
+
 @dataclass(frozen=True)
 class UnknownChunk:
     """An ancillary chunk this implementation does not interpret, kept verbatim."""
@@ -221,7 +238,7 @@ class UnknownChunk:
     offset: int | None = None
 
 
-Record = ObjectRecord | PlaneBlock | PartGroup | Colours | UnknownChunk
+Record = ObjectRecord | PlaneBlock | PartGroup | Colours | Metadata | UnknownChunk
 
 
 @dataclass(frozen=True)
@@ -259,11 +276,20 @@ class Node:
 
 @dataclass(frozen=True)
 class Scene:
-    """Nodes in an order where every parent precedes its children."""
+    """Nodes in an order where every parent precedes its children.
+
+    ``up_axis`` is the world axis that points up, away from the ground (spec §10.3): ``"Y"``
+    (+y up: glTF's convention, USD's default) or ``"Z"`` (+z up: USD ``upAxis = "Z"``, most CAD),
+    or None where the source does not say (OBJ, PLY, STL, OFF). Coordinates are right-handed and
+    kept as authored whatever the axis: it tells viewers which way is up, and converters to a
+    format with a fixed up axis (glTF: Y) rotate the scene into it.
+    """
 
     nodes: tuple[Node, ...]
     units: Units = Units.UNSPECIFIED
+    up_axis: str | None = None
 
     def __repr__(self) -> str:
         meshes = {id(node.mesh) for node in self.nodes if node.mesh is not None}
-        return f"Scene({len(self.nodes)} nodes, {len(meshes)} meshes, units={self.units.name})"
+        up = "" if self.up_axis is None else f", up_axis={self.up_axis}"
+        return f"Scene({len(self.nodes)} nodes, {len(meshes)} meshes, units={self.units.name}{up})"

@@ -9,7 +9,10 @@ the Python 3.11 standard library only.  It reads versions 1.0, 2.0, 3.0,
 document says).  Its version 3.1 part, the sealed groups of pln-3 §8.8, was
 added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
-text and the golden files' JSON, not planefmt's shell code.
+text and the golden files' JSON, not planefmt's shell code.  Its mETA part
+(pln.md §10.3, ancillary metadata of any version) was added with that
+section, from its text; a valid file's JSON lists the chunks as
+"metadata": {keyword: value}.
 
 It checks everything a reader must check without decoding geometry
 (signature, chunk framing, CRC-32, header, plane table in every coding,
@@ -88,7 +91,11 @@ LIMIT_OBJECTS = 2**24
 
 READ_BLOCK = 1 << 20  # payloads are read in bounded blocks (§4.1)
 
-KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"iNDX", b"PEND"}
+KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
+
+# pln.md §10.3: a keyword is 1-79 bytes of 0x21-0x7E; the values of the keywords it defines
+META_KEYWORD_MAX = 79
+META_VALUES = {"up_axis": ("Y", "Z")}
 
 FLAG_LOSSY, FLAG_COUNTS_KNOWN, FLAG_BBOX_KNOWN = 1, 2, 4  # §5
 OBJ_HAS_TRANSFORM = 1  # §8.1
@@ -348,6 +355,7 @@ class Reader:
         self.groups = []  # JSON dicts
         self.group_refcounts = []
         self.colours = []
+        self.metadata = {}
         self.findings = []
         self.chunk_list = []  # (offset, type, ordinal) of OBJT, PLNS, GRUP
         self.index_offset = None  # offset of the iNDX chunk, if seen
@@ -443,6 +451,8 @@ class Reader:
                     self.read_group(payload, offset)
                 elif ctype == b"cOLR":
                     self.read_colours(payload)
+                elif ctype == b"mETA":
+                    self.read_metadata(payload)
                 elif ctype == b"iNDX":
                     self.read_index(payload, offset)
                 elif ctype[0] & 0x20:
@@ -1143,6 +1153,28 @@ class Reader:
         rgba = [list(p[8 + 4 * i:12 + 4 * i]) for i in range(count)]
         self.colours.append({"group": group, "rgba": rgba})
 
+    # -- pln.md §10.3 metadata ---------------------------------------------
+
+    def read_metadata(self, p):
+        if self.chunk_list:
+            raise PlnError("BAD_METADATA", "mETA after an OBJT, PLNS or GRUP chunk")
+        nul = p.find(b"\x00")
+        if nul < 0:
+            raise PlnError("BAD_METADATA", "mETA without a 0x00 after its keyword")
+        keyword = p[:nul]
+        if not 1 <= len(keyword) <= META_KEYWORD_MAX or any(c < 0x21 or c > 0x7E for c in keyword):
+            raise PlnError("BAD_METADATA", "mETA keyword %r is not 1-79 printable ASCII bytes" % keyword)
+        try:
+            value = p[nul + 1:].decode("utf-8")
+        except UnicodeDecodeError:
+            raise PlnError("BAD_METADATA", "mETA value is not UTF-8")
+        key = keyword.decode("ascii")
+        if key in self.metadata:
+            raise PlnError("BAD_METADATA", "a second mETA %s" % key)
+        if key in META_VALUES and value not in META_VALUES[key]:
+            raise PlnError("BAD_METADATA", "mETA %s = %r" % (key, value))
+        self.metadata[key] = value
+
     # -- §8.6 index --------------------------------------------------------
 
     def read_index(self, p, offset):
@@ -1219,6 +1251,7 @@ class Reader:
             "objects": self.objects,
             "groups": self.groups,
             "colours": self.colours,
+            "metadata": self.metadata,
             "findings": self.findings,
             "geometry": None,
         }

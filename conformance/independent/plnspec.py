@@ -5,7 +5,7 @@ spec/pln.md alone (no planefmt, no construct, none of the other readers or spec 
     python conformance/independent/plnspec.py FILE
 
 prints one JSON object in the form of conformance/README.md ("The contract"): the file's
-header, plane table, objects, part-group records, colours and findings, and exits 0; or
+header, plane table, objects, part-group records, colours, metadata and findings, and exits 0; or
 prints {"error": "CODE"} and exits 1. It does not decode geometry ("geometry": null).
 
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
@@ -32,7 +32,9 @@ PLANE_LIMIT = 1 << 28
 REF_LIMIT = 1 << 24
 OBJECT_LIMIT = 1 << 24
 
-KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"iNDX", b"PEND"}
+KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
+# §10.3: the values of the keywords the spec defines
+META_VALUES = {"up_axis": ("Y", "Z")}
 NEWEST_MINOR = {1: 0, 2: 0, 3: 2}  # §9.3: "for this document: 1.0, 2.0, 3.2"
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
@@ -186,6 +188,7 @@ class Reader:
         self.groups: list[dict] = []
         self.group_refs: list[int] = []  # ref_count of every group read, skipped ones included
         self.colours: list[dict] = []
+        self.metadata: dict[str, str] = {}
         self.chunks: list[tuple[int, bytes, int]] = []  # (offset, type, ordinal) of OBJT/PLNS/GRUP
         self.index_offset: int | None = None
 
@@ -251,6 +254,8 @@ class Reader:
                 self.grup(payload, offset)
             elif ctype == b"cOLR":
                 self.colr(payload)
+            elif ctype == b"mETA":
+                self.meta(payload)
             elif ctype == b"iNDX":
                 self.indx(payload, offset)
                 self.index_offset = offset
@@ -769,6 +774,26 @@ class Reader:
             fail("BAD_COLOURS", f"{count} colours for {self.group_refs[group]} references")
         self.colours.append({"group": group, "rgba": [list(rgba[4 * i:4 * i + 4]) for i in range(count)]})
 
+    # §10.3 (added with that section, from its text)
+    def meta(self, p: bytes):
+        if self.chunks:
+            fail("BAD_METADATA", "mETA after an OBJT, PLNS or GRUP")
+        if b"\x00" not in p:
+            fail("BAD_METADATA", "no 0x00 after the keyword")
+        keyword, value = p.split(b"\x00", 1)
+        if not 1 <= len(keyword) <= 79 or any(b < 0x21 or b > 0x7E for b in keyword):
+            fail("BAD_METADATA", f"keyword {keyword!r}")
+        try:
+            text = value.decode("utf-8")
+        except UnicodeDecodeError:
+            fail("BAD_METADATA", "value not UTF-8")
+        key = keyword.decode("ascii")
+        if key in self.metadata:
+            fail("BAD_METADATA", f"{key} twice")
+        if key in META_VALUES and text not in META_VALUES[key]:
+            fail("BAD_METADATA", f"{key} = {text!r}")
+        self.metadata[key] = text
+
     # §10.2
     def indx(self, p: bytes, offset: int):
         c = Cursor(p)
@@ -812,7 +837,8 @@ class Reader:
 
     def result(self) -> dict:
         return {"header": self.header, "planes": self.planes, "objects": self.objects,
-                "groups": self.groups, "colours": self.colours, "findings": self.findings,
+                "groups": self.groups, "colours": self.colours, "metadata": self.metadata,
+                "findings": self.findings,
                 "geometry": None}
 
 

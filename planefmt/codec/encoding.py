@@ -22,7 +22,7 @@ from ..errors import GeometryError
 from ..geometry.planes import transform_points
 from ..groups.shells import reordered
 from ..groups.solids import FLAT_STRATEGIES, STRATEGIES, Splitter
-from ..model import BSP_MAX_SPLIT, Coding, GroupKind, Header, Mesh, Node, Quantization, Scene, Units
+from ..model import BSP_MAX_SPLIT, UP_AXIS, Coding, GroupKind, Header, Mesh, Node, Quantization, Scene, Units
 from .choosing import _Choice, _choose, _choose_shells
 from .preparing import LOSSLESS_TOLERANCE, _Object, _diagonal, _prepare, _world_transforms
 from .strategies import GroupSpec
@@ -120,7 +120,9 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
     One object per node, keeping name, parent and transform; each node's
-    mesh is encoded in its local coordinates. One coding serves the whole
+    mesh is encoded in its local coordinates (a mesh several nodes share is
+    stored once per node: the format has no shared part groups). The scene's
+    ``up_axis``, if any, is a mETA chunk (spec §10.3). One coding serves the whole
     file; the tolerance is a fraction of the diagonal of the decoded scene's
     world bbox, and errors are measured in world coordinates. Identical
     planes (after coding) are stored once, written just before the first
@@ -241,6 +243,8 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
     index = True if not compact else None
     with _writer(target, header, compress, index) as w:
+        if scene.up_axis is not None:
+            w.add_metadata(UP_AXIS, scene.up_axis)
         for i, node in enumerate(scene.nodes):
             obj_index = w.add_object(node.name, node.parent, node.transform)
             if i not in by_node:

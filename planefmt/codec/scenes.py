@@ -5,6 +5,7 @@ damaged file.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import warnings
 from collections.abc import Iterable, Sequence
@@ -17,7 +18,7 @@ from ..container.reader import Reader
 from ..container.salvage import salvage
 from ..errors import FormatError, GeometryError, PlnError, SkippedGroupsWarning
 from ..geometry.planes import transform_points
-from ..model import Colours, Header, Mesh, Node, ObjectRecord, PartGroup, Scene, Units
+from ..model import UP_AXIS, Colours, Header, Mesh, Metadata, Node, ObjectRecord, PartGroup, Scene, Units
 from .decoding import (DecodedGroup, EXACT, GroupLike, _concatenate, decode_group, decode_groups, header_plane_error,
                        plane_error)
 from .encoding import Encoded
@@ -112,7 +113,7 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
         flush()
         if skipped:
             warnings.warn(SkippedGroupsWarning(skipped_groups(skipped), r.name), stacklevel=2)
-        return _assemble(r.objects, parts, r.header.units, colours)
+        return _assemble(r.objects, parts, r.header.units, colours, r.up_axis)
 
 
 def skipped_groups(groups: Sequence[GroupLike]) -> str:
@@ -148,7 +149,8 @@ def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str
         except GeometryError as exc:
             lost.append(f"part group {g.index} lost: {exc.reason}")
     colours = {r.group: r.rgba for r in got.records if isinstance(r, Colours)}
-    return _assemble(objects, parts, got.header.units, colours), lost
+    up = [r.value for r in got.records if isinstance(r, Metadata) and r.key == UP_AXIS]
+    return _assemble(objects, parts, got.header.units, colours, up[0] if up else None), lost
 
 
 #: Face colour of decoded triangles whose group has no cOLR, in an object where others have one.
@@ -156,13 +158,35 @@ UNCOLOURED = np.array([200, 200, 200, 255], dtype=np.uint8)
 
 
 def _assemble(objects: Sequence[ObjectRecord], parts: dict[int, list[tuple[int, DecodedGroup]]], units: Units,
-              colours: dict[int, np.ndarray]) -> Scene:
+              colours: dict[int, np.ndarray], up_axis: str | None) -> Scene:
     # Salvaged objects may have gaps in their indices; nodes are numbered by position.
     position = {o.index: i for i, o in enumerate(objects)}
+    # A mesh its source placed at several nodes is stored once per object (a .pln file has no shared part
+    # groups) and decodes to the same triangles each time: those objects share one Mesh again, as the
+    # source's nodes did, so that writers can instance it.
+    decoded: dict[bytes, Mesh] = {}
+
+    def shared(mesh: Mesh) -> Mesh:
+        kept = decoded.setdefault(_digest(mesh), mesh)
+        return kept if kept is mesh or _same_mesh(kept, mesh) else mesh
+
     nodes = tuple(Node(name=o.name, parent=None if o.parent is None else position[o.parent], transform=o.transform,
-                       mesh=_object_mesh(parts[o.index], colours) if o.index in parts else None)
+                       mesh=shared(_object_mesh(parts[o.index], colours)) if o.index in parts else None)
                   for o in objects)
-    return Scene(nodes=nodes, units=units)
+    return Scene(nodes=nodes, units=units, up_axis=up_axis)
+
+
+def _digest(mesh: Mesh) -> bytes:
+    h = hashlib.blake2b(digest_size=16)
+    for a in (mesh.vertices, mesh.faces, mesh.face_colours):
+        h.update(b"-" if a is None else repr(a.shape).encode() + np.ascontiguousarray(a).tobytes())
+    return h.digest()
+
+
+def _same_mesh(a: Mesh, b: Mesh) -> bool:
+    return (np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+            and (a.face_colours is None) == (b.face_colours is None)
+            and (a.face_colours is None or np.array_equal(a.face_colours, b.face_colours)))
 
 
 def _object_mesh(parts: list[tuple[int, DecodedGroup]], colours: dict[int, np.ndarray]) -> Mesh:

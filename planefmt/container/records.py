@@ -16,8 +16,8 @@ import numpy as np
 from . import quantize, schema, varint
 from .chunks import Limits
 from ..errors import FormatError, LimitError, PlnError, VersionError
-from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, FREE, MAX_GRID, NO_PARENT, Coding, Colours, GroupKind, Header,
-                    ObjectRecord, PartGroup, PlaneBlock, Quantization, Shell, Units)
+from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, FREE, MAX_GRID, NO_PARENT, UP_AXES, UP_AXIS, Coding, Colours,
+                    GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Quantization, Shell, Units)
 
 #: Major versions read, each with the newest minor version this reader knows.
 VERSIONS = {1: 0, 2: 0, 3: 2}
@@ -604,6 +604,40 @@ def decode_colours(payload: bytes, group_refs: dict[int, int]) -> Colours:
         raise FormatError(f"cOLR for group {r.group} does not match a preceding group's references",
                           code="BAD_COLOURS")
     return Colours(group=r.group, rgba=np.frombuffer(r.rgba, dtype=np.uint8).reshape(-1, 4).copy())
+
+
+# spec §10.3 Metadata ------------------------------------------------------------------------
+
+def encode_metadata(m: Metadata) -> bytes:
+    """A mETA payload; raises ``BAD_METADATA`` for what :func:`decode_metadata` would refuse or read otherwise."""
+    try:
+        payload = schema.Metadata.build(dict(keyword=m.key.encode("ascii"), value=m.value.encode("utf-8")))
+    except UnicodeEncodeError:
+        raise FormatError(f"mETA {m.key!r}: keyword not ASCII or value not encodable as UTF-8",
+                          code="BAD_METADATA") from None
+    if decode_metadata(payload) != m:  # a NUL in the keyword would end it early
+        raise FormatError(f"mETA keyword {m.key!r} holds a NUL", code="BAD_METADATA")
+    return payload
+
+
+def decode_metadata(payload: bytes) -> Metadata:
+    """A mETA chunk: the keyword and its value, checked (the value too, for a keyword the spec defines)."""
+    if b"\x00" not in payload:
+        raise FormatError("mETA payload has no 0x00 byte after its keyword", code="BAD_METADATA")
+    r = _parse(schema.Metadata, payload, "mETA")
+    low, high = schema.METADATA_KEYWORD_BYTES
+    raw = np.frombuffer(r.keyword, dtype=np.uint8)
+    if not low <= len(raw) <= high or ((raw < 0x21) | (raw > 0x7E)).any():
+        raise FormatError(f"mETA keyword {bytes(r.keyword)!r} is not {low} to {high} printable ASCII characters "
+                          "without space", code="BAD_METADATA")
+    key = bytes(r.keyword).decode("ascii")
+    try:
+        value = bytes(r.value).decode("utf-8")
+    except UnicodeDecodeError:
+        raise FormatError(f"mETA {key}: the value is not UTF-8", code="BAD_METADATA") from None
+    if key == UP_AXIS and value not in UP_AXES:
+        raise FormatError(f"mETA {UP_AXIS} is {value[:20]!r}, not one of {', '.join(UP_AXES)}", code="BAD_METADATA")
+    return Metadata(key, value)
 
 
 # spec §10.2 Index and §4.4 End (PEND of versions 1 and 2: Appendix A.1) ---------------------

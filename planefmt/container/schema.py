@@ -76,6 +76,7 @@ GRUP = b"GRUP"
 PEND = b"PEND"
 COLR = b"cOLR"
 INDX = b"iNDX"
+META = b"mETA"
 CRITICAL_TYPES = frozenset({PHDR, OBJT, PLNS, GRUP, PEND})
 
 # spec §5 Header (PHDR): the flags of every version; the 108-byte layout of versions 1 and 2 (Appendix A.1)
@@ -202,6 +203,13 @@ Colours = cs.Struct(
     "count" / cs.Int32ul,
     "rgba" / cs.Bytes(cs.this.count * 4),
 )
+
+# spec §10.3 Metadata (mETA, ancillary): a keyword of printable ASCII, a NUL, a UTF-8 value
+Metadata = cs.Struct(
+    "keyword" / cs.NullTerminated(cs.GreedyBytes, term=b"\x00"),
+    "value" / cs.GreedyBytes,
+)
+METADATA_KEYWORD_BYTES = (1, 79)
 
 # spec §10.2 Index (iNDX, ancillary); entries viewed as INDEX_ENTRY_DTYPE
 Index = cs.Struct(

@@ -20,7 +20,7 @@ import numpy as np
 from . import records, schema
 from .chunks import chunk_bytes, is_ancillary, valid_type
 from ..errors import PlnError
-from ..model import (Colours, GroupKind, Header, ObjectRecord, PartGroup, PlaneBlock, Record, Shell,
+from ..model import (Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record, Shell,
                     UnknownChunk)
 
 def _read_umask() -> int:
@@ -87,6 +87,7 @@ class Writer:
         self._objects = 0
         self._groups: list[int] = []  # reference count per group, for cOLR checks
         self._entries: list[tuple[int, bytes, int]] = []
+        self._metadata: set[str] = set()
         self._closed = False
         try:
             self._emit_raw(schema.SIGNATURE)
@@ -197,6 +198,17 @@ class Writer:
             raise PlnError("colours need a written group and one colour per reference", code="BAD_COLOURS")
         self._emit(schema.COLR, records.encode_colours(Colours(group, rgba)))
 
+    def add_metadata(self, key: str, value: str) -> None:
+        """Write a mETA chunk (spec §10.3): ``key`` = ``value``, each key once, before any object,
+        plane or group. ``add_metadata(planefmt.UP_AXIS, "Z")`` records that +z points up."""
+        if self._entries:
+            raise PlnError("metadata is written before the first object, plane block and part group",
+                           code="BAD_METADATA")
+        if key in self._metadata:
+            raise PlnError(f"mETA {key} is already written", code="BAD_METADATA")
+        self._emit(schema.META, records.encode_metadata(Metadata(key, value)))
+        self._metadata.add(key)
+
     def add_chunk(self, ctype: bytes, payload: bytes) -> None:
         """Write an ancillary chunk verbatim (e.g. one a reader did not know)."""
         if not valid_type(ctype) or not is_ancillary(ctype) or ctype == schema.INDX:
@@ -216,6 +228,8 @@ class Writer:
                            facets=record.facets, shell=record.shell)
         elif isinstance(record, Colours):
             self.add_colours(record.group, record.rgba)
+        elif isinstance(record, Metadata):
+            self.add_metadata(record.key, record.value)
         elif isinstance(record, UnknownChunk):
             self.add_chunk(record.type, record.payload)
         else:
