@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 import planefmt
 from planefmt import chunk_bytes
-from planefmt.container import quantize, records, schema
+from planefmt.container import quantize, records, schema, shellfields
 from planefmt.model import BSP_IN, BSP_OUT, Coding, GroupKind, Header, PartGroup, PlaneBlock, Quantization, Shell
 
 from streams import TrickleReader, TrickleWriter
@@ -96,7 +96,7 @@ def shells(draw, m: int, bounding: np.ndarray) -> Shell:
     cover = (3 * np.arange((v + 2) // 3)[:, None] + np.arange(3)) % v
     more = draw(st.lists(st.permutations(range(v)).map(lambda p: p[:3]), max_size=4))
     tri = np.vstack([cover] + [np.array(more, dtype=np.int64).reshape(-1, 3)])
-    rank = records.first_use_order(tri, v)
+    rank = shellfields.first_use_order(tri, v)
     tri, explicit = rank[tri], explicit[np.argsort(rank)]
     faces = np.flatnonzero(~bounding)
     free = draw(st.integers(0, len(tri))) if len(faces) else len(tri)

@@ -1,4 +1,5 @@
-"""Unsigned LEB128 varints and zigzag signs (spec §2.2), vectorized over whole arrays.
+"""Unsigned LEB128 varints and zigzag signs (spec §2.2), vectorized over whole arrays, and the
+reader of packed bit fields (a group's role bits, a shell's corner flags).
 
 A value is written 7 bits at a time, least significant group first, each byte
 but the last with its high bit set; values are below 2^64 and minimal (no
@@ -73,3 +74,15 @@ def unzigzag(values: np.ndarray) -> np.ndarray:
     """The inverse of :func:`zigzag`, as int64."""
     u = np.asarray(values, dtype=np.uint64)
     return ((u >> np.uint64(1)).astype(np.int64)) ^ (-(u & np.uint64(1)).astype(np.int64))
+
+
+def bit_field(raw: np.ndarray, pos: int, count: int, body: str, what: str) -> tuple[np.ndarray, int]:
+    """``count`` bits packed least significant first from ``raw[pos:]`` as bools, and the position
+    after their bytes; ``BAD_PAYLOAD`` where ``body`` ends inside them or a padding bit is set."""
+    size = (count + 7) // 8
+    if len(raw) < pos + size:
+        raise FormatError(f"{body} ends inside its {what}", code="BAD_PAYLOAD")
+    bits = np.unpackbits(raw[pos:pos + size], bitorder="little")
+    if bits[count:].any():
+        raise FormatError(f"non-zero padding bits after the {what}", code="BAD_PAYLOAD")
+    return bits[:count].astype(bool), pos + size

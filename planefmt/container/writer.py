@@ -17,7 +17,7 @@ from typing import BinaryIO
 
 import numpy as np
 
-from . import records, schema
+from . import records, schema, shellfields
 from .chunks import chunk_bytes, is_ancillary, valid_type
 from ..errors import PlnError
 from ..model import (Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record, Shell,
@@ -179,7 +179,7 @@ class Writer:
         if kind == GroupKind.SHELL and int(kind) in records.kinds_of(*self._version):
             if shell is None:
                 raise PlnError("a shell group needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
-            records.check_shell(shell, bounding)
+            shellfields.check_shell(shell, bounding)
         elif shell is not None:
             raise PlnError(f"shell groups need version 3.2, not {self._version[0]}.{self._version[1]}",
                            code="UNKNOWN_GROUP_KIND")

@@ -32,7 +32,7 @@ from scipy.sparse.csgraph import connected_components, depth_first_order
 from ..errors import GeometryError
 from ..model import FREE, MAX_GRID, Shell
 from ..container import varint
-from ..container.records import corner_codes, first_use_order
+from ..container.shellfields import corner_codes, first_use_order
 from .sealed import corners
 
 #: Smallest ``|det|`` of three unit normals the encoder names a corner by: below it a plane
