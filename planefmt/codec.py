@@ -45,6 +45,7 @@ Decoding dispatches on ``group.kind`` through :data:`DECODERS`.
 from __future__ import annotations
 
 import io
+import itertools
 import math
 import os
 import warnings
@@ -73,7 +74,8 @@ from .reader import Reader
 from .solids import FLAT_STRATEGIES, STRATEGIES, Splitter, decode_bsp_group
 from .salvage import salvage
 from .sealed import decode_sealed
-from .shells import FREE, Shell, ShellPlan, decode_shell, encode_shell, plan_shell, reordered
+from .shells import (FREE, Shell, ShellPlan, decode_shell, encode_shell, plan_shell, reordered, reordered_tree,
+                     shell_tree)
 from .trianglegeom import TriangleIndex
 from .validate import GROUP_CHECKS, Finding
 from .writer import BLOCK_PLANES, Writer
@@ -412,12 +414,12 @@ def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: Pla
 
 
 def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``SHELL`` group: its triangles over its corners, named by three planes or explicit (spec 3.2
-    §8.9). Linear time: one batched 3×3 solve."""
+    """A ``SHELL`` or ``SHELL_TREE`` group: its triangles over its corners, named by three planes or
+    explicit (spec 3.2 §8.9, 3.3 §8.10). Linear time: one batched 3×3 solve."""
     shell = group.shell
     if shell is None:
-        raise GeometryError(f"part group {label}: shell groups are kind 6 only from version 3.2 on",
-                            code="UNKNOWN_GROUP_KIND")
+        raise GeometryError(f"part group {label}: shell groups are kind 6 only from version 3.2 on, kind 7 "
+                            f"from 3.3", code="UNKNOWN_GROUP_KIND")
     omega, h = from_triplets(planes)
     try:
         v, t = decode_shell(omega, h, shell)
@@ -439,7 +441,13 @@ DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], Deco
     GroupKind.PSEUDO_CONCAVE: decode_patch,
     GroupKind.SEALED: decode_sealed_group,
     GroupKind.SHELL: decode_shell_group,
+    GroupKind.SHELL_TREE: decode_shell_group,
 }
+#: The kinds of shell groups, which the encoder chooses between by size once their corners are known.
+SHELL_KINDS = (GroupKind.SHELL, GroupKind.SHELL_TREE)
+#: The shell layouts the encoder chooses among (``bench/shell_bits.py`` measures version 3.2's alone
+#: by setting it to ``(GroupKind.SHELL,)``).
+SHELL_LAYOUTS = SHELL_KINDS
 
 
 @dataclass(frozen=True)
@@ -1223,9 +1231,23 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         g = groups[k]
         omega, h = from_triplets(planes[g.refs])
         shell = encode_shell(plan, omega, h, budget)
-        decoded, _ = decode_shell(omega, h, shell)
-        moved = max(moved, float(np.linalg.norm(decoded - plan.points, axis=1).max(initial=0.0)))
-        groups[k] = replace(g, shell=shell)
+        options = [(GroupKind.SHELL, shell, plan.points)] if GroupKind.SHELL in SHELL_LAYOUTS else []
+        if GroupKind.SHELL_TREE in SHELL_LAYOUTS:
+            tree, source = shell_tree(shell, plan.walk)
+            options.append((GroupKind.SHELL_TREE, tree, plan.points[source]))
+        # Whichever layout deflates smaller: the tree's wins but for a few triangles (one per piece of a
+        # soup costs a root's three corner codes and a link).
+        kind, shell, points = min(options, key=lambda c: len(records.pack(records.shell_kind_data(c[0], c[1]), True,
+                                                                          records.SHELL_TREE_LEVEL)[1]))
+        # A tree's named corners are solved with their planes in ascending order of reference, which the
+        # writer renumbers (``reordered_tree``): every order of the three is measured, so the bound
+        # holds for the one written.
+        orders = itertools.permutations(range(3)) if kind == GroupKind.SHELL_TREE else [(0, 1, 2)]
+        for order in orders:
+            vp = np.asarray(shell.vertex_planes, dtype=np.int64).reshape(-1, 3)[:, list(order)]
+            decoded, _ = decode_shell(omega, h, replace(shell, vertex_planes=vp))
+            moved = max(moved, float(np.linalg.norm(decoded - points, axis=1).max(initial=0.0)))
+        groups[k] = replace(g, kind=kind, shell=shell)
     return replace(obj, groups=tuple(groups)), moved
 
 
@@ -1236,8 +1258,16 @@ def _planeless(obj: _Object) -> _Object | None:
         return None
     if obj.face_colours is not None and (obj.face_colours != obj.face_colours[0]).any():
         return None
-    # A group keeps one reference (spec §8.2: m >= 1), which its free triangles take their colour from.
-    return replace(obj, groups=tuple(replace(g, refs=g.refs[:1], bounding=g.bounding[:1]) for g in obj.groups))
+    # A group keeps one reference (spec §8.2: m >= 1), which its free triangles take their colour from;
+    # the table keeps only those planes (CAD/box.STL at draco-14's error: 2.4 kB of 14 kB were planes
+    # nothing referred to).
+    keep = np.unique([g.refs[0] for g in obj.groups])
+    fp = obj.face_plane
+    face_plane = None if fp is None else np.where(np.isin(fp, keep), np.searchsorted(keep, fp), -1)
+    return replace(obj, triplets=obj.triplets[keep], face_plane=face_plane,
+                   plane_colours=None if obj.plane_colours is None else obj.plane_colours[keep],
+                   groups=tuple(replace(g, refs=np.searchsorted(keep, g.refs[:1]), bounding=g.bounding[:1])
+                                for g in obj.groups))
 
 
 def _as_shells(obj: _Object) -> _Object:
@@ -1291,8 +1321,8 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
         else:
             candidates = [(c.coding, c.quantization)]
             convex_error = c.error_bound * c.diagonal
-    table = np.concatenate([o.triplets for o in objects])
     if not candidates:
+        table = np.concatenate([o.triplets for o in objects])
         radius = max(float(np.linalg.norm(o.vertices, axis=1).max()) for o in objects)
         every = _candidates(coding, bits, table, radius)
         candidates = every if forced else \
@@ -1300,7 +1330,6 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     band = tolerance if tolerance > LOSSLESS_TOLERANCE else 0.0
     best: tuple[int, list[_Object], _Choice] | None = None
     why = ""
-    offsets = np.cumsum([0] + [len(o.triplets) for o in objects])
     # Planes that name no corner within the budget only cost bytes: the same shells without them
     # (every corner explicit, every triangle free) compete too, where colours do not ride on them.
     freed = [_planeless(o) for o in objects]
@@ -1311,7 +1340,8 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants}
     for k, (objs, cod, q) in enumerate(trials):
         progress.report("choosing a coding", k, len(trials))
-        rt = quantize.roundtrip(table, cod, q)
+        offsets = np.cumsum([0] + [len(o.triplets) for o in objs])
+        rt = quantize.roundtrip(np.concatenate([o.triplets for o in objs]), cod, q)
         budget = tolerance * diag_src / (1.0 + 2.0 * tolerance)
         for _ in range(_SHELL_TIGHTENINGS):
             built, moved = zip(*(_shells_for(o, pl, rt[a:b], budget / sc)
@@ -1321,7 +1351,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
                       for o, a, b in zip(built, offsets[:-1], offsets[1:])]
             # Shells alone keep the source's topology by construction: only volume or area can move.
             problems = [structure_problem(m, o, band * diag_src / sc,
-                                          topology=any(g.kind != GroupKind.SHELL for g in o.groups))
+                                          topology=any(g.kind not in SHELL_KINDS for g in o.groups))
                         for m, o, sc in zip(meshes, built, scale)]
             problems = [p for p in problems if p is not None]
             if not problems:
@@ -1542,7 +1572,8 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
            choice: _Choice, tolerance: float, compress: bool, compact: bool) -> Header:
     """Write the scene's ``objects`` (those of nodes ``meshes``) in the chosen coding; its header."""
     sealed = any(g.kind == GroupKind.SEALED for o in objects for g in o.groups)
-    shells = any(g.kind == GroupKind.SHELL for o in objects for g in o.groups)
+    shells = any(g.kind in SHELL_KINDS for o in objects for g in o.groups)
+    trees = any(g.kind == GroupKind.SHELL_TREE for o in objects for g in o.groups)
     compact = compact or sealed or shells
     table = quantize.roundtrip(np.concatenate([o.triplets for o in objects]), choice.coding,
                                choice.quantization)
@@ -1565,7 +1596,8 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     if compact and stored.quantized:
         stored = min((Coding.QUANTIZED, Coding.PREDICTED), key=lambda c: _table_bytes(rows, c, choice.quantization,
                                                                                        compress))
-    header = Header(version=((3, 2) if shells else (3, 1) if sealed else (3, 0)) if compact else (1, 0), lossy=choice.lossy, coding=stored,
+    header = Header(version=((3, 3) if trees else (3, 2) if shells else (3, 1) if sealed else (3, 0)) if compact
+                    else (1, 0), lossy=choice.lossy, coding=stored,
                     quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
                     tolerance=float(tolerance), error_bound=choice.error_bound,
                     plane_count=len(rows), object_count=len(scene.nodes),
@@ -1619,7 +1651,7 @@ def _permuted(g: GroupSpec, perm: np.ndarray) -> GroupSpec:
         facets = np.asarray(g.facets, dtype=np.int64).copy()
         facets[:, 0] = local[facets[:, 0]]
         facets = facets[np.argsort(facets[:, 0], kind="stable")]
-    shell = None if g.shell is None else reordered(g.shell, local)
+    shell = None if g.shell is None else (reordered_tree if g.kind == GroupKind.SHELL_TREE else reordered)(g.shell, local)
     return GroupSpec(g.kind, g.refs[perm], g.bounding[perm], cells, tree, vertex_planes, facets, shell=shell)
 
 
