@@ -1235,8 +1235,8 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         if GroupKind.SHELL_TREE in SHELL_LAYOUTS:
             tree, source = shell_tree(shell, plan.walk)
             options.append((GroupKind.SHELL_TREE, tree, plan.points[source]))
-        # Whichever layout deflates smaller: the tree's wins but for a few triangles (one per piece of a
-        # soup costs a root's three corner codes and a link).
+        # Whichever layout deflates smaller: the tree on every corpus mesh measured (bench/shell_bits.py),
+        # though a soup of separate triangles pays a link and a root's three codes for each.
         kind, shell, points = min(options, key=lambda c: len(records.pack(records.shell_kind_data(c[0], c[1]), True,
                                                                           records.SHELL_TREE_LEVEL)[1]))
         # A tree's named corners are solved with their planes in ascending order of reference, which the
