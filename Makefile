@@ -46,7 +46,7 @@ benchmarks: $(STAMP)
 	$(BIN)/python -m pip install -q -e '.[bench]'
 	$(BIN)/python bench/compare.py --tolerances 1e-4 --jobs 2 --timeout 1200
 
-# every corpus file to .pln and back to OBJ, PLY, GLB, glTF, USDA, USDC, USDZ, checked (about an hour)
+# every corpus file to .pln and back to OBJ, PLY, STL, OFF, GLB, glTF, USDA, USDC, USDZ, checked, each re-encoded
 roundtrip: $(STAMP)
 	$(BIN)/python bench/corpus_roundtrip.py
 

@@ -2,7 +2,7 @@
 
 For every corpus mesh (or the paths given): the kind chosen per body, the
 part groups, the distinct planes, their size (12 bytes per plane as float32,
-24 as float64) and the group records' size (spec §8.2-§8.4, with chunk
+24 as float64) and the group records' size (spec §9, with chunk
 framing), the certified two-sided Hausdorff bound between decoded and source
 surface relative to the bbox diagonal, the structural checks (watertight
 inputs: decoded closed 2-manifold, volume, Euler characteristic; open
@@ -68,7 +68,7 @@ def corpus_files() -> list[str]:
 
 
 def group_bytes(enc: MeshGroups) -> int:
-    """Bytes of the GRUP chunks (spec §4.1, §8.2-§8.4): framing 12, head 16, refs, roles, kind data."""
+    """Bytes of the GRUP chunks (spec §4.1, Appendix A.1): framing 12, head 16, refs, roles, kind data."""
     total = 0
     for g in enc.groups:
         m = len(g.refs)

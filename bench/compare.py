@@ -12,7 +12,7 @@ merged by exact position) and every codec:
   bbox diagonal), the whole file with its chunks and object records, as
   ``pln convert`` writes it with its default scheme (convex bodies of up to
   256 planes as convex groups, everything else as one shell group per object:
-  version 3.2, spec/pln-3.md §8.9; bit-packed or predicted plane codes,
+  version 3.2, spec/pln.md §9.10; bit-packed or predicted plane codes,
   varint group bodies and chunk heads, ``--compact``),
   payloads deflated where that saves bytes (spec §6, ``--compress``); the
   codec picks its coding (quantized or float planes). The source scene is
@@ -379,6 +379,7 @@ def report(rows: list[dict], names: list[str], tolerances: tuple[float, ...], ar
                       f"{cat} {statistics.median(v):.2f}" for cat, v in floors.items())
                   + "; plane table alone: " + "; ".join(f"{cat} {statistics.median(v):.2f}" for cat, v in alone.items())
                   + "."]
+    lines += speed_summary(rows, names)
     lines += ["", "## Speed and memory per mesh", "",
               "Encode / decode wall time in ms, and peak memory (MB above the start of the measurement).", ""]
     lines += ["| mesh | " + " | ".join(names) + " |", "|" + "---|" * (1 + len(names))]
@@ -394,6 +395,33 @@ def report(rows: list[dict], names: list[str], tolerances: tuple[float, ...], ar
         lines += ["", "## Failures", ""]
         lines += [f"- {r['category']}/{r['file']}, {n}: {r[n]['failed']}" for r, n in failures]
     return "\n".join(lines) + "\n"
+
+
+def speed_summary(rows: list[dict], names: list[str], peer: str = "draco-14", least: int = 1000) -> list[str]:
+    """Issue 30's speed figures per pln column: the slowest encode and decode, the largest peak memory,
+    and against ``peer`` measured in the same run, over the meshes of ``least`` triangles or more,
+    the geometric mean of decode speed (output triangles per second) and the median of encode
+    speed (input triangles per second) as ratios."""
+    lines = ["", "## Speed against Draco", "",
+             f"Over the {sum(1 for r in rows if r[peer].get('triangles', 0) >= least)} meshes of {least:,} triangles "
+             f"or more: pln's speed / {peer}'s (same triangles, so the ratio of {peer}'s time to pln's), the "
+             "geometric mean for decoding and the median for encoding; and over every mesh, the slowest "
+             "encode and decode and the largest peak memory. A failed run counts as zero speed.", "",
+             "| codec | decode speed ratio (geo. mean) | encode speed ratio (median) | slowest encode s | "
+             "slowest decode s | largest peak MB |", "|---|---|---|---|---|---|"]
+    for n in names:
+        if not n.startswith("pln"):
+            continue
+        both = [(r[n], r[peer]) for r in rows if "failed" not in r[peer] and r[peer]["triangles"] >= least]
+        decode = [max(d["decode"], 1e-6) / max(c["decode"], 1e-6) if "failed" not in c else 0.0 for c, d in both]
+        encode = [max(d["encode"], 1e-6) / max(c["encode"], 1e-6) if "failed" not in c else 0.0 for c, d in both]
+        ok = [r[n] for r in rows if "failed" not in r[n]]
+        geo = math.exp(statistics.fmean(math.log(x) for x in decode)) if decode and min(decode) > 0 else 0.0
+        lines.append(f"| {n} | {geo:.3f} | {statistics.median(encode) if encode else 0.0:.4f} | "
+                     + (f"{max(c['encode'] for c in ok):.2f} | {max(c['decode'] for c in ok):.3f} | "
+                        f"{max(c['peak'] for c in ok) / 2**20:.0f} |" if len(ok) == len(rows) else
+                        f"failed on {len(rows) - len(ok)} | – | – |"))
+    return lines
 
 
 def _machine(jobs: int = 1) -> str:

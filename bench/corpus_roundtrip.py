@@ -1,11 +1,13 @@
-"""Every corpus file to .pln and back to each output format, checked against its source (issue 5).
+"""Every corpus file to .pln and back to each output format, checked against its source (issues 5 and 35).
 
 For each file of ``../shared/corpus`` (or the paths given):
 
 1. ``pln convert SOURCE x.pln`` (default tolerance 1e-6, the CLI as users run
    it, in a subprocess with ``--timeout`` seconds; with ``--allow-open``, so
-   that closed meshes planes cannot close are stored as open surfaces);
-2. ``pln convert x.pln x.EXT`` for OBJ, PLY, GLB, glTF, USDA, USDC and USDZ;
+   that closed meshes planes cannot close are stored as open surfaces;
+   ``--scheme paper`` with ``--scheme paper``);
+2. ``pln convert x.pln x.EXT`` for every format it writes: OBJ, PLY, STL, OFF,
+   GLB, glTF, USDA, USDC and USDZ;
 3. each output reloaded through the project's readers (trimesh for OBJ, PLY
    and glTF, pxr for USD) and compared with the source. The .pln file's own
    decoding (flattened) is measured against the source once: the certified
@@ -19,20 +21,32 @@ For each file of ``../shared/corpus`` (or the paths given):
    failing that (the measure's budget runs out so close), by its certified
    distance from the source, held to the header's tolerance (``ok*``).
    For glTF and USD the names of the nodes that carry meshes must be the
-   .pln file's, in order.
+   .pln file's, in order;
+4. what issue 35 asks of every output (items 4-6), the .pln file itself
+   included: it re-encodes with ``pln convert OUTPUT re.pln`` at the default
+   tolerance (in this process, through the CLI's ``main``: exit 0); it holds
+   no more zero-area triangles (no plane, as the .pln encoder measures them,
+   plus those the reader dropped because welding equal positions left them
+   a repeated corner) than the source as read; and where the source is
+   closed (every edge of every object shared by two triangles running
+   opposite ways, vertices welded by position as read, after the output's
+   float32 rounding), so is the output.
 
-A row per file: the .pln bytes and encode seconds, then ``ok`` or what
-failed per format. Exit 1 if anything failed.
+A row per file: the .pln bytes and encode seconds, whether the source is
+closed, then ``ok`` or what failed per format (``re.pln``: the .pln file
+re-encoded). Exit 1 if anything failed.
 
 Usage::
 
-    python bench/corpus_roundtrip.py [--timeout 1200] [--allow-open] [FILE ...]
+    python bench/corpus_roundtrip.py [--timeout 1200] [--allow-open] [--scheme paper] [FILE ...]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import glob
+import io
 import os
 import subprocess
 import sys
@@ -43,13 +57,15 @@ import warnings
 import numpy as np
 
 CORPUS = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "corpus")
-FORMATS = ("obj", "ply", "glb", "gltf", "usda", "usdc", "usdz")
+FORMATS = ("obj", "ply", "stl", "off", "glb", "gltf", "usda", "usdc", "usdz")
 SCENES = ("glb", "gltf", "usda", "usdc", "usdz")
 #: Rounding of float32 outputs, relative to the largest coordinate.
 FLOAT32_ROUNDING = 1e-7
 #: Budget of each certified measure (the decoding against the source, a re-indexed output against the decoding).
 DECODING_PIECES = 8_000_000
 PLN = [sys.executable, "-m", "planefmt_converters.cli"]
+#: The CLI's exit code after Ctrl-C or SIGTERM.
+INTERRUPTED = 130
 
 
 def corpus_files() -> list[str]:
@@ -68,24 +84,73 @@ def _convert(src: str, dst: str, timeout: float, options: tuple[str, ...] = ()) 
     return None
 
 
-def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tuple[str, list[str]]:
+def _read(path: str):
+    """``(scene, triangles the reader dropped as degenerate)`` of a mesh file."""
+    from planefmt_converters import registry
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene, notes = registry.read(path)
+    degenerate = [int(n.split()[0]) for n in notes if n.endswith(" degenerate faces")]
+    return scene, sum(degenerate)
+
+
+def _zero_area(mesh, degenerate: int) -> int:
+    from planefmt_converters.assemble import with_area
+
+    return degenerate + int(len(mesh.faces) - np.count_nonzero(with_area(mesh.vertices, mesh.faces)))
+
+
+def _closed(mesh) -> bool:
+    from planefmt.bodies import is_closed_manifold
+
+    return is_closed_manifold(mesh.faces, len(mesh.vertices))
+
+
+def _reencodes(path: str, work: str) -> str | None:
+    """``pln convert PATH re.pln`` at the default tolerance; the error line if it did not exit 0."""
+    from planefmt_converters.cli import main
+
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        code = main(["convert", "--force", path, os.path.join(work, "re.pln")])
+    if code == 0:
+        return None
+    if code == INTERRUPTED:
+        # The CLI turns Ctrl-C and SIGTERM into this exit code: they stop the run, not fail a file.
+        raise KeyboardInterrupt
+    return f"re-encoding exits {code}: " + ((err.getvalue().strip().splitlines() or [""])[-1][:140])
+
+
+def _issue35(out: str, back, degenerate: int, zero: int, closed: bool, work: str) -> str | None:
+    """What ``out`` (read back as the flattened ``back``) fails of issue 35's items 4-6, or None."""
+    mesh_zero = _zero_area(back, degenerate)
+    if mesh_zero > zero:
+        return f"{mesh_zero} zero-area triangles (source: {zero})"
+    if closed and not _closed(back):
+        return "open where the source is closed"
+    return _reencodes(out, work)
+
+
+def check(path: str, timeout: float, work: str, allow_open: bool = False,
+          scheme: str = "shell") -> tuple[str, list[str]]:
     """The row of one corpus file and its failures."""
     import planefmt
     from planefmt.hausdorff import hausdorff
-    from planefmt_converters import registry
-    from planefmt_converters.assemble import flatten
+    from planefmt_converters.assemble import flatten, reoriented
 
     name = os.path.relpath(path, CORPUS)
     pln = os.path.join(work, os.path.basename(path) + ".pln")
     t = time.perf_counter()
-    failed = _convert(path, pln, timeout, ("--allow-open",) if allow_open else ())
+    failed = _convert(path, pln, timeout, (("--allow-open",) if allow_open else ()) + ("--scheme", scheme))
     seconds = time.perf_counter() - t
+    read, degenerate = _read(path)
+    source = flatten(read)
+    zero, closed = _zero_area(source, degenerate), _closed(source)
+    head = f"| {name} | {'closed' if closed else 'open'} |"
     if failed:
-        return f"| {name} | – | {seconds:.0f} | " + " | ".join("–" for _ in FORMATS) + f" | {failed} |", [failed]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        source = flatten(registry.read(path)[0])
-        decoded, _ = registry.read(pln)
+        return f"{head} – | {seconds:.0f} | " + " | ".join("–" for _ in FORMATS) + f" | – | {failed} |", [failed]
+    decoded, _ = _read(pln)
     with planefmt.open(pln) as f:
         bound, box = f.header.error_bound, np.asarray(f.header.bbox, dtype=np.float64)
         tolerance = f.header.tolerance
@@ -102,17 +167,18 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
     if not (r.certified and r.upper <= limit):
         why = (f"decoding {r.lower / diag:.2g}..{r.upper / diag:.2g} from the source, header bound {bound:.2g}"
                + ("" if r.certified else f" (not certified within {DECODING_PIECES:,} pieces)"))
-        return f"| {name} | {os.path.getsize(pln):,} | {seconds:.0f} | " + " | ".join("–" for _ in FORMATS) + \
-            f" | {why} |", [why]
+        return f"{head} {os.path.getsize(pln):,} | {seconds:.0f} | " + " | ".join("–" for _ in FORMATS) + \
+            f" | – | {why} |", [why]
     cells, problems, loose = [], [], []
     for ext in FORMATS:
         out = os.path.join(work, os.path.basename(path) + "." + ext)
         why = _convert(pln, out, timeout)
         if why is None:
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore")
-                again, _ = registry.read(out)
+            again, dropped = _read(out)
             back = flatten(again)
+            # A format with an up axis of its own (glTF: Y) holds the decoding turned into it.
+            dec, src = (flatten(decoded), source) if again.up_axis is None else (
+                flatten(reoriented(decoded, again.up_axis)), flatten(reoriented(read, again.up_axis)))
             if back.vertices.shape == dec.vertices.shape and np.array_equal(back.faces, dec.faces):
                 moved = float(np.linalg.norm(back.vertices - dec.vertices, axis=1).max(initial=0.0))
                 if moved > rounding:
@@ -125,7 +191,8 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
                     # Not shown within float32 rounding of the decoding: then held to what the header
                     # promises, the requested tolerance, against the source itself.
                     allowed = tolerance * float(np.linalg.norm(box[1] - box[0]))
-                    s = hausdorff(back.vertices, back.faces, v, faces, target=allowed, max_pieces=DECODING_PIECES)
+                    s = hausdorff(back.vertices, back.faces, src.vertices, src.faces, target=allowed,
+                                  max_pieces=DECODING_PIECES)
                     if s.certified and s.upper <= allowed:
                         loose.append(ext)
                     else:
@@ -134,10 +201,15 @@ def check(path: str, timeout: float, work: str, allow_open: bool = False) -> tup
                                f"{s.upper / diag:.2g} from the source, over the tolerance {tolerance:g}")
             if why is None and ext in SCENES and [n.name for n in again.nodes if n.mesh is not None] != names:
                 why = "node names differ"
+            why = why or _issue35(out, back, dropped, zero, closed, work)
         cells.append(("ok*" if ext in loose else "ok") if why is None else f"FAIL: {why}")
         if why is not None:
             problems.append(f"{ext}: {why}")
-    return (f"| {name} | {os.path.getsize(pln):,} | {seconds:.0f} | " + " | ".join(cells) + " | |"), problems
+    again = _issue35(pln, dec, 0, zero, closed, work)
+    if again:
+        problems.append(f"re.pln: {again}")
+    return (f"{head} {os.path.getsize(pln):,} | {seconds:.0f} | " + " | ".join(cells)
+            + f" | {'ok' if again is None else 'FAIL: ' + again} | |"), problems
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -145,13 +217,14 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("files", nargs="*")
     ap.add_argument("--timeout", type=float, default=1200.0, help="seconds per conversion (default 1200)")
     ap.add_argument("--allow-open", action="store_true", help="pass --allow-open to the conversion to .pln")
+    ap.add_argument("--scheme", choices=("shell", "paper"), default="shell", help="the conversion to .pln's scheme")
     args = ap.parse_args(argv)
-    print("| file | .pln B | encode s | " + " | ".join(FORMATS) + " | .pln failure |")
-    print("|---|---:|---:|" + "---|" * len(FORMATS) + "---|")
+    print("| file | source | .pln B | encode s | " + " | ".join(FORMATS) + " | re.pln | .pln failure |")
+    print("|---|---|---:|---:|" + "---|" * len(FORMATS) + "---|---|")
     failures = 0
     with tempfile.TemporaryDirectory() as work:
         for path in args.files or corpus_files():
-            row, problems = check(path, args.timeout, work, args.allow_open)
+            row, problems = check(path, args.timeout, work, args.allow_open, args.scheme)
             failures += bool(problems)
             print(row, flush=True)
     print(f"\n{failures} of {len(args.files or corpus_files())} files failed; ok*: not certified within float32 "

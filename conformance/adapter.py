@@ -133,6 +133,7 @@ def describe(path: str) -> dict:
                         for o in r.objects],
             "groups": [_group(g) for g in groups],
             "colours": colours,
+            "metadata": r.metadata,
             "findings": sorted({code for code, _ in r.findings}),
             "geometry": _geometry(groups, r.objects, r.header.version),
         }

@@ -3,7 +3,7 @@
 Broken files are chunk layouts, lists of ``(type, payload)``, made from
 planefmt's payload encoders, given one defect, and framed with planefmt's
 ``chunk_bytes`` so that every CRC is computed, never typed. The expected
-plane values are derived here from the spec's formulas (§7.1, §7.3), not
+plane values are derived here from the spec's formulas (§7.2, §7.3), not
 read back through planefmt, so that the suite checks planefmt's reader
 rather than echoing it.
 """
@@ -21,7 +21,7 @@ from planefmt.model import Coding, Header, Quantization, Units
 
 Layout = list[tuple[bytes, bytes]]
 
-#: The cube of spec §12 as (nu, phi, h): faces x = 1, y = 1, x = 0, y = 0, z = 1, z = 0.
+#: The cube of spec/pln-1.md §12 as (nu, phi, h): faces x = 1, y = 1, x = 0, y = 0, z = 1, z = 0.
 CUBE = np.array([
     [math.pi / 2, 0.0, 1.0],
     [math.pi / 2, math.pi / 2, 1.0],
@@ -31,7 +31,7 @@ CUBE = np.array([
     [math.pi, 0.0, 0.0],
 ])
 
-#: The header of spec §12 (the writer fills in the counts).
+#: The header of spec/pln-1.md §12 (the writer fills in the counts).
 SPEC_HEADER = Header(coding=Coding.FLOAT32, units=Units.METRE, bbox=np.array([[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]]),
                      tolerance=1e-6, error_bound=0.0)
 
@@ -57,7 +57,7 @@ def offsets(layout: Layout) -> list[int]:
 
 
 def index_payload(layout: Layout, major: int = 1) -> bytes:
-    """The iNDX payload listing the OBJT, PLNS and GRUP chunks of ``layout`` (spec §8.6).
+    """The iNDX payload listing the OBJT, PLNS and GRUP chunks of ``layout`` (spec §10.2).
 
     Ordinals are read from the payloads themselves (object index, first plane,
     group index: a u32 / u64 in versions 1 and 2, a varint in version 3), so a
@@ -79,7 +79,7 @@ def finish(layout: Layout, index: bool = True, major: int = 1) -> Layout:
 
 def stored_header(h: Header) -> Header:
     """The header values a reader gets back: version 3 stores the bbox rounded outward to float32 and
-    tolerance and error bound rounded up (spec 3.0 §5), written out here from that rule."""
+    tolerance and error bound rounded up (spec §5), written out here from that rule."""
     if h.version[0] != 3:
         return h
 
@@ -106,7 +106,7 @@ def stored_planes(triplets: np.ndarray, coding: int, q: Quantization | None) -> 
         return t.copy()
     if coding == Coding.FLOAT32:
         t32 = t.astype(np.float32)
-        t32[t32[:, 1] >= np.float32(2 * math.pi), 1] = 0  # §7.1: phi rounded up to 2 pi is stored as 0
+        t32[t32[:, 1] >= np.float32(2 * math.pi), 1] = 0  # §7.2: phi rounded up to 2 pi is stored as 0
         return t32.astype(np.float64)
     # §7.3, written out as the spec states it: binary64, round(x) = floor(x + 0.5).
     m_nu, n_phi, m_h = 2.0 ** (q.bits_nu - 1), 2.0 ** q.bits_phi, 2.0 ** q.bits_h - 1
@@ -125,7 +125,7 @@ def stored_planes(triplets: np.ndarray, coding: int, q: Quantization | None) -> 
 
 
 def world_matrices(objects: list[tuple[int | None, np.ndarray | None]]) -> list[np.ndarray]:
-    """World matrix of each object from ``(parent, local transform)`` pairs (spec §8.1)."""
+    """World matrix of each object from ``(parent, local transform)`` pairs (spec §8)."""
     out: list[np.ndarray] = []
     for parent, m in objects:
         local = np.eye(4) if m is None else np.asarray(m, dtype=np.float64)
@@ -153,7 +153,7 @@ def shell_json(shell) -> dict:
     return {"explicit": np.flatnonzero(shell.explicit).tolist(),
             "vertex_planes": np.asarray(shell.vertex_planes, dtype=np.int64).reshape(-1, 3).tolist(),
             "grid": np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3).tolist(),
-            # The grid is stored only for explicit corners (spec 3.2 §8.9).
+            # The grid is stored only for explicit corners (spec §9.10).
             "origin": [float(x) for x in shell.origin] if np.any(shell.explicit) else None,
             "step": float(shell.step) if np.any(shell.explicit) else None,
             "facets": np.asarray(shell.facets, dtype=np.int64).tolist()}

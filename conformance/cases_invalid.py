@@ -1,6 +1,6 @@
 """The broken golden files: each is a valid file with exactly one defect, and the error it must raise.
 
-Most start from the cube of spec §12 (``cube()``), assembled chunk by chunk
+Most start from the cube of spec/pln-1.md §12 (``cube()``), assembled chunk by chunk
 from planefmt's payload encoders; the defect is made in a payload before it
 is framed (so its CRC is right and the reader gets as far as the defect), or
 in the framed bytes where the framing itself is the defect. Offsets in the
@@ -22,6 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planefmt import records, schema, varint
+from planefmt.chunks import chunk_bytes
 from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization, Units
 
 from . import reference
@@ -50,10 +51,10 @@ def case(name: str, error: str, description: str, *, level: str = "container", a
     return register
 
 
-# -- the cube of spec §12 and its parts --------------------------------------------------------
+# -- the cube of spec/pln-1.md §12 and its parts ------------------------------------------------
 
 def header(**fields) -> bytes:
-    """A PHDR payload: spec §12's header with counts 6 / 1 / 1, fields replaced."""
+    """A PHDR payload: spec/pln-1.md §12's header with counts 6 / 1 / 1, fields replaced."""
     h = dataclasses.replace(SPEC_HEADER, plane_count=6, object_count=1, group_count=1)
     return records.encode_header(dataclasses.replace(h, **fields))
 
@@ -95,7 +96,7 @@ def body(refs=range(6), roles: bytes | None = None, extra: bytes = b"") -> bytes
 
 
 def cube(**parts: bytes) -> Layout:
-    """The chunks of the spec §12 cube before iNDX; ``PHDR=``, ``OBJT=``, ... replace one payload."""
+    """The chunks of the spec/pln-1.md §12 cube before iNDX; ``PHDR=``, ``OBJT=``, ... replace one payload."""
     default = {"PHDR": header(), "OBJT": objt(), "PLNS": plns(), "GRUP": grup()}
     default.update(parts)
     return [(t.encode(), p) for t, p in default.items()]
@@ -463,7 +464,7 @@ def _():
     return file(cube(PLNS=plns_raw(z, compression=1, raw_size=72)))
 
 
-# -- version 2.0 (spec/pln-2.md) ----------------------------------------------------------------
+# -- version 2.0 (spec/pln.md A.2) --------------------------------------------------------------
 
 V2_HEAD = Header(version=(2, 0), coding=Coding.PREDICTED, quantization=Quantization(16, 16, 16, 0.0, 1.0),
                  units=Units.METRE)
@@ -548,11 +549,11 @@ def _():
     return v2(GRUP=grup())
 
 
-# -- version 3.0 (spec/pln-3.md) ----------------------------------------------------------------
+# -- version 3.0 (spec/pln.md) ------------------------------------------------------------------
 
 def v3(PHDR: bytes | None = None, OBJT: bytes | None = None, PLNS: bytes | None = None, GRUP: bytes | None = None,
        *, index: bool = True, end: bytes | None = None) -> bytes:
-    """The cube of spec §12 as a version 3.0 file, one payload replaced (``end``: the PEND payload)."""
+    """The cube of spec/pln-1.md §12 as a version 3.0 file, one payload replaced (``end``: the PEND payload)."""
     layout = cube(PHDR=PHDR or header(version=(3, 0)),
                   OBJT=OBJT or records.encode_object(ObjectRecord(0, "cube", None, None), 3),
                   PLNS=PLNS or records.encode_planes(0, CUBE, V3_HEAD, False),
@@ -647,14 +648,14 @@ def _():
     return frame(layout + [(schema.INDX, index), (schema.PEND, records.encode_end(at[-1], 3))])
 
 
-# -- sealed groups (spec/pln-3.md §8.8, version 3.1) ---------------------------------------------
+# -- sealed groups (spec/pln.md §9.9, version 3.1) ---------------------------------------------
 
 V3_F64 = dataclasses.replace(V3_HEAD, coding=Coding.FLOAT64)
 
 
 def sealed_body(vertex_planes=SEALED_CUBE_VERTICES, facets=SEALED_CUBE_FACETS, *, roles: bytes = b"\0",
                 vertex_count: int | None = None) -> bytes:
-    """The body of a sealed group over the cube's 6 references (spec 2.0 §8.7, 3.1 §8.8), varint by
+    """The body of a sealed group over the cube's 6 references (spec §9.2, §9.9), varint by
     varint, since the writer refuses broken ones; ``facets`` rows are (face, i0, i1, i2), the face
     stored as a difference."""
     faces = [f[0] for f in facets]
@@ -666,7 +667,7 @@ def sealed_body(vertex_planes=SEALED_CUBE_VERTICES, facets=SEALED_CUBE_FACETS, *
 
 
 def sealed_file(body: bytes, version: tuple[int, int] = (3, 1)) -> bytes:
-    """The cube of spec §12 as a version 3.1 file (or ``version``), float64 (its planes x <= 1 and
+    """The cube of spec/pln-1.md §12 as a version 3.1 file (or ``version``), float64 (its planes x <= 1 and
     x >= 0 are then 1e-16 from parallel), with a sealed group of ``body`` in place of the convex one."""
     group = schema.GroupHead3.build(dict(index=0, object=0, kind=5, compression=0, raw_size=len(body), body=body))
     return v3(PHDR=header(version=version, coding=Coding.FLOAT64), PLNS=records.encode_planes(0, CUBE, V3_F64, False),
@@ -718,11 +719,11 @@ def _():
     return sealed_file(b[:-1] + bytes([b[-1] | 0x80]))
 
 
-# -- shell groups (spec/pln-3.md §8.9, version 3.2) ----------------------------------------------
+# -- shell groups (spec/pln.md §9.10, version 3.2) ----------------------------------------------
 
 def shell_file(body: bytes, version: tuple[int, int] = (3, 2), colours: bytes | None = None, kind: int = 6) -> bytes:
-    """The cube of spec §12 as a version 3.2 file (or ``version``), float64, with a shell group (or a
-    group of ``kind``) of ``body`` (its references and roles included) in place of the convex one, and a
+    """The cube of spec/pln-1.md §12 as a version 3.2 file (or ``version``), float64, with a shell group (or
+    a group of ``kind``) of ``body`` (its references and roles included) in place of the convex one, and a
     cOLR chunk of ``colours`` after it if given."""
     group = schema.GroupHead3.build(dict(index=0, object=0, kind=kind, compression=0, raw_size=len(body), body=body))
     layout = cube(PHDR=header(version=version, coding=Coding.FLOAT64), OBJT=records.encode_object(
@@ -924,7 +925,7 @@ def _():
     return file(cube(GRUP=grup_raw(zlib.compress(body(), 9), compression=1, raw_size=0xFFFFFFFF)))
 
 
-# -- objects (spec §8.1) -----------------------------------------------------------------------
+# -- objects (spec §8) -----------------------------------------------------------------------
 
 @case("xobjt_index", "BAD_OBJECT", "the first OBJT has index 1")
 def _():
@@ -971,7 +972,7 @@ def _():
     return file(cube(OBJT=bytes(payload)))
 
 
-# -- part groups (spec §8.2) -------------------------------------------------------------------
+# -- part groups (spec §9) -------------------------------------------------------------------
 
 @case("xgrup_plane_range", "BAD_PLANE_REFERENCE", "a reference to plane 6 of a 6-plane table")
 def _():
@@ -1036,7 +1037,7 @@ def _():
     return file(cube(PHDR=header(version=(1, 1)), GRUP=grup([0, 1, 2, 3, 4, 6], kind=9)))
 
 
-# -- cells (spec §8.3) and trees (spec §8.4) ---------------------------------------------------
+# -- cells (spec §9.6) and trees (spec §9.7) ---------------------------------------------------
 
 L_ROLES = [False] * 8 + [True]  # the cut plane x = y
 
@@ -1112,7 +1113,7 @@ def _():
     return l_file(grup_raw(body(range(8), extra=tokens + b"\0\0\0\0"), kind=2), L_PLANES[:8])
 
 
-# -- colours (spec §8.5) -----------------------------------------------------------------------
+# -- colours (spec §10.1) -----------------------------------------------------------------------
 
 def colr(group: int = 0, count: int = 6) -> bytes:
     return records.encode_colours(Colours(group, np.full((count, 4), 200, dtype=np.uint8)))
@@ -1134,7 +1135,50 @@ def _():
     return file(cube() + [(schema.COLR, colr(count=5))])
 
 
-# -- index and end (spec §4.4, §8.6) -----------------------------------------------------------
+# -- metadata (spec §10.3) ------------------------------------------------------------------
+
+def with_meta(*payloads: bytes, at: int = 1) -> bytes:
+    """The cube with raw mETA payloads (what the writer refuses to write) inserted at layout position ``at``."""
+    layout = cube()
+    return file(layout[:at] + [(schema.META, p) for p in payloads] + layout[at:])
+
+
+@case("xmeta_no_separator", "BAD_METADATA", "a mETA payload up_axisZ without the 0x00 after its keyword")
+def _():
+    return with_meta(b"up_axisZ")
+
+
+@case("xmeta_empty_keyword", "BAD_METADATA", "a mETA whose keyword is empty (the payload starts with 0x00)")
+def _():
+    return with_meta(b"\x00Z")
+
+
+@case("xmeta_keyword_space", "BAD_METADATA", "a mETA keyword with a space, 'up axis'")
+def _():
+    return with_meta(b"up axis\x00Z")
+
+
+@case("xmeta_value_utf8", "BAD_METADATA", "a mETA value that is not UTF-8 (ff fe) under a keyword no spec defines")
+def _():
+    return with_meta(b"title\x00\xff\xfe")
+
+
+@case("xmeta_up_axis_x", "BAD_METADATA", "mETA up_axis = X: only Y and Z are defined")
+def _():
+    return with_meta(b"up_axis\x00X")
+
+
+@case("xmeta_repeated", "BAD_METADATA", "two mETA chunks up_axis = Z: a keyword appears once")
+def _():
+    return with_meta(b"up_axis\x00Z", b"up_axis\x00Z")
+
+
+@case("xmeta_after_object", "BAD_METADATA", "mETA up_axis = Z after the OBJT: metadata precedes the geometry")
+def _():
+    return with_meta(b"up_axis\x00Z", at=2)
+
+
+# -- index and end (spec §4.4, §10.2) -----------------------------------------------------------
 
 def with_index(entries: list[tuple[int, bytes, int]], layout: Layout | None = None,
                index_offset: int | None = None) -> bytes:
@@ -1204,7 +1248,7 @@ def _():
     return frame(finish(cube(), index=False)[:-1] + [(schema.PEND, bytes(12))])
 
 
-# -- geometry (spec §8.2): only decoders of geometry see these ---------------------------------
+# -- geometry (spec §9): only decoders of geometry see these ---------------------------------
 
 def geometry_case(name: str, error: str, description: str, *, also: tuple[str, ...] = ()):
     return case(name, error, description, level="geometry", also=also)
@@ -1281,3 +1325,135 @@ def _():
                "cell interiors must be disjoint")
 def _():
     return l_file(grup(range(9), kind=1, bounding=L_ROLES, cells=(L_CELLS[0], L_CELLS[0])))
+
+
+# -- rules spec/pln.md decides (issue 32): one code each where older documents allowed two --------
+
+@case("xcrc_and_payload", "CRC_MISMATCH", "a PHDR with coding 7 and a wrong CRC: framing is checked before the "
+      "payload (spec/pln.md §4.1, §12.1)")
+def _():
+    return patched(CUBE_FILE, PHDR_AT + 8 + 4, b"\x07")  # the coding byte, after the CRC was computed
+
+
+@case("xorder_after_index_bad_payload", "CHUNK_ORDER", "an OBJT of 3 bytes (its own payload too short) between "
+      "iNDX and PEND: a chunk's place is checked before its payload (spec/pln.md §12.1)")
+def _():
+    return CUBE_FILE[:PEND_AT] + chunk_bytes(b"OBJT", b"\x01\x00\x00") + CUBE_FILE[PEND_AT:]
+
+
+@case("xchunk_too_long_max", "CHUNK_TOO_LONG", "the GRUP length is 2^32 - 1: above 2^31 - 1, above any reader's "
+      "chunk limit and beyond the end of the file; CHUNK_TOO_LONG comes first (spec/pln.md §4.1)")
+def _():
+    return patched(CUBE_FILE, GRUP_AT + 4, (0xFFFFFFFF).to_bytes(4, "little"))
+
+
+@case("xplns_stored_short", "SIZE_MISMATCH", "uncompressed PLNS data of 68 bytes with raw_size 72 (what 6 "
+      "float32 planes take): method 0 with a stored size other than raw size (spec/pln.md §6 step 3)")
+def _():
+    return file(cube(PLNS=plns_raw(CUBE.astype("<f4").tobytes()[:68], raw_size=72)))
+
+
+@case("xgrup_method_and_bomb", "BAD_COMPRESSION", "GRUP compression method 2 with raw_size 2^32 - 1: the method, "
+      "a defect of the file, is checked before the reader's limits (spec/pln.md §6 steps 1-2)")
+def _():
+    return file(cube(GRUP=grup_raw(body(), compression=2, raw_size=0xFFFFFFFF)))
+
+
+@case("xplns_zlib_truncated", "SIZE_MISMATCH", "a zlib stream cut after 30 of its bytes: a valid start that ends "
+      "inside the stream is SIZE_MISMATCH, not BAD_COMPRESSION (spec/pln.md §6 step 5)")
+def _():
+    z = zlib.compress(CUBE.astype("<f4").tobytes(), 9)
+    assert len(z) > 30
+    return file(cube(PLNS=plns_raw(z[:30], compression=1, raw_size=72)))
+
+
+@case("xplns_zlib_check", "BAD_COMPRESSION", "a zlib stream that inflates to the 72 bytes but whose Adler-32 "
+      "check value is wrong: an error the inflater reports (spec/pln.md §6 step 5)")
+def _():
+    z = bytearray(zlib.compress(CUBE.astype("<f4").tobytes(), 9))
+    z[-1] ^= 0x01
+    return file(cube(PLNS=plns_raw(bytes(z), compression=1, raw_size=72)))
+
+
+@case("xplns_padding_and_code", "BAD_PAYLOAD", "quantized 7/9/5 with a padding bit set and the first nu code 127, "
+      "above M_nu = 64: padding is checked before the codes (spec/pln.md §7.3)")
+def _():
+    q = Quantization(7, 9, 5, 0.0, 1.0)
+    payload = bytearray(plns(head=Header(coding=Coding.QUANTIZED, quantization=q)))
+    payload[20] |= 0x7F  # record 0's nu: bits 0-6 of the data
+    payload[-1] |= 0x80
+    return file(cube(PHDR=header(coding=Coding.QUANTIZED, quantization=q), PLNS=bytes(payload)))
+
+
+@case("xv2_predicted_extra_and_code", "SIZE_MISMATCH", "version 2.0, predicted planes: the first nu difference -1 "
+      "(a negative code) and one byte after the 18 varints: the fill is checked before the codes (spec/pln.md §7.4)")
+def _():
+    return v2(v2_planes(b"\x01" + V2_STREAMS[V2_FIRST:] + b"\x00"))
+
+
+@case("xv2_ref_count_long", "BAD_PAYLOAD", "version 2.0 group body: ref_count 200 in a body of 8 bytes: ref_count "
+      "is not compared with the bytes left, the body ends inside the references (spec/pln.md §9.2 step 3)")
+def _():
+    return v2(GRUP=grup_raw(b"\xc8\x01\x00\x01\x01\x01\x01\x01"))
+
+
+@case("xv2_ref_range_then_cut", "BAD_PAYLOAD", "version 2.0 group body: ref_count 6, the second difference 9 "
+      "reaches past the 6 planes, and the body ends after the fourth: every reference is read before any is checked "
+      "(spec/pln.md §9.2 steps 3-4)")
+def _():
+    return v2(GRUP=grup_raw(b"\x06\x00\x09\x01\x01"))
+
+
+@case("xv3_sealed_vertex_third", "BAD_GROUP_STRUCTURE", "version 3.1 sealed cube whose vertex_count says 25 with "
+      "74 bytes after it (the cube's 73 and one more): 3 x 25 = 75 > 74, whatever a reader's rounding of a third "
+      "(spec/pln.md §2.1, §9.9)")
+def _():
+    return sealed_file(sealed_body(vertex_count=25) + b"\x00")
+
+
+@case("xv3_shell_counts_short", "BAD_PAYLOAD", "version 3.2 shell cube cut 30 bytes short: its counts (8 corners, "
+      "12 triangles) pass their checks against the 43 bytes left after them, and the body ends inside the corner "
+      "codes (spec/pln.md §9.10 step 3)")
+def _():
+    return shell_file(shell_body()[:-30])
+
+
+@case("xv3_shell_step_then_cut", "BAD_PAYLOAD", "version 3.2 shell cube with its corner explicit: a coordinate step "
+      "of 2^53 (beyond 2^52) and the last corner code cut: every field is read before any value is checked "
+      "(spec/pln.md §9.10 steps 3, 5)")
+def _():
+    good = shell_body(SHELL_MIXED)
+    big = records._shell_body(dataclasses.replace(SHELL_MIXED, grid=np.array([[1 << 53, 0, 0]])))
+    b = good[:8] + big
+    return shell_file(b[:-1] + bytes([b[-1] | 0x80]))
+
+
+@geometry_case("xgeom_cells_empty_cell", "EMPTY_POLYTOPE", "the L's two cells and a third, x >= 1 and x <= 0 "
+               "within the box: an empty cell is an error (spec/pln.md §9.6)")
+def _():
+    cells = L_CELLS + ((7, 11, 0, 4, 12, 14),)
+    geometry_defect("EMPTY_POLYTOPE", 1, L_PLANES, L_ROLES, cells)
+    return l_file(grup(range(9), kind=1, bounding=L_ROLES, cells=cells))
+
+
+@geometry_case("xgeom_cells_unbounded_z", "UNBOUNDED_POLYTOPE", "a cells group whose first cell lacks z >= 0: an "
+               "unbounded cell is UNBOUNDED_POLYTOPE (spec/pln.md §9.6)")
+def _():
+    cells = ((0, 2, 4, 17, 12), L_CELLS[1])
+    geometry_defect("UNBOUNDED_POLYTOPE", 1, L_PLANES, L_ROLES, cells)
+    return l_file(grup(range(9), kind=1, bounding=L_ROLES, cells=cells))
+
+
+@geometry_case("xgeom_bsp_unbounded_leaf", "UNBOUNDED_POLYTOPE", "a tree whose IN leaf is the half-space z >= 0: "
+               "an unbounded IN leaf is UNBOUNDED_POLYTOPE (spec/pln.md §9.7)")
+def _():
+    geometry_defect("UNBOUNDED_POLYTOPE", 2, L_PLANES[:8], None, None, (7, IN, OUT))
+    return l_file(grup(range(8), kind=2, tree=(7, IN, OUT)), L_PLANES[:8])
+
+
+@geometry_case("xgeom_patch_no_face", "EMPTY_POLYTOPE", "a pseudo-convex patch (kind 3) of the cube's six planes, "
+               "every one a bounding plane (role bits 0x3f): the polytope is fine but no face is on a face plane "
+               "(spec/pln.md §9.8)")
+def _():
+    geometry_defect("EMPTY_POLYTOPE", 3, CUBE, [True] * 6)
+    return group_file(CUBE, grup(range(6), kind=3, bounding=[True] * 6))

@@ -13,6 +13,7 @@ from __future__ import annotations
 import dataclasses
 import io
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -20,8 +21,8 @@ import numpy as np
 import planefmt
 import planefmt.quantize
 from planefmt import records, schema
-from planefmt.model import (Coding, Colours, GroupKind, Header, ObjectRecord, PartGroup, Quantization, Shell,
-                            Units)
+from planefmt.model import (UP_AXIS, Coding, Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup,
+                            Quantization, Shell, Units)
 
 from . import reference
 from .build import (CUBE, SPEC_HEADER, box, finish, frame, header_json, rounded, shell_json, stored_header, stored_planes,
@@ -36,7 +37,7 @@ class Obj:
     name: str
     parent: int | None = None
     transform: np.ndarray | None = None
-    extra: bytes = b""  # OBJT fields of a newer minor version (spec §8.1)
+    extra: bytes = b""  # OBJT fields of a newer minor version (spec §8)
 
 
 @dataclass(frozen=True)
@@ -54,7 +55,7 @@ class Group:
     tree: tuple[int, ...] | None = None
     vertex_planes: tuple[tuple[int, int, int], ...] | None = None  # sealed groups: local references
     facets: tuple[tuple[int, int, int, int], ...] | None = None  # sealed groups: face reference, 3 vertices
-    shell: Shell | None = None  # shell groups (spec 3.2 §8.9)
+    shell: Shell | None = None  # shell groups (spec §9.10)
     extra: bytes = b""  # kind data of a kind this version does not know
 
 
@@ -62,6 +63,12 @@ class Group:
 class Colour:
     group: int
     rgba: np.ndarray
+
+
+@dataclass(frozen=True)
+class Meta:
+    key: str
+    value: str
 
 
 @dataclass(frozen=True)
@@ -82,6 +89,9 @@ class ValidCase:
     decoded_bbox: bool = False  # header bbox = the decoded geometry's, rounded to 9 decimals
     assembled_only: bool = False  # uses what a version 1.0 writer cannot write
     header_flags: int = 0  # PHDR flag bits beyond the writer's (assembled cases only)
+    #: Rewrites the assembled chunks (type, payload) before iNDX and PEND are added: bytes a writer
+    #: does not write but a reader must accept (assembled cases only).
+    edit: Callable[[list], list] | None = field(default=None, compare=False)
     findings: tuple[str, ...] = ()
     findings_optional: tuple[str, ...] = ()
     table: np.ndarray = field(init=False, repr=False, compare=False)
@@ -144,7 +154,7 @@ def written(case: ValidCase, header: Header) -> bytes:
     """The file as ``planefmt.Writer`` writes it."""
     sink = _Pipe() if case.stream else io.BytesIO()
     if header.version[0] == 3 and case.counts is not None:
-        # A version 3 writer writes the counts it is told up front (spec 3.0 §5).
+        # A version 3 writer writes the counts it is told up front (spec §5).
         header = dataclasses.replace(header, plane_count=case.counts[0], object_count=case.counts[1],
                                      group_count=case.counts[2])
     with planefmt.Writer(sink, header, compress=case.compress, index=case.index) as w:
@@ -158,6 +168,8 @@ def written(case: ValidCase, header: Header) -> bytes:
                             extra=op.extra, vertex_planes=_vertex_planes(op), facets=_facets(op), shell=op.shell)
             elif isinstance(op, Colour):
                 w.add_colours(op.group, op.rgba)
+            elif isinstance(op, Meta):
+                w.add_metadata(op.key, op.value)
             else:
                 w.add_chunk(op.type, op.payload)
     return bytes(sink.data) if case.stream else sink.getvalue()
@@ -187,8 +199,12 @@ def assembled(case: ValidCase, header: Header) -> bytes:
             groups += 1
         elif isinstance(op, Colour):
             layout.append((schema.COLR, records.encode_colours(Colours(op.group, op.rgba))))
+        elif isinstance(op, Meta):
+            layout.append((schema.META, records.encode_metadata(Metadata(op.key, op.value))))
         else:
             layout.append((op.type, op.payload))
+    if case.edit is not None:
+        layout = case.edit(layout)
     return frame(finish(layout, case.index, header.version[0]))
 
 
@@ -233,7 +249,7 @@ def expected(case: ValidCase, header: Header, geo: dict) -> dict:
         groups.append(entry)
     colours = [{"group": op.group, "rgba": np.asarray(op.rgba).tolist()} for op in case.ops
                if isinstance(op, Colour)]
-    return {
+    result = {
         "header": header_json(header, case.counts),
         "planes": case.table.tolist(),
         "objects": objects,
@@ -243,6 +259,11 @@ def expected(case: ValidCase, header: Header, geo: dict) -> dict:
         "findings_optional": sorted(set(case.findings_optional)),
         "geometry": geo,
     }
+    metadata = {op.key: op.value for op in case.ops if isinstance(op, Meta)}
+    if metadata:
+        # Only here: the results of the cases before mETA stay as they were.
+        result["metadata"] = metadata
+    return result
 
 
 def build(case: ValidCase) -> tuple[bytes, dict]:
@@ -350,7 +371,7 @@ V3_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 0))
 V3_Q221 = Header(version=(3, 0), coding=Coding.QUANTIZED, quantization=Quantization(2, 2, 1, 0.0, 1.0),
                  units=Units.MILLIMETRE, tolerance=1e-6, error_bound=2.2e-14)
 
-#: The unit cube as a sealed group (kind 5, spec 3.1 §8.8) over the planes of CUBE: vertex x + 2y + 4z
+#: The unit cube as a sealed group (kind 5, spec §9.9) over the planes of CUBE: vertex x + 2y + 4z
 #: is the corner (x, y, z), named by its three face planes (x = 1 or 0: 0 or 2, y: 1 or 3, z: 4 or 5).
 SEALED_CUBE_VERTICES = tuple((0 if x else 2, 1 if y else 3, 4 if z else 5)
                              for z in (0, 1) for y in (0, 1) for x in (0, 1))
@@ -367,7 +388,7 @@ SEALED_CORNER_VERTICES = ((2, 3, 6),) + SEALED_CUBE_VERTICES[1:]
 def shell_of(corners, facets, origin=(0.0, 0.0, 0.0), step: float = 1.0) -> Shell:
     """A :class:`Shell` from ``corners`` (each a triple of local references, or ``("grid", x, y, z)``)
     and ``facets`` (face or -1, i0, i1, i2) in any order: triangles sorted by face, free ones last,
-    and corners renumbered by first use, as spec 3.2 §8.9 stores them."""
+    and corners renumbered by first use, as spec §9.10 stores them."""
     fc = sorted(facets, key=lambda f: (f[0] < 0, f[0]))
     order: list[int] = []
     for f in fc:
@@ -382,7 +403,7 @@ def shell_of(corners, facets, origin=(0.0, 0.0, 0.0), step: float = 1.0) -> Shel
                  facets=np.array([(f[0], *(rank[i] for i in f[1:])) for f in fc], dtype=np.int64))
 
 
-#: The unit cube as a shell (kind 6, spec 3.2 §8.9): the corners and triangles of the sealed cube.
+#: The unit cube as a shell (kind 6, spec §9.10): the corners and triangles of the sealed cube.
 SHELL_CUBE = shell_of(SEALED_CUBE_VERTICES, SEALED_CUBE_FACETS)
 #: The same with its corner (0, 0, 0) explicit (grid step 0.25, at 0, 0, 0) and the two triangles of
 #: face 5 (z >= 0) free: reference 5 then only names corners.
@@ -439,16 +460,55 @@ NEWER_MINOR = dict(
     decoded_bbox=True, assembled_only=True, header_flags=0x0100,
     findings=("SKIPPED_GROUP_KIND",), findings_optional=("NEWER_MINOR_VERSION",))
 
+def ignored_fields(layout: list) -> list:
+    """Every field spec/pln.md §2.1 says readers ignore, set: the PHDR's undefined flag bits (through
+    ``header_flags``) and, under a float coding, its widths (and in version 1 its reserved bytes and h
+    range, NaN and -inf); the OBJT's undefined flag bits (and in version 1 its reserved byte); in
+    version 1 the reserved bytes of PLNS and GRUP heads."""
+    out = []
+    v1 = layout[0][1][0] == 1  # the PHDR's version_major
+    for ctype, payload in layout:
+        p = bytearray(payload)
+        if ctype == schema.PHDR:
+            p[5:8] = b"\x08\x10\x20"  # widths of a coding without widths
+            if v1:
+                p[9:12] = b"\xa5\x5a\xff"  # reserved
+                p[12:28] = np.array([math.nan, -math.inf], "<f8").tobytes()  # h range of a float coding
+        elif ctype == schema.OBJT:
+            if v1:
+                p[8] |= 0xFE  # flags: every bit but HAS_TRANSFORM
+                p[9] = 0x77  # reserved
+            else:
+                p[2] |= 0xFE  # version 3: index 0 and parent 0 (one-byte varints), then flags
+        elif ctype == schema.PLNS and v1:
+            p[13:16] = b"\x01\x02\x03"
+        elif ctype == schema.GRUP and v1:
+            p[10:12] = b"\xfe\xff"
+        out.append((ctype, bytes(p)))
+    return out
+
+
+#: The L's tree with one more split at its root on x >= 0 (reference 5), whose outer side (x <= 0)
+#: splits on x <= 1 (reference 3) into an OUT leaf and an IN leaf whose region, x <= 0 and x >= 1, is
+#: empty: an empty IN leaf contributes nothing (spec/pln.md §9.7).
+L_TREE_EMPTY_LEAF = (5,) + L_TREE + (3, OUT, IN)
+#: patch_convex's open box with its first face reference (x <= 1) given twice.
+PATCH_REPEATED_OPS = (Obj("open box"),
+                      Planes(np.vstack([box((0, 0, 0), (1, 1, 1))[[0, 1, 2, 3, 5]], [[0.46, math.pi, 0.8]]])),
+                      Group(0, GroupKind.PSEUDO_CONVEX, (0, 0, 1, 2, 3, 4, 5), bounding=(6,)))
+
 CASES = [
-    ValidCase("cube_float32", "the unit cube of spec §12, float32, metres, with index: the 401 bytes printed there",
+    ValidCase("cube_float32", "the unit cube of spec/pln-1.md §12, float32, metres, with index: the 401 bytes "
+              "printed there",
               SPEC_HEADER, cube_ops()),
-    ValidCase("cube_float64", "the unit cube of spec §12 in float64",
+    ValidCase("cube_float64", "the unit cube of spec/pln-1.md §12 in float64",
               dataclasses.replace(SPEC_HEADER, coding=Coding.FLOAT64), cube_ops()),
-    ValidCase("cube_noindex", "the spec §12 cube without iNDX: PEND index_offset 0",
+    ValidCase("cube_noindex", "the spec/pln-1.md §12 cube without iNDX: PEND index_offset 0",
               SPEC_HEADER, cube_ops(), index=False),
-    ValidCase("cube_colours", "the spec §12 cube with a cOLR chunk, one RGBA colour per face",
+    ValidCase("cube_colours", "the spec/pln-1.md §12 cube with a cOLR chunk, one RGBA colour per face",
               SPEC_HEADER, cube_ops(Colour(0, _rgba))),
-    ValidCase("cube_ancillary", "the spec §12 cube with an unknown ancillary chunk nOTE between OBJT and PLNS",
+    ValidCase("cube_ancillary", "the spec/pln-1.md §12 cube with an unknown ancillary chunk nOTE between OBJT and "
+              "PLNS",
               SPEC_HEADER, (Obj("cube"), Chunk(b"nOTE", b"an ancillary chunk no reader knows; skip it"),
                             Planes(CUBE), Group(0, GroupKind.CONVEX, tuple(range(6)))),
               findings=("UNKNOWN_ANCILLARY_CHUNK",)),
@@ -550,9 +610,9 @@ CASES = [
               (Obj("gem"), Planes(GEM), Group(0, 0, tuple(range(10))),
                Group(0, GroupKind.PSEUDO_CONVEX, (0, 2, 3, 4, 5, 6, 7, 8, 9, 9))),
               decoded_bbox=True, findings_optional=("REDUNDANT_PLANE",)),
-    ValidCase("cube_v3", "version 3.0: the unit cube of spec §12, float32, metres, with index: the bytes printed "
-              "in spec/pln-3.md §12 (bbox, tolerance and error bound as float32, counts and heads as varints, an "
-              "8-byte PEND)", V3_CUBE, cube_ops()),
+    ValidCase("cube_v3", "version 3.0: the unit cube of spec/pln-1.md §12, float32, metres, with index: the bytes "
+              "printed in spec/pln-3.md §12 (bbox, tolerance and error bound as float32, counts and heads as "
+              "varints, an 8-byte PEND)", V3_CUBE, cube_ops()),
     ValidCase("cube_v3_q2_2_1", "version 3.0: the cube bit-packed at 2/2/1 bits over h in [0, 1] (every plane an "
               "exact code), lossless, the bbox of the decoded cube, no index: an empty PEND", V3_Q221, cube_ops(),
               decoded_bbox=True, index=False),
@@ -617,6 +677,29 @@ CASES = [
               dataclasses.replace(V33_CUBE, coding=Coding.FLOAT64),
               (Obj("pyramid"), Planes(APEX_PLANES), Group(0, GroupKind.SHELL_TREE, tuple(range(5)), shell=TREE_APEX)),
               decoded_bbox=True),
+    ValidCase("cube_meta_up_z", "version 3.0: the cube of cube_v3 with a mETA chunk up_axis = Z right after PHDR "
+              "(spec §10.3: any version may hold it; its version stays 3.0)", V3_CUBE,
+              (Meta(UP_AXIS, "Z"), *cube_ops())),
     ValidCase("empty", "the smallest valid file: signature, PHDR (counts 0), PEND without index",
               Header(coding=Coding.FLOAT32), (), index=False),
+    # -- rules spec/pln.md decides (issue 32)
+    ValidCase("ignored_fields", "the spec/pln-1.md §12 cube of version 1.0 with every field a reader ignores set "
+              "(spec/pln.md §2.1, A.1): undefined PHDR and OBJT flag bits, the widths (8/16/32) and h range (NaN, "
+              "-inf) of a float coding, the reserved bytes of PHDR, OBJT, PLNS and GRUP; read as the cube",
+              SPEC_HEADER, cube_ops(), assembled_only=True, header_flags=0xFFF8, edit=ignored_fields),
+    ValidCase("ignored_fields_v3", "the cube of version 3.0 with every field a reader ignores set (spec/pln.md "
+              "§2.1): undefined PHDR and OBJT flag bits, the widths (8/16/32) of a float coding",
+              V3_CUBE, cube_ops(), assembled_only=True, header_flags=0xFFF8, edit=ignored_fields),
+    ValidCase("convex_roles", "the cube's convex group with role bit 1 on reference 5 (z >= 0): role bits of a convex "
+              "group carry no meaning, the face z = 0 is decoded (spec/pln.md §9.4)",
+              SPEC_HEADER, (Obj("cube"), Planes(CUBE), Group(0, GroupKind.CONVEX, tuple(range(6)), bounding=(5,))),
+              assembled_only=True),
+    ValidCase("bsp_empty_leaf", "the L of bsp_l with one more split at the root, x >= 0, whose outer side holds an "
+              "IN leaf of empty region (x <= 0 and x >= 1): allowed, it adds nothing (spec/pln.md §9.7)",
+              Header(coding=Coding.FLOAT64, units=Units.METRE),
+              (Obj("L"), Planes(L_PLANES[:8]), Group(0, GroupKind.BSP, tuple(range(8)), tree=L_TREE_EMPTY_LEAF)),
+              decoded_bbox=True),
+    ValidCase("patch_repeated_face", "kind 3: the open box of patch_convex with its face reference x <= 1 given "
+              "twice: the face is decoded once per reference, twice (spec/pln.md §9.8)",
+              Header(coding=Coding.FLOAT64, units=Units.METRE), PATCH_REPEATED_OPS, decoded_bbox=True),
 ]

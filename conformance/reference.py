@@ -1,4 +1,4 @@
-"""Reference geometry of part groups (spec §8.2-§8.4, 3.1 §8.8), for the expected results of valid cases.
+"""Reference geometry of part groups (spec §9, §9.9), for the expected results of valid cases.
 
 Deliberately independent of planefmt's own decoder (``planefmt.halfspace``,
 ``planefmt.codec``): the suite checks that decoder against this one. It is
@@ -28,10 +28,10 @@ WELD = 1e-9
 #: fraction of the extent apart, so that no sane decoder's vertex welding can change them.
 DISTINCT = 1e-5
 
-#: |det| of three unit normals at or below which they are linearly dependent (spec 3.1 §8.8).
+#: |det| of three unit normals at or below which they are linearly dependent (spec §9.9).
 DEPENDENT = 1e-12
 
-#: Tokens of spec §8.4.
+#: Tokens of spec §9.7.
 BSP_IN, BSP_OUT = 0xFFFFFFFE, 0xFFFFFFFF
 
 
@@ -63,7 +63,7 @@ class Face:
 
 
 def planes_of(triplets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``(omega, h)`` of triplets ``(nu, phi, h)`` (spec §2.2)."""
+    """``(omega, h)`` of triplets ``(nu, phi, h)`` (spec §2.3)."""
     t = np.asarray(triplets, dtype=np.float64).reshape(-1, 3)
     s = np.sin(t[:, 0])
     omega = np.column_stack([s * np.cos(t[:, 1]), s * np.sin(t[:, 1]), np.cos(t[:, 0])])
@@ -154,15 +154,28 @@ def _overlap(face: Face, other: Face) -> float:
 
 
 def _cell_faces(omega: np.ndarray, h: np.ndarray, entries) -> list[Face]:
-    """Faces of one cell: entries ``2 j + s`` of local planes, ``s = 1`` for the complement."""
+    """Faces of one cell: entries ``2 j + s`` of local planes, ``s = 1`` for the complement. An entry
+    given twice (a tree that splits on a plane its path already took) bounds the cell once."""
+    entries = list(dict.fromkeys(int(e) for e in entries))
     j = np.asarray(entries, dtype=np.int64) >> 1
     sign = np.where(np.asarray(entries) & 1, -1.0, 1.0)
     faces = convex_faces(omega[j] * sign[:, None], h[j] * sign)
     return [Face(f.normal, f.offset, f.points, int(j[f.plane])) for f in faces]
 
 
+def _leaf_faces(omega: np.ndarray, h: np.ndarray, entries) -> list[Face]:
+    """Faces of an IN leaf's region; none where it is empty or flat, which spec/pln.md §9.7 allows (an
+    unbounded region is still a ``Defect``)."""
+    try:
+        return _cell_faces(omega, h, entries)
+    except Defect as exc:
+        if exc.code != "EMPTY_POLYTOPE":
+            raise
+        return []
+
+
 def bsp_cells(tokens, m: int) -> list[list[int]]:
-    """The IN leaves of a preorder BSP token stream (spec §8.4), as cell entry lists."""
+    """The IN leaves of a preorder BSP token stream (spec §9.7), as cell entry lists."""
     cells: list[list[int]] = []
     stack = [[]]  # half-spaces of the region each pending subtree covers
     for t in (int(x) for x in tokens):
@@ -194,7 +207,7 @@ def _solid_union(cells: list[list[Face]], size: float) -> tuple[float, np.ndarra
 
 
 def sealed_vertices(omega: np.ndarray, h: np.ndarray, vertex_planes) -> np.ndarray:
-    """Where each triple of local planes meets (spec 3.1 §8.8); raises ``Defect`` (``BAD_VERTEX``)
+    """Where each triple of local planes meets (spec §9.9); raises ``Defect`` (``BAD_VERTEX``)
     where the normals are linearly dependent or the point is not finite."""
     out = []
     for k, (a, b, c) in enumerate(vertex_planes):
@@ -220,8 +233,8 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
     omega, h = planes_of(triplets)
     volume = None
     if kind in (6, 7):
-        # spec 3.2 §8.9 (3.3 §8.10 the same once read): named corners as sealed vertices, explicit ones
-        # on the grid; no volume (a shell may be open).
+        # spec §9.10 (§9.11 the same once read): named corners as sealed vertices, explicit ones on
+        # the grid; no volume (a shell may be open).
         explicit = np.asarray(shell.explicit, dtype=bool)
         points = np.zeros((len(explicit), 3))
         if (~explicit).any():
@@ -241,7 +254,7 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
         area = float(np.linalg.norm(cross, axis=1).sum()) / 2
         vector = cross.sum(axis=0) / 2
         volume = float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6  # divergence theorem
-        counts = (len(points), len(facets))  # vertex identity as stored: readers must not weld (§8.8)
+        counts = (len(points), len(facets))  # vertex identity as stored: readers must not weld (spec §9.9)
     elif kind in (0, 3, 4):
         faces = convex_faces(omega, h)
         if kind == 0:
@@ -250,6 +263,8 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
             volume = sum(f.area * f.offset for f in faces) / 3.0  # divergence theorem
         else:
             faces = [f for f in faces if not bounding[f.plane]]
+            if not faces:
+                raise Defect("EMPTY_POLYTOPE", "no face of the patch lies on a face plane (spec §9.8)")
             if kind == 4:
                 faces = [flipped(f) for f in faces]
         points = np.concatenate([f.points for f in faces])
@@ -262,7 +277,8 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
             raise ValueError("vertices too close together for the counts to be unambiguous")
     else:
         entries = cells if kind == 1 else bsp_cells(tree, len(h))
-        cell_faces = [_cell_faces(omega, h, e) for e in entries]
+        cell_faces = [_cell_faces(omega, h, e) if kind == 1 else _leaf_faces(omega, h, e) for e in entries]
+        cell_faces = [faces for faces in cell_faces if faces]
         points = np.concatenate([f.points for faces in cell_faces for f in faces])
         area, vector = _solid_union(cell_faces, float(np.linalg.norm(np.ptp(points, axis=0))))
         volume = sum(f.area * f.offset for faces in cell_faces for f in faces) / 3.0

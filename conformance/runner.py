@@ -95,6 +95,9 @@ def compare_valid(want: dict, got: dict, level: str) -> str | None:
     for key in EXACT:
         if got.get(key) != want[key]:
             return f"{key}: {json.dumps(got.get(key))[:200]}, expected {json.dumps(want[key])[:200]}"
+    # Only the cases with mETA chunks (spec §10.3) expect metadata: older results do not list it.
+    if "metadata" in want and got.get("metadata") != want["metadata"]:
+        return f"metadata: {json.dumps(got.get('metadata'))[:200]}, expected {json.dumps(want['metadata'])[:200]}"
     found, required = set(got.get("findings", [])), set(want["findings"])
     if not required <= found or not found <= required | set(want["findings_optional"]):
         return f"findings {sorted(found)}, expected {sorted(required)} (optional {want['findings_optional']})"

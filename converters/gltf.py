@@ -4,13 +4,18 @@ Reading keeps trimesh's scene graph: every node (with or without a mesh)
 with its name, parent and local matrix. trimesh splits a mesh of several
 primitives into one child node per primitive. glTF's unit is the metre.
 A material's plain base colour becomes the face colour; textures, UVs,
-normals and other material properties are reported as dropped.
+normals and other material properties are reported as dropped. The scene
+is Y-up, as glTF says every file is.
 
 Writing keeps node names (repeated names too), hierarchy, transforms and
 instancing (nodes sharing one :class:`Mesh` share one glTF mesh). glTF has
-no face colours, so a coloured mesh is written with three vertices of its
-own per face carrying the face's ``COLOR_0``; the reader merges them back.
-Positions are float32. The ``.gltf`` writer puts all binary data in one
+no face colours: a mesh of one colour is written with a material of that
+base colour, one of several colours with three vertices of its own per face
+carrying the face's ``COLOR_0``; the reader turns both back into face colours.
+Positions are float32. A Z-up scene is turned Y-up, glTF's convention, by
+rotating its root nodes (``assemble.reoriented``: (x, y, z) -> (x, z, -y));
+vertices are written as they are, welded after rounding, with no triangle left
+without area (:func:`.assemble.at_float32`). The ``.gltf`` writer puts all binary data in one
 ``<stem>.bin`` beside the JSON.
 """
 
@@ -22,16 +27,17 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import quote, unquote, urlsplit
 
-import numpy as np
-
 from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
+from .assemble import at_float32, reoriented
 from .atomic import atomic_paths, write_bytes
 from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
 
 _GLB_MAGIC = b"glTF"
+#: glTF 2.0 §3.4: +Y is up.
+GLTF_UP_AXIS = "Y"
 
 
 def sniff_glb(head: bytes, size: int) -> bool:
@@ -68,13 +74,13 @@ def references(path: str | os.PathLike[str]) -> tuple[str, ...]:
 
 def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.glb`` file into ``(scene, dropped)``."""
-    return read_scene(path, "glb", "binary glTF", units=Units.METRE,
+    return read_scene(path, "glb", "binary glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS,
                       reversed_siblings=True)
 
 
 def read_gltf(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.gltf`` file (and the buffers and images it refers to) into ``(scene, dropped)``."""
-    return read_scene(path, "gltf", "glTF", units=Units.METRE, reversed_siblings=True,
+    return read_scene(path, "gltf", "glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS, reversed_siblings=True,
                       resolver=_uri_resolver(path))
 
 
@@ -138,10 +144,9 @@ def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:
     if scene.units not in (Units.METRE, Units.UNSPECIFIED):
         notes.append(f"units ({scene.units.name.lower()}; glTF is in metres, "
                      "coordinates written unscaled)")
-    if any(node.mesh is not None and (node.mesh.vertices.astype(np.float32)
-                                      != node.mesh.vertices).any() for node in scene.nodes):
-        notes.append("coordinates rounded to float32")
     try:
+        scene, rounding = at_float32(reoriented(scene, GLTF_UP_AXIS))
+        notes += rounding
         tm_scene, names = to_trimesh_scene(scene)
 
         def restore_names(tree: dict[str, Any]) -> None:

@@ -11,7 +11,7 @@ import numpy as np
 from planefmt.errors import GeometryError, PlnWarning, SkippedGroupsWarning
 from planefmt.model import Mesh, Scene
 
-from .assemble import build_mesh, world_transforms
+from .assemble import build_mesh, instancing_note, with_area, world_transforms
 
 SIGNATURE_TAIL = b"PLN"
 
@@ -49,17 +49,15 @@ def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6
                                     tau=tau, compress=compress, compact=compact, watertight=watertight,
                                     scheme=scheme)
     notes = [f"{dropped} zero-area triangle{'s' if dropped > 1 else ''} (no plane to store)"] if dropped else []
+    instancing = instancing_note(scene)
+    if instancing:
+        notes.append(instancing)
     if header.error_bound > header.tolerance:
         # Only a forced coding gets here: the codec refuses any other that misses the tolerance.
         notes.append(f"the tolerance {header.tolerance:g} (the forced coding measured {header.error_bound:.3g} of "
                      "the diagonal; the file is marked lossy)")
     return notes + [str(w) for w in _pln_warnings(caught)]
 
-
-#: A triangle whose height is at most this fraction of its mesh's bounding-box diagonal has no plane:
-#: collinear corners in float64 give heights about 1e-16 of the diagonal, and dropping the triangle moves
-#: the surface by its height, far under any tolerance the codec accepts.
-ZERO_AREA = 1e-12
 
 #: The header's bounding box is float32 (spec §5): a coordinate beyond this cannot be recorded.
 FLOAT32_MAX = float(np.finfo(np.float32).max)
@@ -92,7 +90,7 @@ def without_zero_area(scene: Scene) -> tuple[Scene, int]:
             raise GeometryError(f"a mesh {diagonal:.3g} across is too small for the plane arithmetic (at least "
                                 f"{SMALLEST_DIAGONAL:g}): scale it up", code="DEGENERATE_GEOMETRY")
         if id(mesh) not in cleaned:
-            keep = _with_area(mesh)
+            keep = with_area(mesh.vertices, mesh.faces)
             dropped += int(len(keep) - np.count_nonzero(keep))
             cleaned[id(mesh)] = mesh if keep.all() else build_mesh(
                 mesh.vertices, mesh.faces[keep],
@@ -104,20 +102,6 @@ def without_zero_area(scene: Scene) -> tuple[Scene, int]:
         return scene, 0
     nodes = tuple(replace(node, mesh=None if node.mesh is None else cleaned[id(node.mesh)]) for node in scene.nodes)
     return replace(scene, nodes=nodes), dropped
-
-
-def _with_area(mesh: Mesh) -> np.ndarray:
-    """Per face: whether it is taller than ZERO_AREA of the mesh's diagonal."""
-    v = mesh.vertices - mesh.vertices.min(axis=0)
-    diagonal = float(np.linalg.norm(v.max(axis=0)))
-    if not diagonal > 0:
-        return np.zeros(len(mesh.faces), dtype=bool)
-    # In units of the diagonal, so that products neither overflow nor underflow at extreme scales.
-    corners = (v / diagonal)[mesh.faces]
-    edges = corners[:, [1, 2, 0]] - corners
-    longest = np.linalg.norm(edges, axis=2).max(axis=1)
-    twice_area = np.linalg.norm(np.cross(edges[:, 0], edges[:, 1]), axis=1)
-    return twice_area > ZERO_AREA * longest
 
 
 def _pln_warnings(caught: list[warnings.WarningMessage]) -> list[PlnWarning]:

@@ -4,7 +4,8 @@ Face colours are read and written (``red green blue alpha`` on the face
 element). Vertex properties other than position, and vertex colours that
 differ within a face, are reported as dropped. Writing flattens the scene
 into one world-space mesh; binary little-endian by default. trimesh writes
-coordinates as float32.
+coordinates as float32, welded after rounding, with no triangle left without
+area (:func:`.assemble.at_float32`).
 """
 
 from __future__ import annotations

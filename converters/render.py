@@ -1,7 +1,8 @@
 """A headless picture of decoded part groups: a numpy z-buffer and a PNG writer, no display needed.
 
 Used by ``pln preview``. Orthographic view along ``-view`` (a direction
-towards the eye, model coordinates, z up), flat Lambert shading with a fixed
+towards the eye, model coordinates), the ``up`` axis (Y or Z) towards the
+top of the picture, flat Lambert shading with a fixed
 light over the eye's shoulder, one colour per part group. Back faces are
 drawn darker so an open surface's inside shows as such. Rasterization is
 vectorized over (triangle, pixel) pairs in bounded batches: memory stays
@@ -15,6 +16,10 @@ import zlib
 
 import numpy as np
 
+from .assemble import up_rotation
+
+#: A view from the front right and above a Z-up model (``DEFAULT_VIEW_Z_UP`` turned for other up axes).
+DEFAULT_VIEW_Z_UP = (1.0, -1.4, 0.9)
 #: Colours of part groups, cycled: Okabe-Ito, legible for colour-blind readers.
 PALETTE = np.array([[230, 159, 0], [86, 180, 233], [0, 158, 115], [240, 228, 66], [0, 114, 178],
                     [213, 94, 0], [204, 121, 167], [120, 120, 120]], dtype=np.float64)
@@ -33,17 +38,27 @@ def _camera(view: np.ndarray) -> np.ndarray:
     return np.stack([right, np.cross(back, right), back])
 
 
+def default_view(up: str) -> np.ndarray:
+    """The default direction towards the eye for a model whose ``up`` axis points up: the same view of
+    it whichever axis that is."""
+    return up_rotation("Z", up)[:3, :3] @ np.array(DEFAULT_VIEW_Z_UP)
+
+
 def render(vertices: np.ndarray, triangles: np.ndarray, group: np.ndarray, *, size: int = 640,
-           view: tuple[float, float, float] = (1.0, -1.4, 0.9)) -> np.ndarray:
+           view: tuple[float, float, float] = DEFAULT_VIEW_Z_UP, up: str = "Z") -> np.ndarray:
     """An ``(size, size, 3)`` uint8 image of ``triangles`` (T, 3) over ``vertices`` (V, 3).
 
-    ``group`` (T,) gives each triangle's part group, which picks its colour.
+    ``group`` (T,) gives each triangle's part group, which picks its colour; ``up`` ("Y" or "Z") is
+    the model axis drawn upwards.
     """
     image = np.empty((size, size, 3), dtype=np.uint8)
     image[:] = BACKGROUND
     if len(triangles) == 0:
         return image
-    cam = _camera(np.asarray(view))
+    # The camera is built for +z up: a model of another up axis is turned into that frame first.
+    turn = up_rotation(up, "Z")[:3, :3]
+    vertices = np.asarray(vertices, dtype=np.float64) @ turn.T
+    cam = _camera(turn @ np.asarray(view, dtype=np.float64))
     p = vertices @ cam.T
     lo, hi = p[:, :2].min(axis=0), p[:, :2].max(axis=0)
     scale = 0.9 * size / max(float((hi - lo).max()), 1e-300)

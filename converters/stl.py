@@ -2,8 +2,10 @@
 
 STL is a triangle soup of float32 coordinates: the reader merges equal
 positions back into shared vertices (see :mod:`.assemble`). Writing
-flattens the scene into one world-space mesh, binary by default; STL has
-no units, names or colours (the vendor colour conventions are not used).
+flattens the scene into one world-space mesh, binary by default, welded
+after float32 rounding with no triangle left without area
+(:func:`.assemble.at_float32`); STL has no units, names or colours (the
+vendor colour conventions are not used).
 """
 
 from __future__ import annotations

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from dataclasses import replace
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
@@ -21,7 +22,7 @@ import numpy as np
 from planefmt.errors import ConversionError
 from planefmt.model import Mesh, Node, Scene, Units
 
-from .assemble import build_mesh, flatten
+from .assemble import at_float32, build_mesh, flatten, instancing_note
 from .atomic import write_bytes
 from .failures import describe
 
@@ -39,11 +40,12 @@ def require_trimesh(what: str) -> ModuleType:
 
 
 def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
-               units: Units = Units.UNSPECIFIED,
+               units: Units = Units.UNSPECIFIED, up_axis: str | None = None,
                reversed_siblings: bool = False, resolver: Any = None) -> tuple[Scene, list[str]]:
     """Read ``path`` as ``file_type`` through trimesh into ``(scene, dropped)``.
 
-    ``what`` names the format in messages ("binary glTF"). Any trimesh
+    ``what`` names the format in messages ("binary glTF"); ``units`` and
+    ``up_axis`` are the format's own (glTF: metres, +y up). Any trimesh
     failure becomes a :class:`ConversionError`; so does a file with no
     triangle. ``reversed_siblings``: trimesh's graph lists each node's
     children in reverse file order (see :func:`scene_from_trimesh`). ``resolver``:
@@ -60,6 +62,7 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input
         raise ConversionError(f"cannot read as {what}: {describe(exc)}", file=file) from exc
     scene, dropped = scene_from_trimesh(loaded, units, file, reversed_siblings)
+    scene = replace(scene, up_axis=up_axis)
     if not any(node.mesh is not None for node in scene.nodes):
         raise ConversionError(f"no triangle mesh found in this {what} file", file=file)
     return scene, dropped
@@ -178,13 +181,22 @@ def _face_colours(geometry: Any, faces: np.ndarray) -> tuple[np.ndarray | None, 
 def to_trimesh(mesh: Mesh, *, colours_per_vertex: bool = False) -> "trimesh.Trimesh":
     """A trimesh mesh for ``mesh``; face colours as trimesh face colours.
 
-    With ``colours_per_vertex`` each face gets its own three vertices carrying
-    the face's colour: formats without face colours (glTF) keep them exactly
-    that way, and :func:`build_mesh` merges the copies again on reading.
+    With ``colours_per_vertex`` (formats without face colours: glTF) a mesh of
+    one colour gets a material of that base colour, which :func:`_face_colours`
+    reads back as that face colour; any other gets three vertices of its own
+    per face carrying the face's colour, which :func:`build_mesh` merges again
+    on reading (three times the vertices: kept for meshes that need it).
     """
     tm = require_trimesh("mesh export")
     if mesh.face_colours is None:
         return tm.Trimesh(vertices=mesh.vertices, faces=mesh.faces, process=False)
+    if colours_per_vertex and (mesh.face_colours == mesh.face_colours[0]).all():
+        rgba = mesh.face_colours[0]
+        # Metallic 0: glTF's default of 1 would show a plain colour as metal.
+        material = tm.visual.material.PBRMaterial(baseColorFactor=rgba, metallicFactor=0.0,
+                                                   alphaMode="BLEND" if rgba[3] < 255 else None)
+        return tm.Trimesh(vertices=mesh.vertices, faces=mesh.faces,
+                          visual=tm.visual.TextureVisuals(material=material), process=False)
     if colours_per_vertex:
         return tm.Trimesh(vertices=mesh.vertices[mesh.faces].reshape(-1, 3),
                           faces=np.arange(3 * len(mesh.faces)).reshape(-1, 3),
@@ -242,13 +254,23 @@ def write_flat(scene: Scene, path: str | os.PathLike[str], *, what: str,
     if len(scene.nodes) > 1:
         notes.append(f"scene hierarchy and node names "
                      f"({len(scene.nodes)} nodes merged into one mesh)")
+    instancing = instancing_note(scene)
+    if instancing:
+        notes.append(instancing)
     if scene.units != Units.UNSPECIFIED:
         notes.append(f"units ({scene.units.name.lower()})")
+    if scene.up_axis is not None:
+        notes.append(f"up axis ({scene.up_axis})")
     if mesh.face_colours is not None and not colours:
         notes.append("face colours")
         mesh = Mesh(vertices=mesh.vertices, faces=mesh.faces)
-    if float32 and (mesh.vertices.astype(np.float32) != mesh.vertices).any():
-        notes.append("coordinates rounded to float32")
+    if float32:
+        try:
+            flat, rounding = at_float32(Scene(nodes=(Node(name="", mesh=mesh),), units=scene.units))
+        except ConversionError as exc:
+            raise exc.located(file=file)
+        mesh = flat.nodes[0].mesh
+        notes += rounding
     try:
         data = export(to_trimesh(mesh))
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything

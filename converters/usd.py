@@ -2,27 +2,33 @@
 
 Reading composes the stage (references, payloads, instancing) and keeps
 every ``UsdGeom.Mesh`` with the prims above it, so the hierarchy and the
-local transforms survive. Polygons are triangulated (fans for convex faces,
-ear clipping for concave ones), hole faces removed, ``leftHanded`` winding
-flipped to the model's counter-clockwise-outward convention. Attributes are
-read at their earliest time sample (their default when not animated).
-``metersPerUnit`` becomes :class:`Units` where it matches one; ``upAxis`` is
-not applied (coordinates are kept as authored) and is reported when it is
-not Y. ``displayColor``/``displayOpacity`` with constant or uniform
-interpolation become face colours; the rest (UVs, normals, other primvars,
+local transforms survive; the instances of one prototype share one mesh.
+Polygons are triangulated (fans for convex faces, ear clipping for concave
+ones), hole faces removed, ``leftHanded`` winding flipped to the model's
+counter-clockwise-outward convention. Attributes are read at their earliest
+time sample (their default when not animated). ``metersPerUnit`` becomes
+:class:`Units` where it matches one; ``upAxis`` becomes the scene's
+``up_axis`` (coordinates are kept as authored). ``displayColor`` and
+``displayOpacity`` with constant or uniform interpolation become face colours; the rest (UVs, normals, other primvars,
 materials, subdivision schemes: the cage is kept) is reported as dropped.
 Prims with purpose guide or proxy, and invisible prims, are skipped.
 
 Writing makes one prim per node: an ``Xform`` (or a ``Mesh`` for a childless
 mesh node) with its local transform as a single ``xformOp:transform``; a node
 with both a mesh and children becomes an ``Xform`` holding a ``Mesh`` child
-marked ``planefmt:nodeMesh``. Several root nodes are wrapped in one ``Xform``
+marked ``planefmt:nodeMesh``. A mesh several childless nodes share is
+written once, as the ``mesh`` child of a root ``class`` prim, and each of
+those nodes is an instanceable ``Xform`` referencing it (the reader folds
+the instance's mesh back, shared); a node with children keeps a copy of its
+own, which the notes report. Several root nodes are wrapped in one ``Xform``
 marked ``planefmt:sceneRoot`` (USD wants a single default prim). The reader
 folds both markers back, so a scene survives a round trip node for node.
 Prim names are made valid identifiers and unique; a node name that had to
 change is kept as the prim's ``displayName``. Stage metadata: ``upAxis``
-(``Y`` unless asked), ``metersPerUnit`` (1 when the units are unspecified)
-and ``defaultPrim``. Points are float32 as the schema has them; face colours
+(the scene's, Y where it has none; another on request, the scene turned
+into it), ``metersPerUnit`` (1 when the units are unspecified)
+and ``defaultPrim``. Points are float32 as the schema has them (welded after
+rounding, with no triangle left without area: :func:`.assemble.at_float32`); face colours
 go to a uniform ``displayColor`` (and ``displayOpacity`` when not opaque),
 as the stored 8-bit values divided by 255.
 """
@@ -32,6 +38,7 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+from collections import Counter
 from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
@@ -39,9 +46,9 @@ from typing import Any
 import numpy as np
 
 from planefmt.errors import ConversionError
-from planefmt.model import Mesh, Node, Scene, Units
+from planefmt.model import UP_AXES, Mesh, Node, Scene, Units
 
-from .assemble import build_mesh
+from .assemble import at_float32, build_mesh, instancing_note, reoriented
 from .atomic import atomic_path
 from .failures import describe
 from .polygons import triangulate
@@ -122,6 +129,7 @@ class _StageReader:
         self.xforms = pxr.UsdGeom.XformCache(self.time)
         self.dropped: set[str] = set()
         self.degenerate = 0
+        self.prototypes: dict[Any, Mesh | None] = {}
 
     def read(self) -> tuple[Scene, list[str]]:
         UsdGeom = self.pxr.UsdGeom
@@ -151,7 +159,7 @@ class _StageReader:
                     and self._local(prim, parent_path) is None:
                 index[path] = None
                 continue
-            mesh = self._mesh(prim) if path in meshes else None
+            mesh = self._shared_mesh(prim) if path in meshes else None
             transform = self._local(prim, parent_path)
             if (self._marked(prim, NODE_MESH_KEY) and parent is not None and transform is None
                     and nodes[parent].mesh is None):
@@ -165,14 +173,24 @@ class _StageReader:
 
         if not any(node.mesh is not None for node in nodes):
             raise ConversionError("no polygon mesh found in this USD stage", file=self.file)
-        up = self.pxr.UsdGeom.GetStageUpAxis(self.stage)
-        if up != self.pxr.UsdGeom.Tokens.y:
-            self.dropped.add(f"upAxis {up} (coordinates kept as authored)")
+        # The authored upAxis, else USD's fallback (Y unless a site configured otherwise): a stage always
+        # has one, unlike metersPerUnit, whose fallback (cm) is not the author's word.
+        up = str(self.pxr.UsdGeom.GetStageUpAxis(self.stage))
         units = self._units()
         notes = sorted(self.dropped)
         if self.degenerate:
             notes.append(f"{self.degenerate} degenerate faces")
-        return Scene(nodes=tuple(nodes), units=units), notes
+        return Scene(nodes=tuple(nodes), units=units, up_axis=up), notes
+
+    def _shared_mesh(self, prim: Any) -> Mesh | None:
+        """The prim's mesh; instance proxies of one prototype prim share one (scenegraph instancing), as
+        the nodes of a glTF mesh do, so that writers keep or report the sharing."""
+        if not prim.IsInstanceProxy():
+            return self._mesh(prim)
+        key = prim.GetPrimInPrototype().GetPath()
+        if key not in self.prototypes:
+            self.prototypes[key] = self._mesh(prim)
+        return self.prototypes[key]
 
     def _wanted(self, prim: Any) -> bool:
         """False for meshes a renderer would not show as the asset's surface."""
@@ -321,18 +339,20 @@ def _array(value: Any, dtype: type) -> np.ndarray:
 
 # --------------------------------------------------------------------------- writing
 
-def write(scene: Scene, path: str | os.PathLike[str], *, up_axis: str = "Y") -> list[str]:
+def write(scene: Scene, path: str | os.PathLike[str], *, up_axis: str | None = None) -> list[str]:
     """Write ``scene`` as ``.usda``, ``.usdc``, ``.usd`` (crate) or ``.usdz``, atomically.
 
-    The format follows the extension. ``up_axis`` ("Y" or "Z") is stored as
-    stage metadata only; coordinates are not rotated.
+    The format follows the extension. The stage's ``upAxis`` is ``up_axis``
+    ("Y" or "Z"), else the scene's, else Y; a scene whose own up axis differs
+    is turned into it (its root nodes rotated, ``assemble.reoriented``).
     """
     pxr = _pxr()
     target = Path(path)
-    if up_axis not in ("Y", "Z"):
-        raise ConversionError(f"up_axis must be 'Y' or 'Z', not {up_axis!r}", file=str(target))
+    up_axis = up_axis or scene.up_axis or "Y"
+    if up_axis not in UP_AXES:
+        raise ConversionError(f"up_axis must be one of {', '.join(UP_AXES)}, not {up_axis!r}", file=str(target))
     try:
-        stage, notes = _build_stage(pxr, scene, up_axis)
+        stage, notes = _build_stage(pxr, reoriented(scene, up_axis), up_axis)
         layer = stage.GetRootLayer()
         with atomic_path(target) as temp:
             if target.suffix.lower() == ".usdz":
@@ -364,29 +384,48 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
     stage = pxr.Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z if up_axis == "Z" else UsdGeom.Tokens.y)
     UsdGeom.SetStageMetersPerUnit(stage, METERS_PER_UNIT.get(scene.units, 1.0))
-    notes: list[str] = []
+    scene, notes = at_float32(scene)
 
     children: dict[int | None, int] = {}
     for node in scene.nodes:
         children[node.parent] = children.get(node.parent, 0) + 1
+    # A mesh that several childless nodes place is written once, as a prototype those nodes instance
+    # (an instance's own children would be ignored: nodes with children keep a copy of their own).
+    leaves = Counter(id(node.mesh) for k, node in enumerate(scene.nodes) if node.mesh is not None
+                     and not children.get(k))
+    instanced = frozenset(k for k, node in enumerate(scene.nodes) if node.mesh is not None
+                          and not children.get(k) and leaves[id(node.mesh)] > 1)
+    instancing = instancing_note(scene, instanced)
+    notes += [instancing] if instancing else []
+    prototypes: dict[int, Any] = {}
+
     taken: dict[Any, set[str]] = {}
     root = Sdf.Path.absoluteRootPath
     if children.get(None, 0) != 1:
+        taken[root] = {"Scene"}
         wrapper = UsdGeom.Xform.Define(stage, root.AppendChild("Scene")).GetPrim()
         wrapper.SetCustomDataByKey(SCENE_ROOT_KEY, True)
         root = wrapper.GetPath()
         stage.SetDefaultPrim(wrapper)
 
     paths: list[Any] = []
-    rounded = False
     for index, node in enumerate(scene.nodes):
         parent_path = root if node.parent is None else paths[node.parent]
         name = _unique_name(pxr, node.name, taken.setdefault(parent_path, set()))
         path = parent_path.AppendChild(name)
         paths.append(path)
-        if node.mesh is not None and not children.get(index):
+        if index in instanced:
+            prototype = prototypes.get(id(node.mesh))
+            if prototype is None:
+                prototype = _prototype(pxr, stage, len(prototypes), taken.setdefault(Sdf.Path.absoluteRootPath, set()))
+                _write_mesh(pxr, UsdGeom.Mesh(stage.GetPrimAtPath(prototype.AppendChild("mesh"))), node.mesh)
+                prototypes[id(node.mesh)] = prototype
+            prim = UsdGeom.Xform.Define(stage, path).GetPrim()
+            prim.GetReferences().AddInternalReference(prototype)
+            prim.SetInstanceable(True)
+        elif node.mesh is not None and not children.get(index):
             prim = UsdGeom.Mesh.Define(stage, path).GetPrim()
-            rounded |= _write_mesh(pxr, UsdGeom.Mesh(prim), node.mesh)
+            _write_mesh(pxr, UsdGeom.Mesh(prim), node.mesh)
         else:
             prim = UsdGeom.Xform.Define(stage, path).GetPrim()
             if node.mesh is not None:
@@ -394,7 +433,7 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
                 mesh_path = path.AppendChild(own)
                 mesh_prim = UsdGeom.Mesh.Define(stage, mesh_path)
                 mesh_prim.GetPrim().SetCustomDataByKey(NODE_MESH_KEY, True)
-                rounded |= _write_mesh(pxr, mesh_prim, node.mesh)
+                _write_mesh(pxr, mesh_prim, node.mesh)
         if path.name != node.name:
             prim.SetDisplayName(node.name)
         if node.transform is not None:
@@ -403,9 +442,16 @@ def _build_stage(pxr: SimpleNamespace, scene: Scene, up_axis: str) -> tuple[Any,
             UsdGeom.Xformable(prim).AddTransformOp().Set(pxr.Gf.Matrix4d(matrix.T.tolist()))
         if node.parent is None and children.get(None, 0) == 1:
             stage.SetDefaultPrim(prim)
-    if rounded:
-        notes.append("coordinates rounded to float32")
     return stage, notes
+
+
+def _prototype(pxr: SimpleNamespace, stage: Any, number: int, taken: set[str]) -> Any:
+    """A root class prim (abstract: not traversed, not drawn) holding an empty Mesh ``mesh`` marked as its
+    node's own, for instances to reference; its path."""
+    path = pxr.Sdf.Path.absoluteRootPath.AppendChild(_unique_name(pxr, f"Prototype{number}", taken))
+    stage.CreateClassPrim(path).SetTypeName("Xform")
+    pxr.UsdGeom.Mesh.Define(stage, path.AppendChild("mesh")).GetPrim().SetCustomDataByKey(NODE_MESH_KEY, True)
+    return path
 
 
 def _unique_name(pxr: SimpleNamespace, name: str, taken: set[str]) -> str:
@@ -419,8 +465,8 @@ def _unique_name(pxr: SimpleNamespace, name: str, taken: set[str]) -> str:
     return candidate
 
 
-def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> bool:
-    """Author a triangle mesh on ``usd_mesh``; True if float32 rounding changed a point."""
+def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> None:
+    """Author a triangle mesh, its coordinates float32 already (:func:`.assemble.at_float32`), on ``usd_mesh``."""
     Vt, UsdGeom = pxr.Vt, pxr.UsdGeom
     points = np.ascontiguousarray(mesh.vertices, dtype=np.float32)
     usd_mesh.CreatePointsAttr(Vt.Vec3fArray.FromNumpy(points))
@@ -439,4 +485,3 @@ def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> bool:
         if (mesh.face_colours[:, 3] != 255).any():
             usd_mesh.CreateDisplayOpacityPrimvar(UsdGeom.Tokens.uniform).Set(
                 Vt.FloatArray.FromNumpy(np.ascontiguousarray(rgba[:, 3])))
-    return bool((points != mesh.vertices).any())

@@ -1,6 +1,6 @@
 """planefmt: the reference implementation of the .pln format, 3D meshes stored as planes.
 
-Conventions: a plane is the triplet (nu, phi, h) of spec/pln-1.md: nu in
+Conventions: a plane is the triplet (nu, phi, h) of spec/pln.md §2.3: nu in
 [0, pi] and phi in [0, 2*pi) in radians give the outward unit normal omega,
 h the signed distance in model units; the solid lies where omega . x <= h.
 """
@@ -8,8 +8,8 @@ h the signed distance in model units; the solid lies where omega . x <= h.
 from .chunks import Limits, chunk_bytes
 from .errors import (CODES, ChecksumError, ConversionError, FormatError, GeometryError, LimitError,
                      PlnError, PlnWarning, SkippedGroupsWarning, TruncatedError, VersionError)
-from .model import (Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup, PlaneBlock,
-                    Quantization, Scene, UnknownChunk, Units)
+from .model import (UP_AXES, UP_AXIS, Coding, Colours, GroupKind, Header, Mesh, Metadata, Node, ObjectRecord,
+                    PartGroup, PlaneBlock, Quantization, Scene, UnknownChunk, Units)
 from .reader import Reader, open
 from .writer import Writer
 
@@ -30,8 +30,8 @@ def __getattr__(name: str):
 
 __all__ = [
     "CODES", "ChecksumError", "Coding", "Colours", "ConversionError", "FormatError", "GeometryError",
-    "GroupKind", "Header", "Limits", "LimitError", "Mesh", "Node", "ObjectRecord", "PartGroup",
+    "GroupKind", "Header", "Limits", "LimitError", "Mesh", "Metadata", "Node", "ObjectRecord", "PartGroup",
     "PlaneBlock", "PlnError", "PlnWarning", "Quantization", "Reader", "Scene", "SkippedGroupsWarning",
-    "TruncatedError", "UnknownChunk", "Units", "VersionError", "Writer", "chunk_bytes", "decode_mesh",
-    "decode_scene", "encode_mesh", "encode_scene", "open", "salvage_scene",
+    "TruncatedError", "UP_AXES", "UP_AXIS", "UnknownChunk", "Units", "VersionError", "Writer", "chunk_bytes",
+    "decode_mesh", "decode_scene", "encode_mesh", "encode_scene", "open", "salvage_scene",
 ]

@@ -62,7 +62,7 @@ VOLUME_TOLERANCE = 1e-6
 @dataclass(frozen=True)
 class Group:
     """A part group over a :class:`PlaneTable`: ``refs`` indices, ``bounding`` roles, ``tree`` tokens,
-    a sealed group's ``vertex_planes`` and ``facets`` (local references, spec 3.1 §8.8)."""
+    a sealed group's ``vertex_planes`` and ``facets`` (local references, spec §9.9)."""
 
     kind: GroupKind
     refs: np.ndarray

@@ -1,4 +1,4 @@
-"""BSP trees of spec §8.4: parsing the token stream, and the surface of the union of IN leaves.
+"""BSP trees of spec §9.7: parsing the token stream, and the surface of the union of IN leaves.
 
 Boundary extraction (after Thibault & Naylor 1987; Naylor, Amanatides &
 Thibault 1990). For every split node ``N`` on plane ``p``, its
@@ -58,7 +58,7 @@ class Tree:
 
 
 def parse(tokens: np.ndarray, refs: int) -> Tree:
-    """Parse preorder tokens (spec §8.4) over ``refs`` local references; ``BAD_GROUP_STRUCTURE`` if malformed."""
+    """Parse preorder tokens (spec §9.7) over ``refs`` local references; ``BAD_GROUP_STRUCTURE`` if malformed."""
     tok = np.asarray(tokens, dtype=np.int64).reshape(-1)
     n = len(tok)
     if n == 0:

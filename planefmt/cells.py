@@ -1,4 +1,4 @@
-"""Cells groups (kind 1, spec §8.3): a solid as the union of explicit convex cells.
+"""Cells groups (kind 1, spec §9.6): a solid as the union of explicit convex cells.
 
 Each cell is decoded as a convex polytope first (bounded, with an interior:
 ``UNBOUNDED_POLYTOPE``, ``EMPTY_POLYTOPE``). The surface of the union is then
@@ -11,7 +11,7 @@ hold it follow. A cell lying wholly on one side of a split is left out of the
 other side's subtree, so cells cut from a BSP tree, as writers make them, give
 a tree about as large as their entries.
 
-Cells MUST have disjoint interiors (§8.3): the union's volume is compared with
+Cells MUST have disjoint interiors (spec §9.6): the union's volume is compared with
 the sum of the cells' volumes, and a shortfall is ``BAD_GROUP_STRUCTURE``.
 """
 
@@ -43,7 +43,7 @@ def decode_cells_group(omega: np.ndarray, h: np.ndarray, cells: Sequence[np.ndar
     """The surface of a cells group: ``(vertices, triangles, inc_vertex, inc_ref, triangle_ref)``.
 
     ``omega`` (m, 3), ``h`` (m,) are the group's planes in reference order,
-    ``cells`` its cells' entries ``2 j + s`` (§8.3), ``face`` (m,) True for
+    ``cells`` its cells' entries ``2 j + s`` (spec §9.6), ``face`` (m,) True for
     face planes. ``plane_error`` and ``merge_limit`` are those of
     :func:`planefmt.halfspace.intersect`, for the cells alone.
     """
@@ -74,7 +74,7 @@ def _volume(vertices: np.ndarray, triangles: np.ndarray) -> float:
 
 def _tree(omega: np.ndarray, h: np.ndarray, entries: list[np.ndarray], corners: list[np.ndarray],
           where: str = "planes") -> np.ndarray:
-    """Preorder tokens (spec §8.4) of a tree whose IN leaves are the cells, as the module says.
+    """Preorder tokens (spec §9.7) of a tree whose IN leaves are the cells, as the module says.
 
     Built with an explicit stack: a chain has as many levels as its cell has entries, beyond
     Python's recursion limit in large cells.

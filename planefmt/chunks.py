@@ -1,4 +1,4 @@
-"""Chunk framing (spec §3-§4): signature check, bounded chunk reads, CRC, ``chunk_bytes``.
+"""Chunk framing (spec §3–§4): signature check, bounded chunk reads, CRC, ``chunk_bytes``.
 
 Framing knows nothing of payload meaning. ``chunk_bytes`` is the one helper
 that frames a payload; the writer, the conformance generator and the tests
@@ -24,7 +24,7 @@ READ_BLOCK = 1 << 20
 
 @dataclass(frozen=True)
 class Limits:
-    """Resource caps of a reader (spec §10.3). Defaults suit files up to a few GB."""
+    """Resource caps of a reader (spec §12.4). Defaults suit files up to a few GB."""
 
     max_chunk_length: int = 256 << 20
     max_raw_size: int = 256 << 20  # uncompressed size of one payload

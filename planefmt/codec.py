@@ -1,6 +1,6 @@
 """The geometry codec: triangle meshes to part groups of planes and back, with verified error.
 
-Conventions (spec §2.2): planes ``(omega, h)`` with outward unit normals,
+Conventions (spec §2.3): planes ``(omega, h)`` with outward unit normals,
 the solid where ``omega . x <= h``; triplets ``(nu, phi, h)`` in radians,
 radians, model units; triangles counter-clockwise seen from outside.
 Tolerances and error bounds are **fractions of the bounding-box diagonal**;
@@ -44,6 +44,7 @@ Decoding dispatches on ``group.kind`` through :data:`DECODERS`.
 
 from __future__ import annotations
 
+import hashlib
 import io
 import itertools
 import math
@@ -62,8 +63,9 @@ from . import progress, quantize, records
 from .errors import CODES, FormatError, GeometryError, PlnError, PlnWarning, SkippedGroupsWarning
 from .halfspace import decode_convex, intersect, resolve_vertices
 from .hausdorff import DEFAULT_MAX_PIECES, closest_distance, hausdorff
-from .model import (BSP_MAX_SPLIT, Coding, Colours, GroupKind, Header, Mesh, Node, ObjectRecord, PartGroup,
-                    Quantization, Scene, Units)
+from .model import (BSP_MAX_SPLIT, UP_AXIS, Coding, Colours, GroupKind, Header, Mesh, Metadata, Node, ObjectRecord,
+                    PartGroup, Quantization, Scene, Units)
+from .convexbound import convex_hausdorff
 from .bodies import encode_body, euler_characteristic, is_closed_manifold, signed_volume
 from .cells import decode_cells_group
 from .patches import PlaneTable, decode_patch_groups
@@ -300,7 +302,7 @@ def encode_shell_body(body: Body) -> list[GroupSpec]:
         raise GeometryError(f"a body of {len(fp)} triangles, none with an area", code="DEGENERATE_GEOMETRY")
     count = np.bincount(fp[fp >= 0], minlength=len(body.h))
     keep = (fp >= 0) & ((count[np.maximum(fp, 0)] >= 2) | body.every_plane)
-    # A group has at least one reference (spec §8.2).
+    # A group has at least one reference (spec §9).
     refs = np.unique(fp[keep]) if keep.any() else fp[fp >= 0][:1]
     return [GroupSpec(GroupKind.SHELL, refs, np.zeros(len(refs), dtype=bool), faces=body.faces)]
 
@@ -341,14 +343,14 @@ SCHEMES = {"shell": SHELL_STRATEGIES, "paper": BODY_STRATEGIES}
 
 def decode_convex_group(planes: np.ndarray, group: GroupLike, label: object,
                         error: PlaneError) -> DecodedGroup:
-    """A ``CONVEX`` group: the intersection of all its inner half-spaces (spec §8.2.1)."""
+    """A ``CONVEX`` group: the intersection of all its inner half-spaces (spec §9.5)."""
     poly = decode_convex(planes, group=label, plane_error=error.of(planes), merge_limit=error.merge_limit)
     inc_vertex, inc_ref = poly.incidences
     return DecodedGroup(poly.vertices, poly.triangles, inc_vertex, inc_ref, poly.redundant, poly.triangle_plane)
 
 
 def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``BSP`` group: the closed surface of its IN leaves, welded without T-junctions (spec §8.4)."""
+    """A ``BSP`` group: the closed surface of its IN leaves, welded without T-junctions (spec §9.7)."""
     if group.tree is None:
         raise GeometryError(f"part group {label}: a BSP group without a tree", code="BAD_GROUP_STRUCTURE")
     omega, h = from_triplets(planes)
@@ -358,7 +360,7 @@ def decode_bsp(planes: np.ndarray, group: GroupLike, label: object, error: Plane
 
 
 def decode_cells(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``CELLS`` group: the closed surface of the union of its convex cells (spec §8.3)."""
+    """A ``CELLS`` group: the closed surface of the union of its convex cells (spec §9.6)."""
     if group.cells is None:
         raise GeometryError(f"part group {label}: a cells group without cells", code="BAD_GROUP_STRUCTURE")
     omega, h = from_triplets(planes)
@@ -368,7 +370,7 @@ def decode_cells(planes: np.ndarray, group: GroupLike, label: object, error: Pla
 
 
 def decode_sealed_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``SEALED`` group: its triangles, each corner where its three planes meet (spec 3.1 §8.8)."""
+    """A ``SEALED`` group: its triangles, each corner where its three planes meet (spec §9.9)."""
     if group.vertex_planes is None or group.facets is None:
         raise GeometryError(f"part group {label}: sealed groups are kind 5 only from version 3.1 on",
                             code="UNKNOWN_GROUP_KIND")
@@ -384,7 +386,7 @@ def decode_sealed_group(planes: np.ndarray, group: GroupLike, label: object, err
 
 
 def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes (spec §8.2.2).
+    """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes (spec §9.8).
 
     Small patches are intersected in numpy (:mod:`planefmt.polytopes`); where that finds no
     polytope, Qhull (:func:`planefmt.halfspace.intersect`) decides: near-duplicate bounding
@@ -415,7 +417,7 @@ def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: Pla
 
 def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
     """A ``SHELL`` or ``SHELL_TREE`` group: its triangles over its corners, named by three planes or
-    explicit (spec 3.2 §8.9, 3.3 §8.10). Linear time: one batched 3×3 solve."""
+    explicit (spec §9.10, §9.11). Linear time: one batched 3×3 solve."""
     shell = group.shell
     if shell is None:
         raise GeometryError(f"part group {label}: shell groups are kind 6 only from version 3.2 on, kind 7 "
@@ -655,7 +657,7 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     :class:`PlnWarning` says so. By default such a source fails.
 
     ``scheme``: ``"shell"`` (default) stores convex bodies as convex groups
-    and everything else as one shell group (spec 3.2 §8.9), whose error
+    and everything else as one shell group (spec §9.10), whose error
     holds by construction; ``"paper"`` uses the paper's BSP trees, sealed
     groups and patches for non-convex bodies, verified by a certified
     Hausdorff search (slow: minutes for a few thousand CAD triangles).
@@ -1060,17 +1062,18 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
         progress.report("verifying codings", tried[0])
         tried[0] += 1
         if cod == Coding.FLOAT64:
-            meshes = base_meshes
+            decoded = base
         else:
             rt = quantize.roundtrip(table, cod, q)
             try:
                 error = plane_error(cod, q, tolerance, diag_src)
-                meshes = [_concatenate(_decode_object(rt[a:b], o, error)) for (a, b), o in zip(spans, objects)]
+                decoded = [_decode_object(rt[a:b], o, error) for (a, b), o in zip(spans, objects)]
             except GeometryError:
                 # Coarse planes can lose a face or the solid altogether: not this coding.
                 if forced:
                     raise
                 return None
+        meshes = base_meshes if decoded is base else [_concatenate(d) for d in decoded]
         if not forced and not simplified:
             problems = [(k, structure_problem(m, o, band * diag_src / sc))
                         for k, (m, o, sc) in enumerate(zip(meshes, objects, scale))]
@@ -1086,7 +1089,7 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
             # Float64 is the finest coding, with no next one to certify sooner: it gets the full budget.
             if pieces is None:
                 pieces = DEFAULT_MAX_PIECES if cod == Coding.FLOAT64 else _VERIFY_PIECES
-            checks = [_verify(m, o, bound, pieces) for m, o in zip(meshes, objects)]
+            checks = [_verify(m, o, bound, pieces, d) for m, o, d in zip(meshes, objects, decoded)]
             errors = [c[0] for c in checks]
             if max(errors) > bound:
                 if all(c[1] <= bound for c in checks):
@@ -1258,7 +1261,7 @@ def _planeless(obj: _Object) -> _Object | None:
         return None
     if obj.face_colours is not None and (obj.face_colours != obj.face_colours[0]).any():
         return None
-    # A group keeps one reference (spec §8.2: m >= 1), which its free triangles take their colour from;
+    # A group keeps one reference (spec §9: m >= 1), which its free triangles take their colour from;
     # the table keeps only those planes (CAD/box.STL at draco-14's error: 2.4 kB of 14 kB were planes
     # nothing referred to).
     keep = np.unique([g.refs[0] for g in obj.groups])
@@ -1436,16 +1439,51 @@ class _Incidences:
         return out, _peak(offset[wild])
 
 
-def _verify(mesh: Mesh, obj: _Object, target: float, pieces: int) -> tuple[float, float]:
+def _verify(mesh: Mesh, obj: _Object, target: float, pieces: int,
+            decoded: list[DecodedGroup] | None = None) -> tuple[float, float]:
     """``(upper, lower)``: certified bounds (world model units) of the two-sided Hausdorff distance to
     the source, refined until ``upper <= target`` or the decision is made; ``upper`` is infinity
-    when it is not at most ``target``."""
-    a = transform_points(mesh.vertices, obj.world)
-    b = transform_points(obj.vertices, obj.world)
+    when it is not at most ``target``.
+
+    Convex groups over convex source bodies (``decoded`` given) are bounded from their corners
+    (:func:`planefmt.convexbound.convex_hausdorff`), group by group, without a search.
+    """
     shift = _mended(obj)
-    r = hausdorff(a, mesh.faces, b, obj.faces, target=target - shift, max_pieces=pieces)
-    upper = float(r.upper) + shift
-    return (upper if upper <= target else math.inf), max(float(r.lower) - shift, 0.0)
+    convex = _convex_bounds(decoded, obj) if decoded is not None else None
+    if convex is not None:
+        upper, lower = convex
+    else:
+        a = transform_points(mesh.vertices, obj.world)
+        b = transform_points(obj.vertices, obj.world)
+        r = hausdorff(a, mesh.faces, b, obj.faces, target=target - shift, max_pieces=pieces)
+        upper, lower = float(r.upper), float(r.lower)
+    upper += shift
+    return (upper if upper <= target else math.inf), max(lower - shift, 0.0)
+
+
+def _convex_bounds(decoded: list[DecodedGroup], obj: _Object) -> tuple[float, float] | None:
+    """``(upper, lower)`` of the two-sided Hausdorff distance (world model units) of an object made
+    of convex groups, each against its source body, or None where a group or body is not convex.
+
+    The distance between the unions is at most the largest between a body and its own group's
+    decoding: each is part of its union's surface."""
+    groups = obj.groups
+    if not groups or any(g.kind != GroupKind.CONVEX for g in groups):
+        return None
+    if len(groups) == 1 and groups[0].faces is None:
+        sources = [obj.faces]
+    elif all(g.faces is not None for g in groups):
+        sources = [obj.faces[g.faces] for g in groups]
+    else:
+        return None
+    upper = lower = 0.0
+    b = transform_points(obj.vertices, obj.world)
+    for d, faces in zip(decoded, sources):
+        found = convex_hausdorff(transform_points(d.vertices, obj.world), d.triangles, b, faces)
+        if found is None:
+            return None
+        upper, lower = max(upper, found[0]), max(lower, found[1])
+    return upper, lower
 
 
 def _mended(obj: _Object) -> float:
@@ -1483,7 +1521,9 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
     One object per node, keeping name, parent and transform; each node's
-    mesh is encoded in its local coordinates. One coding serves the whole
+    mesh is encoded in its local coordinates (a mesh several nodes share is
+    stored once per node: the format has no shared part groups). The scene's
+    ``up_axis``, if any, is a mETA chunk (spec §10.3). One coding serves the whole
     file; the tolerance is a fraction of the diagonal of the decoded scene's
     world bbox, and errors are measured in world coordinates. Identical
     planes (after coding) are stored once, written just before the first
@@ -1492,7 +1532,7 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
 
     ``compress`` (the default, as ``pln convert``): payloads deflated where
     that saves bytes. ``compact`` (the default, as ``pln convert``; False
-    writes version 1.0): a version 3.0 file (spec/pln-3.md): quantized planes in
+    writes version 1.0): a version 3.0 file (spec/pln.md): quantized planes in
     whichever of the bit-packed and the predicted coding takes fewer bytes,
     group references, cells and trees as varints, chunk heads as varints. The
     planes and the decoded surface are those of the version 1 file. A scene
@@ -1603,9 +1643,11 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                     plane_count=len(rows), object_count=len(scene.nodes),
                     group_count=sum(len(o.groups) for o in objects))
     by_node = {i: (o, a) for i, o, a in zip(meshes, objects, offsets)}
-    # An index of one group gives no random access a streaming read lacks: compact files skip it.
-    index = not compact or sum(len(o.groups) for o in objects) > 1
+    # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
+    index = True if not compact else None
     with _writer(target, header, compress, index) as w:
+        if scene.up_axis is not None:
+            w.add_metadata(UP_AXIS, scene.up_axis)
         for i, node in enumerate(scene.nodes):
             obj_index = w.add_object(node.name, node.parent, node.transform)
             if i not in by_node:
@@ -1668,7 +1710,7 @@ def _scene_diagonal(scene: Scene, worlds: list[np.ndarray], meshes: list[int]) -
     return d if math.isfinite(d) else None
 
 
-def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool = True) -> Writer:
+def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True) -> Writer:
     return Writer(target, header, compress=compress, index=index)
 
 
@@ -1686,7 +1728,7 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
     """Read a .pln file into a :class:`Scene`: one node per object, its groups decoded and joined.
 
     Streams: part groups are decoded in batches of up to 4096 as they are read.
-    Groups of a kind from a newer minor version are skipped, as spec §11 asks
+    Groups of a kind from a newer minor version are skipped, as spec §13 asks
     of a reader, with one :class:`PlnWarning` naming them.
     """
     parts: dict[int, list[tuple[int, DecodedGroup]]] = {}
@@ -1716,11 +1758,11 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
         flush()
         if skipped:
             warnings.warn(SkippedGroupsWarning(skipped_groups(skipped), r.name), stacklevel=2)
-        return _assemble(r.objects, parts, r.header.units, colours)
+        return _assemble(r.objects, parts, r.header.units, colours, r.up_axis)
 
 
 def skipped_groups(groups: Sequence[GroupLike]) -> str:
-    """The part groups of newer minor versions' kinds a reader skipped (spec §11), named."""
+    """The part groups of newer minor versions' kinds a reader skipped (spec §13), named."""
     which = ", ".join(f"{g.index} (kind {int(g.kind)})" for g in groups)
     return f"part group{'s' if len(groups) > 1 else ''} {which} of a newer minor version than this reader knows"
 
@@ -1752,7 +1794,8 @@ def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str
         except GeometryError as exc:
             lost.append(f"part group {g.index} lost: {exc.reason}")
     colours = {r.group: r.rgba for r in got.records if isinstance(r, Colours)}
-    return _assemble(objects, parts, got.header.units, colours), lost
+    up = [r.value for r in got.records if isinstance(r, Metadata) and r.key == UP_AXIS]
+    return _assemble(objects, parts, got.header.units, colours, up[0] if up else None), lost
 
 
 #: Face colour of decoded triangles whose group has no cOLR, in an object where others have one.
@@ -1760,28 +1803,50 @@ UNCOLOURED = np.array([200, 200, 200, 255], dtype=np.uint8)
 
 
 def _assemble(objects: Sequence[ObjectRecord], parts: dict[int, list[tuple[int, DecodedGroup]]], units: Units,
-              colours: dict[int, np.ndarray]) -> Scene:
+              colours: dict[int, np.ndarray], up_axis: str | None) -> Scene:
     # Salvaged objects may have gaps in their indices; nodes are numbered by position.
     position = {o.index: i for i, o in enumerate(objects)}
+    # A mesh its source placed at several nodes is stored once per object (a .pln file has no shared part
+    # groups) and decodes to the same triangles each time: those objects share one Mesh again, as the
+    # source's nodes did, so that writers can instance it.
+    decoded: dict[bytes, Mesh] = {}
+
+    def shared(mesh: Mesh) -> Mesh:
+        kept = decoded.setdefault(_digest(mesh), mesh)
+        return kept if kept is mesh or _same_mesh(kept, mesh) else mesh
+
     nodes = tuple(Node(name=o.name, parent=None if o.parent is None else position[o.parent], transform=o.transform,
-                       mesh=_object_mesh(parts[o.index], colours) if o.index in parts else None)
+                       mesh=shared(_object_mesh(parts[o.index], colours)) if o.index in parts else None)
                   for o in objects)
-    return Scene(nodes=nodes, units=units)
+    return Scene(nodes=nodes, units=units, up_axis=up_axis)
+
+
+def _digest(mesh: Mesh) -> bytes:
+    h = hashlib.blake2b(digest_size=16)
+    for a in (mesh.vertices, mesh.faces, mesh.face_colours):
+        h.update(b"-" if a is None else repr(a.shape).encode() + np.ascontiguousarray(a).tobytes())
+    return h.digest()
+
+
+def _same_mesh(a: Mesh, b: Mesh) -> bool:
+    return (np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+            and (a.face_colours is None) == (b.face_colours is None)
+            and (a.face_colours is None or np.array_equal(a.face_colours, b.face_colours)))
 
 
 def _object_mesh(parts: list[tuple[int, DecodedGroup]], colours: dict[int, np.ndarray]) -> Mesh:
-    """The groups of one object joined; face colours from their cOLR chunks (spec §8.5), if any."""
+    """The groups of one object joined; face colours from their cOLR chunks (spec §10.1), if any."""
     mesh = _concatenate([d for _, d in parts])
     if not any(k in colours for k, _ in parts):
         return mesh
-    # A shell's free triangles (reference -1) take its last reference's colour (spec 3.2 §8.9).
+    # A shell's free triangles (reference -1) take its last reference's colour (spec §9.10).
     face = np.concatenate([colours[k][d.triangle_ref] if k in colours else np.tile(UNCOLOURED, (len(d.triangles), 1))
                            for k, d in parts]).astype(np.uint8)
     return Mesh(mesh.vertices, mesh.faces, face_colours=face)
 
 
 def check_group(group: PartGroup, reader: Reader) -> list[Finding]:
-    """Geometry findings of one part group for ``planefmt.validate`` (spec §8.2, §10.2).
+    """Geometry findings of one part group for ``planefmt.validate`` (spec §9, §12.3).
 
     ``EMPTY_POLYTOPE`` / ``UNBOUNDED_POLYTOPE`` errors, one ``REDUNDANT_PLANE``
     warning per plane of a convex group that bounds no face. Kinds without a

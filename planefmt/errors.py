@@ -1,4 +1,4 @@
-"""The exception tree and the catalogue of error codes (spec §10).
+"""The exception tree and the catalogue of error codes (spec §12).
 
 Every error the library raises for bad input is a :class:`PlnError`. Each
 carries a stable ``code`` from :data:`CODES`, and where known the file name,
@@ -42,7 +42,7 @@ _CATALOGUE = [
     Code("UNSUPPORTED_CODING", "error", "the triplet coding is unknown or its bit widths are invalid"),
     Code("BAD_HEADER_VALUE", "error", "a header field is out of its allowed range"),
     Code("COUNT_MISMATCH", "error", "header counts disagree with the chunks present"),
-    # payloads (spec §6-§8)
+    # payloads (spec §6–§10)
     Code("BAD_COMPRESSION", "error", "unknown compression method or corrupt deflate stream"),
     Code("SIZE_MISMATCH", "error", "a payload's size disagrees with its declared count or raw size"),
     Code("LIMIT_EXCEEDED", "error", "a declared size exceeds the reader's configured limits"),
@@ -56,8 +56,9 @@ _CATALOGUE = [
     Code("SKIPPED_GROUP_KIND", "warning", "a part group of a kind from a newer minor version was skipped"),
     Code("BAD_GROUP_STRUCTURE", "error", "cells, tree or sealed triangles of a part group are malformed"),
     Code("BAD_COLOURS", "error", "a cOLR chunk does not match its part group"),
+    Code("BAD_METADATA", "error", "a mETA chunk is malformed, repeats a keyword, follows geometry or has a bad value"),
     Code("BAD_INDEX", "error", "the iNDX chunk points outside the file or at the wrong chunk"),
-    # geometry (spec §9)
+    # geometry (spec §11)
     Code("EMPTY_POLYTOPE", "error", "the half-spaces of a part group have an empty intersection"),
     Code("UNBOUNDED_POLYTOPE", "error", "the half-spaces of a part group do not bound a finite region"),
     Code("BAD_VERTEX", "error", "the three planes of a sealed group's vertex do not meet in one point"),
@@ -168,7 +169,7 @@ class PlnWarning(UserWarning):
 
 
 class SkippedGroupsWarning(PlnWarning):
-    """Part groups of kinds from a newer minor version that decoding skipped, as spec §11 asks of a
+    """Part groups of kinds from a newer minor version that decoding skipped, as spec §13 asks of a
     reader; ``what`` names them."""
 
     def __init__(self, what: str, file: str | None = None) -> None:

@@ -1,4 +1,4 @@
-"""Convex decoding: the intersection of half-spaces ``omega . x <= h`` as a triangle mesh (spec §8.2.1).
+"""Convex decoding: the intersection of half-spaces ``omega . x <= h`` as a triangle mesh (spec §9.5).
 
 Method. The polytope ``P = {x : omega_i . x <= h_i}`` is computed through
 duality: with ``c`` strictly inside ``P``, plane ``i`` maps to the dual point

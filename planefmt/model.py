@@ -27,7 +27,7 @@ class Coding(IntEnum):
     FLOAT32 = 0
     FLOAT64 = 1
     QUANTIZED = 2
-    #: Version 2: the codes of QUANTIZED, each predicted from the previous plane's (spec 2.0 §7.4).
+    #: Version 2: the codes of QUANTIZED, each predicted from the previous plane's (spec §7.4).
     PREDICTED = 3
 
     @property
@@ -50,8 +50,8 @@ class Units(IntEnum):
 
 
 class GroupKind(IntEnum):
-    """Part group kinds: 0-4 of version 1.0 (spec §8.2), 5 of version 3.1 (spec 3.1 §8.8), 6 of
-    version 3.2 (spec 3.2 §8.9), 7 of version 3.3 (spec 3.3 §8.10)."""
+    """Part group kinds: 0-4 of version 1.0 (spec §9), 5 of version 3.1 (spec §9.9), 6 of
+    version 3.2 (spec §9.10), 7 of version 3.3 (spec §9.11)."""
 
     CONVEX = 0
     CELLS = 1
@@ -63,7 +63,8 @@ class GroupKind(IntEnum):
     SHELL_TREE = 7
 
 
-#: BSP tree leaf tokens (spec §8.4); every smaller token is a split plane.
+#: BSP tree leaf tokens in version 1.0's numbering (spec Appendix A.1), which the model uses for every
+#: version (spec §9.7 codes IN 0, OUT 1, a split on j as j + 2); every smaller token is a split plane.
 BSP_IN = 0xFFFFFFFE
 BSP_OUT = 0xFFFFFFFF
 BSP_MAX_SPLIT = 0xFFFFFFEF
@@ -121,7 +122,7 @@ class Header:
 
 @dataclass(frozen=True)
 class ObjectRecord:
-    """An OBJT chunk: a named node of the scene (spec §8.1)."""
+    """An OBJT chunk: a named node of the scene (spec §8)."""
 
     index: int
     name: str
@@ -139,7 +140,7 @@ class PlaneBlock:
 
 #: Face reference of a free triangle (no face plane), in :attr:`Shell.facets`.
 FREE = -1
-#: Largest magnitude of a grid coordinate (spec 3.2 §8.9): integers of float64 exactly.
+#: Largest magnitude of a grid coordinate (spec §9.10): integers of float64 exactly.
 MAX_GRID = 1 << 52
 
 
@@ -178,17 +179,18 @@ class Shell:
 
 @dataclass(frozen=True)
 class PartGroup:
-    """A GRUP chunk (spec §8.2).
+    """A GRUP chunk (spec §9).
 
     ``refs`` are indices into the file's plane table; ``bounding[i]`` is True
     where ``refs[i]`` is a bounding or cut plane rather than a face plane.
     For CELLS groups, ``cells`` holds one uint32 array per convex cell whose
     entries are ``2 * local + complement`` (``local`` indexes ``refs``;
     ``complement`` 1 means the half-space ``omega . x >= h``). For BSP groups,
-    ``tree`` holds the preorder token stream of spec §8.4. For SEALED groups,
+    ``tree`` holds the preorder tokens of spec §9.7 in version 1.0's numbering (:data:`BSP_IN`,
+    :data:`BSP_OUT`, a split on j as j). For SEALED groups,
     ``vertex_planes`` (V, 3) holds each vertex's three local references and
     ``facets`` (T, 4) each triangle's face local reference and three vertices
-    (spec 3.1 §8.8). ``planes`` holds the referenced triplets when the reader
+    (spec §9.9). ``planes`` holds the referenced triplets when the reader
     resolved them.
     """
 
@@ -212,10 +214,27 @@ class PartGroup:
 
 @dataclass(frozen=True)
 class Colours:
-    """A cOLR chunk: one RGBA8 colour per reference of a part group (spec §8.5)."""
+    """A cOLR chunk: one RGBA8 colour per reference of a part group (spec §10.1)."""
 
     group: int
     rgba: np.ndarray  # (m, 4) uint8
+
+
+#: The mETA keyword naming the axis that points up (spec §10.3), and its values.
+UP_AXIS = "up_axis"
+UP_AXES = ("Y", "Z")
+
+
+@dataclass(frozen=True)
+class Metadata:
+    """A mETA chunk: one keyword and its text value (spec §10.3).
+
+    ``key`` is 1 to 79 characters of printable ASCII without space; ``value`` any text. The
+    keyword :data:`UP_AXIS` has the value ``"Y"`` or ``"Z"``.
+    """
+
+    key: str
+    value: str
 
 
 @dataclass(frozen=True)
@@ -227,7 +246,7 @@ class UnknownChunk:
     offset: int | None = None
 
 
-Record = ObjectRecord | PlaneBlock | PartGroup | Colours | UnknownChunk
+Record = ObjectRecord | PlaneBlock | PartGroup | Colours | Metadata | UnknownChunk
 
 
 @dataclass(frozen=True)
@@ -265,11 +284,20 @@ class Node:
 
 @dataclass(frozen=True)
 class Scene:
-    """Nodes in an order where every parent precedes its children."""
+    """Nodes in an order where every parent precedes its children.
+
+    ``up_axis`` is the world axis that points up, away from the ground (spec §10.3): ``"Y"``
+    (+y up: glTF's convention, USD's default) or ``"Z"`` (+z up: USD ``upAxis = "Z"``, most CAD),
+    or None where the source does not say (OBJ, PLY, STL, OFF). Coordinates are right-handed and
+    kept as authored whatever the axis: it tells viewers which way is up, and converters to a
+    format with a fixed up axis (glTF: Y) rotate the scene into it.
+    """
 
     nodes: tuple[Node, ...]
     units: Units = Units.UNSPECIFIED
+    up_axis: str | None = None
 
     def __repr__(self) -> str:
         meshes = {id(node.mesh) for node in self.nodes if node.mesh is not None}
-        return f"Scene({len(self.nodes)} nodes, {len(meshes)} meshes, units={self.units.name})"
+        up = "" if self.up_axis is None else f", up_axis={self.up_axis}"
+        return f"Scene({len(self.nodes)} nodes, {len(meshes)} meshes, units={self.units.name}{up})"

@@ -8,7 +8,7 @@ planes); *pseudo-concave* when every two are negatively oriented. A
 pseudo-convex patch lies on the boundary of the convex polytope of its face
 planes; *bounding planes* through its border edges cut that polytope down so
 that its faces on the face planes are exactly the patch's polygons (spec
-§8.2.2). A pseudo-concave patch is stored with every plane inverted, which
+§9.8). A pseudo-concave patch is stored with every plane inverted, which
 makes it pseudo-convex; the decoder flips its faces back.
 
 What the encoder needs for the decoded faces to be the source polygons:
@@ -684,7 +684,7 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def decode_patch_faces(omega: np.ndarray, h: np.ndarray, owner: np.ndarray, count: int, face: np.ndarray,
                        concave: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Decode many patch groups at once (spec §8.2.2).
+    """Decode many patch groups at once (spec §9.8).
 
     ``omega``, ``h`` the stored planes of all groups' references (rows),
     ``owner`` (rows,) sorted group ids, ``face`` (rows,) True for face

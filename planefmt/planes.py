@@ -1,4 +1,4 @@
-"""Plane math with the paper's conventions (spec §2.2, §8.1), vectorized over arrays of planes.
+"""Plane math with the paper's conventions (spec §2.3, §8), vectorized over arrays of planes.
 
 Conventions:
 

@@ -34,7 +34,7 @@ def check_quantization(q: Quantization) -> None:
 
 
 def check_triplets(triplets: np.ndarray, coding: Coding) -> None:
-    """Raise ``PlnError(BAD_TRIPLET)`` unless every triplet is finite and in range (spec §7.1)."""
+    """Raise ``PlnError(BAD_TRIPLET)`` unless every triplet is finite and in range (spec §7.2)."""
     t = np.asarray(triplets)
     if t.ndim != 2 or t.shape[1] != 3:
         raise PlnError(f"triplets must have shape (n, 3), not {t.shape}", code="BAD_TRIPLET")
@@ -170,7 +170,7 @@ def _check_codes(codes: np.ndarray, q: Quantization) -> np.ndarray:
 
 
 def _predict(codes: np.ndarray) -> bytes:
-    """The three varint streams of the predicted coding (spec 2.0 §7.4) for ``(n, 3)`` codes.
+    """The three varint streams of the predicted coding (spec §7.4) for ``(n, 3)`` codes.
 
     nu: zigzag difference from the previous plane's code (0 before the first); phi: the
     difference if nu equals the previous nu, else the code itself; h: the difference if nu and

@@ -1,4 +1,4 @@
-"""Streaming reader of .pln files (spec §4-§10).
+"""Streaming reader of .pln files (spec §4–§12).
 
 ``open()`` reads the signature and header at once and everything else lazily:
 iterating yields records one at a time in file order, with memory bounded by
@@ -22,7 +22,7 @@ import numpy as np
 from . import records, schema
 from .chunks import ChunkStream, Limits, RawChunk, chunk_bytes, is_ancillary
 from .errors import FormatError, PlnError
-from .model import ObjectRecord, PartGroup, Record, UnknownChunk
+from .model import UP_AXIS, ObjectRecord, PartGroup, Record, UnknownChunk
 
 
 class Reader:
@@ -43,6 +43,8 @@ class Reader:
         self.retain_planes = retain_planes
         self.findings: list[tuple[str, str]] = []
         self.objects: list[ObjectRecord] = []
+        # mETA chunks precede every OBJT, PLNS and GRUP chunk: complete once the first of those is read.
+        self.metadata: dict[str, str] = {}
         self.chunk_stats: Counter[str] = Counter()  # payload + framing bytes per chunk type
         self.chunk_counts: Counter[str] = Counter()
         self._table = np.empty((0, 3), dtype=np.float64)
@@ -82,6 +84,12 @@ class Reader:
         """Close the file if this reader opened it (a caller's stream stays open)."""
         if self._own and not self._fp.closed:
             self._fp.close()
+
+    @property
+    def up_axis(self) -> str | None:
+        """The world axis that points up, ``"Y"`` or ``"Z"`` (spec §10.3), None where the file does not
+        say; known once the first object, plane block or part group has been read."""
+        return self.metadata.get(UP_AXIS)
 
     @property
     def planes(self) -> np.ndarray:
@@ -177,6 +185,15 @@ class Reader:
             return group
         if t == schema.COLR:
             return records.decode_colours(raw.payload, self._group_refs)
+        if t == schema.META:
+            if self._listed:
+                raise FormatError("mETA after an OBJT, PLNS or GRUP chunk: metadata precedes the geometry",
+                                  code="BAD_METADATA")
+            meta = records.decode_metadata(raw.payload)
+            if meta.key in self.metadata:
+                raise FormatError(f"a second mETA {meta.key}", code="BAD_METADATA")
+            self.metadata[meta.key] = meta.value
+            return meta
         if t == schema.INDX:
             self.index_offset = raw.offset
             self._check_index(records.decode_index(raw.payload, raw.offset, self._after_header))
@@ -192,7 +209,7 @@ class Reader:
         raise FormatError(f"unknown critical chunk {raw.name}", code="UNKNOWN_CRITICAL_CHUNK")
 
     def _check_index(self, entries: np.ndarray) -> None:
-        """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §8.6)."""
+        """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §10.2)."""
         listed = np.array(self._listed, dtype=schema.INDEX_ENTRY_DTYPE)
         if len(entries) != len(listed):
             raise FormatError(f"iNDX lists {len(entries)} chunks; the file has {len(listed)} OBJT, PLNS and GRUP "
@@ -242,7 +259,7 @@ class Reader:
         major = self.header.version[0]
         stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
         if major == 3 and end >= 12:
-            # A version 3 file without an index ends in an empty PEND (spec 3.0 §4.4).
+            # A version 3 file without an index ends in an empty PEND (spec §4.4).
             self._fp.seek(self._base + end - 12)
             if self._fp.read(12) == chunk_bytes(schema.PEND, b""):
                 raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - 12)

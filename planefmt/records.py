@@ -1,4 +1,4 @@
-"""Chunk payloads <-> model records (spec §5-§8), with every check the spec requires.
+"""Chunk payloads <-> model records (spec §5–§10), with every check the spec requires.
 
 Decoders take a payload (already framed and CRC-checked) and raise
 ``PlnError`` subclasses without location; the reader adds file, chunk and
@@ -16,12 +16,12 @@ import numpy as np
 from . import quantize, schema, varint
 from .chunks import Limits
 from .errors import FormatError, LimitError, PlnError, VersionError
-from .model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, FREE, MAX_GRID, NO_PARENT, Coding, Colours, GroupKind, Header,
-                    ObjectRecord, PartGroup, PlaneBlock, Quantization, Shell, Units)
+from .model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, FREE, MAX_GRID, NO_PARENT, UP_AXES, UP_AXIS, Coding, Colours,
+                    GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Quantization, Shell, Units)
 
 #: Major versions read, each with the newest minor version this reader knows.
 VERSIONS = {1: 0, 2: 0, 3: 3}
-#: Triplet codings each major version allows (spec §5; 2.0 §7.4; 3.0 §5).
+#: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
@@ -78,7 +78,7 @@ def encode_header(h: Header) -> bytes:
 
 
 def _f32_toward(values: np.ndarray, direction: float, what: str) -> list[float]:
-    """Each value rounded to the nearest float32 on the side of ``direction`` (spec 3.0 §5)."""
+    """Each value rounded to the nearest float32 on the side of ``direction`` (spec §5)."""
     v = np.asarray(values, dtype=np.float64)
     with np.errstate(over="ignore"):
         f = v.astype(np.float32)
@@ -179,15 +179,16 @@ def pack(data: bytes, compress: bool, level: int = 9) -> tuple[int, bytes]:
 
 
 def unpack(method: int, stored: bytes, raw_size: int, limits: Limits) -> bytes:
-    """The raw bytes of a stored payload, with the deflate-bomb caps of spec §10.3."""
+    """The raw bytes of a stored payload, checked in the order of spec/pln.md §6, with the deflate-bomb
+    caps of spec §12.4: the method (a defect of the file) before the reader's own limits."""
+    if method not in (schema.COMPRESSION_NONE, schema.COMPRESSION_ZLIB):
+        raise FormatError(f"unknown compression method {method}", code="BAD_COMPRESSION")
     if raw_size > limits.max_raw_size:
         raise LimitError(f"declared raw size {raw_size} exceeds the limit {limits.max_raw_size}")
     if method == schema.COMPRESSION_NONE:
         if len(stored) != raw_size:
             raise FormatError(f"raw size {raw_size} != stored size {len(stored)}", code="SIZE_MISMATCH")
         return stored
-    if method != schema.COMPRESSION_ZLIB:
-        raise FormatError(f"unknown compression method {method}", code="BAD_COMPRESSION")
     if raw_size > max(len(stored), 1) * limits.max_compression_ratio:
         raise LimitError(f"declared raw size {raw_size} is over {limits.max_compression_ratio}x "
                          f"the {len(stored)} stored bytes")
@@ -244,7 +245,7 @@ def decode_planes(payload: bytes, header: Header, expected_first: int, limits: L
     return PlaneBlock(first=r.first, triplets=triplets)
 
 
-# spec §8.1 Objects ---------------------------------------------------------------------------
+# spec §8 Objects ---------------------------------------------------------------------------
 
 def encode_object(o: ObjectRecord, major: int = 1) -> bytes:
     name = o.name.encode("utf-8")
@@ -287,11 +288,11 @@ def decode_object(payload: bytes, expected_index: int, major: int = 1) -> Object
     return ObjectRecord(index=index, name=name, parent=parent, transform=transform)
 
 
-# spec §8.2-§8.4 Part groups ------------------------------------------------------------------
+# spec §9 Part groups ------------------------------------------------------------------
 
 def encode_group(g: PartGroup, compress: bool, major: int = 1) -> bytes:
-    """The GRUP payload; ``major`` 2 and 3 write the varint body of spec 2.0 §8.7, 3 with the varint
-    head of 3.0 §8.2."""
+    """The GRUP payload; ``major`` 2 and 3 write the varint body of spec §9.2, 3 with the varint
+    head of 3.0 (spec §9.1, §9.2; version 1's u32 body: Appendix A.1)."""
     if g.facets is not None and major != 3:
         raise PlnError("sealed groups need version 3.1", code="UNKNOWN_GROUP_KIND")
     if g.shell is not None and major != 3:
@@ -416,7 +417,7 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
 
 
 def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: frozenset[int]) -> PartGroup:
-    """A version 2 or 3 group body (spec 2.0 §8.7)."""
+    """A version 2 or 3 group body (spec §9.2)."""
     raw = np.frombuffer(body, dtype=np.uint8)
     (count,), pos = varint.decode(raw, 1, "group reference count")
     count = int(count)
@@ -506,7 +507,7 @@ def _decode_compact_tree(raw: np.ndarray, count: int) -> np.ndarray:
 
 def _decode_sealed(raw: np.ndarray, bounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Vertex triples (V, 3) and facets (T, 4: face reference, three vertices) of a SEALED body
-    (spec 3.1 §8.8), checked."""
+    (spec §9.9), checked."""
     (v,), pos = varint.decode(raw, 1, "sealed vertex count")
     if not 3 <= int(v) <= (len(raw) - pos) // schema.SEALED_VERTEX_FIELDS:
         raise FormatError(f"sealed group: {int(v)} vertices declared, fewer than 3 or more than the body holds",
@@ -532,7 +533,7 @@ def _decode_sealed(raw: np.ndarray, bounding: np.ndarray) -> tuple[np.ndarray, n
 def check_sealed(vertex_planes: np.ndarray | None, facets: np.ndarray | None,
                  bounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``vertex_planes`` (V, 3) and ``facets`` (T, 4) of a SEALED group as uint32, or
-    ``FormatError`` (``BAD_GROUP_STRUCTURE``) naming the first rule of spec 3.1 §8.8 they break."""
+    ``FormatError`` (``BAD_GROUP_STRUCTURE``) naming the first rule of spec §9.9 they break."""
     def bad(reason: str) -> FormatError:
         return FormatError(f"sealed group: {reason}", code="BAD_GROUP_STRUCTURE")
     if vertex_planes is None or facets is None:
@@ -597,7 +598,7 @@ def check_tree(tokens: np.ndarray, count: int) -> None:
         raise FormatError("BSP token stream is not exactly one complete tree", code="BAD_GROUP_STRUCTURE")
 
 
-# spec §8.5 Colours ---------------------------------------------------------------------------
+# spec §10.1 Colours ---------------------------------------------------------------------------
 
 def encode_colours(c: Colours) -> bytes:
     rgba = np.ascontiguousarray(c.rgba, dtype=np.uint8).reshape(-1, 4)
@@ -615,14 +616,48 @@ def decode_colours(payload: bytes, group_refs: dict[int, int]) -> Colours:
     return Colours(group=r.group, rgba=np.frombuffer(r.rgba, dtype=np.uint8).reshape(-1, 4).copy())
 
 
-# spec §8.6 Index and §4.4 End ----------------------------------------------------------------
+# spec §10.3 Metadata ------------------------------------------------------------------------
+
+def encode_metadata(m: Metadata) -> bytes:
+    """A mETA payload; raises ``BAD_METADATA`` for what :func:`decode_metadata` would refuse or read otherwise."""
+    try:
+        payload = schema.Metadata.build(dict(keyword=m.key.encode("ascii"), value=m.value.encode("utf-8")))
+    except UnicodeEncodeError:
+        raise FormatError(f"mETA {m.key!r}: keyword not ASCII or value not encodable as UTF-8",
+                          code="BAD_METADATA") from None
+    if decode_metadata(payload) != m:  # a NUL in the keyword would end it early
+        raise FormatError(f"mETA keyword {m.key!r} holds a NUL", code="BAD_METADATA")
+    return payload
+
+
+def decode_metadata(payload: bytes) -> Metadata:
+    """A mETA chunk: the keyword and its value, checked (the value too, for a keyword the spec defines)."""
+    if b"\x00" not in payload:
+        raise FormatError("mETA payload has no 0x00 byte after its keyword", code="BAD_METADATA")
+    r = _parse(schema.Metadata, payload, "mETA")
+    low, high = schema.METADATA_KEYWORD_BYTES
+    raw = np.frombuffer(r.keyword, dtype=np.uint8)
+    if not low <= len(raw) <= high or ((raw < 0x21) | (raw > 0x7E)).any():
+        raise FormatError(f"mETA keyword {bytes(r.keyword)!r} is not {low} to {high} printable ASCII characters "
+                          "without space", code="BAD_METADATA")
+    key = bytes(r.keyword).decode("ascii")
+    try:
+        value = bytes(r.value).decode("utf-8")
+    except UnicodeDecodeError:
+        raise FormatError(f"mETA {key}: the value is not UTF-8", code="BAD_METADATA") from None
+    if key == UP_AXIS and value not in UP_AXES:
+        raise FormatError(f"mETA {UP_AXIS} is {value[:20]!r}, not one of {', '.join(UP_AXES)}", code="BAD_METADATA")
+    return Metadata(key, value)
+
+
+# spec §10.2 Index and §4.4 End (PEND of versions 1 and 2: Appendix A.1) ---------------------
 
 def encode_index(entries: np.ndarray) -> bytes:
     return schema.Index.build(dict(count=len(entries), entries=entries.astype(schema.INDEX_ENTRY_DTYPE).tobytes()))
 
 
 def decode_index(payload: bytes, index_offset: int, first_chunk: int = 8 + 12 + schema.HEADER_SIZE) -> np.ndarray:
-    """The iNDX entries; ``first_chunk`` is the offset of the chunk after PHDR (spec §8.6, 3.0 §8.6)."""
+    """The iNDX entries; ``first_chunk`` is the offset of the chunk after PHDR (spec §10.2)."""
     r = _parse(schema.Index, payload, "iNDX")
     if len(payload) != 4 + 16 * r.count:
         raise FormatError("iNDX size does not match its count", code="BAD_INDEX")
@@ -637,7 +672,7 @@ def decode_index(payload: bytes, index_offset: int, first_chunk: int = 8 + 12 + 
 
 
 def encode_end(index_offset: int, major: int = 1) -> bytes:
-    """The PEND payload; version 3 leaves it empty when there is no index (spec 3.0 §4.4)."""
+    """The PEND payload; version 3 leaves it empty when there is no index (spec §4.4)."""
     if major == 3 and not index_offset:
         return b""
     return schema.End.build(dict(index_offset=index_offset))
@@ -656,10 +691,10 @@ def decode_end(payload: bytes, major: int = 1) -> int:
     return index_offset
 
 
-# spec 3.2 §8.9 Shells --------------------------------------------------------------------------
+# spec §9.10 Shells --------------------------------------------------------------------------
 
 def corner_codes(triangles: np.ndarray) -> np.ndarray:
-    """The corner codes of spec 3.2 §8.9 of ``triangles`` (T, 3) whose corners are numbered by first
+    """The corner codes of spec §9.10 of ``triangles`` (T, 3) whose corners are numbered by first
     use: 0 for a corner's first use, ``k`` for a later one of the k-th newest corner."""
     tri = np.asarray(triangles, dtype=np.int64).reshape(-1)
     if not len(tri):
@@ -679,7 +714,7 @@ def first_use_order(triangles: np.ndarray, count: int) -> np.ndarray:
 
 
 def check_shell(shell: Shell, bounding: np.ndarray) -> None:
-    """``FormatError`` (``BAD_GROUP_STRUCTURE``) naming the first rule of spec 3.2 §8.9 ``shell``
+    """``FormatError`` (``BAD_GROUP_STRUCTURE``) naming the first rule of spec §9.10 ``shell``
     breaks for a group whose references have roles ``bounding``."""
     def bad(reason: str) -> FormatError:
         return FormatError(f"shell group: {reason}", code="BAD_GROUP_STRUCTURE")
@@ -719,7 +754,7 @@ def check_shell(shell: Shell, bounding: np.ndarray) -> None:
 
 
 def _shell_body(shell: Shell) -> bytes:
-    """The kind data of a SHELL group (spec 3.2 §8.9)."""
+    """The kind data of a SHELL group (spec §9.10)."""
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
     face = fc[:, 0]
@@ -737,7 +772,7 @@ def _shell_body(shell: Shell) -> bytes:
 
 
 def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
-    """The corners and triangles of a SHELL body (spec 3.2 §8.9), checked."""
+    """The corners and triangles of a SHELL body (spec §9.10), checked."""
     (v, t, u), pos = varint.decode(raw, 3, "shell counts")
     v, t, u = int(v), int(t), int(u)
     left = len(raw) - pos
@@ -746,9 +781,8 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
                           f"allows", code="BAD_GROUP_STRUCTURE")
     explicit, pos = _bit_field(raw, pos, v, "shell group: the body", "corner flags")
     e = int(explicit.sum())
-    if 3 * (v - e) + 3 * e + 3 * t > len(raw) - pos:
-        raise FormatError("shell group: more corners and triangles declared than the body holds",
-                          code="BAD_GROUP_STRUCTURE")
+    # Every field is read before any value is checked (spec/pln.md §9.10): a body that ends inside one
+    # is BAD_PAYLOAD whatever else is wrong. The counts' checks above bound what is decoded.
     triples, used = varint.decode(raw[pos:], 3 * (v - e), "shell corner planes")
     pos += used
     origin, step, grid = np.zeros(3), 0.0, np.zeros((0, 3), dtype=np.int64)
@@ -761,14 +795,17 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
         deltas, used = varint.decode(raw[pos:], 3 * e, "shell corner coordinates")
         pos += used
         steps = varint.unzigzag(deltas).reshape(-1, 3)
-        if np.abs(steps).max(initial=0) > MAX_GRID:
-            raise FormatError("shell group: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE")
-        grid = np.cumsum(steps, axis=0)
     gaps, used = varint.decode(raw[pos:], t - u, "shell face references")
     pos += used
     codes, used = varint.decode(raw[pos:], 3 * t, "shell triangle corners")
     if pos + used != len(raw):
         raise FormatError("shell group: the triangles do not fill the body", code="BAD_GROUP_STRUCTURE")
+    if e:
+        # Checked before the cumulative sum, which steps near 2^63 would overflow (and compared on both
+        # sides: abs(-2^63) is still negative in int64).
+        if ((steps > MAX_GRID) | (steps < -MAX_GRID)).any():
+            raise FormatError("shell group: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE")
+        grid = np.cumsum(steps, axis=0)
     if len(gaps) and gaps.max() >= len(bounding):
         raise FormatError("shell group: a face reference is past the group's references",
                           code="BAD_GROUP_STRUCTURE")

@@ -24,7 +24,7 @@ from .crc import crc32
 from .errors import FormatError, PlnError
 from .model import Header, ObjectRecord, PartGroup, Record, UnknownChunk
 
-_KNOWN = (schema.PHDR, schema.OBJT, schema.PLNS, schema.GRUP, schema.COLR, schema.INDX, schema.PEND)
+_KNOWN = (schema.PHDR, schema.OBJT, schema.PLNS, schema.GRUP, schema.COLR, schema.META, schema.INDX, schema.PEND)
 
 
 @dataclass(frozen=True)
@@ -172,6 +172,9 @@ class _Salvager:
             self._take_group(chunk)
         elif t == schema.COLR:
             self.out.records.append(records.decode_colours(chunk.payload, self.group_refs))
+        elif t == schema.META:
+            # Salvage keeps what it can read wherever it is: a late or repeated keyword is no loss.
+            self.out.records.append(records.decode_metadata(chunk.payload))
         elif t == schema.INDX:
             return
         elif is_ancillary(t):

@@ -1,5 +1,6 @@
-"""Construct declarations of the .pln container, versions 1, 2 and 3 (read beside spec/pln-1.md,
-spec/pln-2.md and spec/pln-3.md; "2.0 §", "3.0 §" and "3.1 §" mark sections of the latter two).
+"""Construct declarations of the .pln container, versions 1, 2 and 3, read beside spec/pln.md: each
+under the section it implements ("spec §x"), the fixed-size structures of versions 1 and 2 under its
+Appendix A.1.
 
 Only structure lives here. Bulk arrays (triplets, plane references, role
 bits, cell entries, tree tokens, colours, index entries) are ``Bytes`` fields
@@ -13,7 +14,7 @@ VARINT_MAX_BYTES = 10
 
 
 class Leb128(cs.Construct):
-    """A minimal unsigned LEB128 varint below ``2**bits`` (spec 2.0 §2.3; varint32 of 3.0): the
+    """A minimal unsigned LEB128 varint below ``2**bits`` (spec §2.2; varint32 of 3.0): the
     heads of version 3 chunks. Parsing fails on a varint that is not minimal, is longer than 10
     bytes, or is out of range, so that every byte string has at most one reading."""
 
@@ -75,9 +76,10 @@ GRUP = b"GRUP"
 PEND = b"PEND"
 COLR = b"cOLR"
 INDX = b"iNDX"
+META = b"mETA"
 CRITICAL_TYPES = frozenset({PHDR, OBJT, PLNS, GRUP, PEND})
 
-# spec §5 Header (PHDR)
+# spec §5 Header (PHDR): the flags of every version; the 108-byte layout of versions 1 and 2 (Appendix A.1)
 FLAG_LOSSY = 0x0001
 FLAG_COUNTS_KNOWN = 0x0002
 FLAG_BBOX_KNOWN = 0x0004
@@ -112,7 +114,7 @@ HEADER_SIZE = 108
 COMPRESSION_NONE = 0
 COMPRESSION_ZLIB = 1
 
-# spec §7 Plane table (PLNS)
+# spec Appendix A.1 Plane table head (PLNS) of versions 1 and 2
 PlaneBlock = cs.Struct(
     "first" / cs.Int64ul,
     "count" / cs.Int32ul,
@@ -123,7 +125,7 @@ PlaneBlock = cs.Struct(
 )
 PLANE_BLOCK_HEAD = 20
 
-# spec §8.1 Objects (OBJT)
+# spec Appendix A.1 Objects (OBJT) of versions 1 and 2
 OBJECT_HAS_TRANSFORM = 0x01
 Object = cs.Struct(
     "index" / cs.Int32ul,
@@ -136,7 +138,7 @@ Object = cs.Struct(
     "extra" / cs.GreedyBytes,
 )
 
-# spec §8.2 Part groups (GRUP): a fixed head, then a possibly deflated body
+# spec Appendix A.1 Part groups (GRUP) of versions 1 and 2: a fixed head, then a possibly deflated body
 GroupHead = cs.Struct(
     "index" / cs.Int32ul,
     "object" / cs.Int32ul,
@@ -148,7 +150,7 @@ GroupHead = cs.Struct(
 )
 GROUP_HEAD = 16
 
-# spec §8.2 Group body, common to every kind (known or not)
+# spec Appendix A.1 Group body of version 1, common to every kind (known or not)
 GroupBody = cs.Struct(
     "ref_count" / cs.Int32ul,
     "refs" / cs.Bytes(cs.this.ref_count * 4),
@@ -156,37 +158,37 @@ GroupBody = cs.Struct(
     "extra" / cs.GreedyBytes,
 )
 
-# spec §8.3 Kind-specific part of CELLS groups
+# spec Appendix A.1 Kind-specific part of CELLS groups of version 1
 CellsExtra = cs.Struct(
     "cell_count" / cs.Int32ul,
     "sizes" / cs.Bytes(cs.this.cell_count * 4),
     "entries" / cs.GreedyBytes,
 )
 
-# spec §8.4 Kind-specific part of BSP groups
+# spec Appendix A.1 Kind-specific part of BSP groups of version 1
 TreeExtra = cs.Struct(
     "token_count" / cs.Int32ul,
     "tokens" / cs.Bytes(cs.this.token_count * 4),
 )
 
-# spec 2.0 §2.3 Varints: unsigned LEB128, minimal, at most 10 bytes (VARINT_MAX_BYTES above). Bulk
+# spec §2.2 Varints: unsigned LEB128, minimal, at most 10 bytes (VARINT_MAX_BYTES above). Bulk
 # varints (plane streams, references, tokens) are decoded with numpy in planefmt.varint, never per
 # element with construct; Leb128 serves the few in version 3 chunk heads.
 
-# spec 2.0 §7.4 Predicted plane data (coding 3): three streams of `count` varints (nu, phi, h),
+# spec §7.4 Predicted plane data (coding 3): three streams of `count` varints (nu, phi, h),
 # each below 2^33, taking 3 to 15 bytes a plane
 PREDICTED_LIMIT = 2**33
 PREDICTED_BYTES = (3, 15)
 
-# spec 2.0 §8.7 Group body of version 2: ref_count, reference differences, role bits, kind data,
+# spec §9.2 Group body of version 2: ref_count, reference differences, role bits, kind data,
 # all varints but the role bits; tree tokens 0 IN, 1 OUT, j + 2 split on local reference j
 COMPACT_IN, COMPACT_OUT, COMPACT_SPLIT = 0, 1, 2
-# spec 3.1 §8.8 Sealed group (kind 5) data: vertex count, three local references per vertex,
+# spec §9.9 Sealed group (kind 5) data: vertex count, three local references per vertex,
 # triangle count, then per triangle the face reference's difference from the previous one and its
 # three vertices; all varints (read in bulk by varint.decode)
 SEALED_VERTEX_FIELDS, SEALED_TRIANGLE_FIELDS = 3, 4
 
-# spec 3.2 §8.9 Shell group (kind 6) data: corner, triangle and free-triangle counts (varints),
+# spec §9.10 Shell group (kind 6) data: corner, triangle and free-triangle counts (varints),
 # one flag bit per corner, three references per named corner (varints), and where a corner is
 # explicit this grid, then zigzag varint coordinate steps, face reference steps and corner codes
 ShellGrid = cs.Struct(
@@ -195,27 +197,34 @@ ShellGrid = cs.Struct(
 )
 SHELL_GRID_BYTES = 32
 
-# spec §8.5 Face colours (cOLR, ancillary)
+# spec §10.1 Face colours (cOLR, ancillary)
 Colours = cs.Struct(
     "group" / cs.Int32ul,
     "count" / cs.Int32ul,
     "rgba" / cs.Bytes(cs.this.count * 4),
 )
 
-# spec §8.6 Index (iNDX, ancillary); entries viewed as INDEX_ENTRY_DTYPE
+# spec §10.3 Metadata (mETA, ancillary): a keyword of printable ASCII, a NUL, a UTF-8 value
+Metadata = cs.Struct(
+    "keyword" / cs.NullTerminated(cs.GreedyBytes, term=b"\x00"),
+    "value" / cs.GreedyBytes,
+)
+METADATA_KEYWORD_BYTES = (1, 79)
+
+# spec §10.2 Index (iNDX, ancillary); entries viewed as INDEX_ENTRY_DTYPE
 Index = cs.Struct(
     "count" / cs.Int32ul,
     "entries" / cs.Bytes(cs.this.count * 16),
 )
 INDEX_ENTRY_DTYPE = [("offset", "<u8"), ("type", "S4"), ("ordinal", "<u4")]
 
-# spec §4.4 End (PEND)
+# spec §4.4 End (PEND); versions 1 and 2 always 8 bytes (Appendix A.1)
 End = cs.Struct(
     "index_offset" / cs.Int64ul,
 )
 END_SIZE = 8
 
-# spec 3.0 §5 Header of version 3: a fixed part, then only the fields the coding and flags call for
+# spec §5 Header of version 3: a fixed part, then only the fields the coding and flags call for
 HEADER3_FIXED = 9
 CODINGS_WITH_RANGE = (2, 3)
 Header3 = cs.Struct(
@@ -232,7 +241,7 @@ Header3 = cs.Struct(
     "extra" / cs.GreedyBytes,
 )
 
-# spec 3.0 §7 Plane table head of version 3
+# spec §7.1 Plane table head of version 3
 PlaneBlock3 = cs.Struct(
     "first" / Varint,
     "count" / Varint32,
@@ -244,7 +253,7 @@ PlaneBlock3 = cs.Struct(
 #: Longest head of PlaneBlock3 (varints of 10, 5 and 5 bytes and the compression byte).
 PLANE_BLOCK3_MAX_HEAD = 21
 
-# spec 3.0 §8.1 Objects of version 3: parent 0 for a root, else the parent's index + 1
+# spec §8 Objects of version 3: parent 0 for a root, else the parent's index + 1
 OBJECT3_MAX_NAME = 0xFFFF
 Object3Head = cs.Struct(
     "index" / Varint32,
@@ -259,7 +268,7 @@ Object3 = cs.Struct(
     "extra" / cs.GreedyBytes,
 )
 
-# spec 3.0 §8.2 Part group head of version 3; the body is that of 2.0 §8.7
+# spec §9.1 Part group head of version 3; the body is that of spec §9.2
 GroupHead3 = cs.Struct(
     "index" / Varint32,
     "object" / Varint32,
@@ -269,5 +278,5 @@ GroupHead3 = cs.Struct(
     "body" / cs.GreedyBytes,
 )
 
-# spec 3.0 §4.4 End of version 3: empty (no index) or the index offset
+# spec §4.4 End of version 3: empty (no index) or the index offset
 END3_SIZES = (0, END_SIZE)

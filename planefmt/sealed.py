@@ -1,4 +1,4 @@
-"""Sealed surfaces (kind 5, spec 3.1 §8.8): triangles whose corners are meeting points of three planes.
+"""Sealed surfaces (kind 5, spec §9.9): triangles whose corners are meeting points of three planes.
 
 A BSP tree's surface is computed from its planes alone, so its topology is
 whatever those planes make of it. Where a smooth, finely tessellated solid
@@ -34,8 +34,8 @@ from .patches import PlaneTable
 MIN_DETERMINANT = 1e-6
 #: Smallest sine of the angle between the two face planes a crease vertex keeps.
 MIN_SINE = 1e-3
-#: ``|det|`` of three unit normals at or below which they count as linearly dependent (spec 3.1
-#: §8.8): normals decoded from triplets are off by rounding, so parallel planes never give 0.
+#: ``|det|`` of three unit normals at or below which they count as linearly dependent (spec
+#: §9.9): normals decoded from triplets are off by rounding, so parallel planes never give 0.
 DEPENDENT = 1e-12
 
 

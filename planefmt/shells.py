@@ -1,4 +1,4 @@
-"""Shell groups (kind 6, spec 3.2 §8.9): triangles over shared corners, each corner named by three
+"""Shell groups (kind 6, spec §9.10): triangles over shared corners, each corner named by three
 planes or stored as coordinates.
 
 A shell keeps its source's triangles and their connectivity. A corner where

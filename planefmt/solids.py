@@ -2,7 +2,7 @@
 
 Encoding is a BSP autopartition (Thibault & Naylor 1987): every splitting
 plane is the plane of a face of the mesh, so a cell is described by face
-planes only (spec §8.3, §8.4), and the decomposition is consistent under any
+planes only (spec §9.6, §9.7), and the decomposition is consistent under any
 small change of the planes (quantization): neighbouring cells share their
 splitting plane, so they still tile the solid.
 
@@ -32,7 +32,7 @@ splitting plane, so they still tile the solid.
   for one closed, outward, non-self-intersecting body; bodies are encoded one by one, and
   the encoder verifies the decoded surface, so a body where it fails
   (self-intersection, self-contact) is caught and encoded otherwise.
-* Output. The tree as preorder tokens (``BSP``, spec §8.4), each convex
+* Output. The tree as preorder tokens (``BSP``, spec §9.7), each convex
   piece written as a chain.
 
 Decoding (:func:`decode_tree`) pushes square pieces of each splitting plane
@@ -92,7 +92,7 @@ EXHAUSTIVE = 2048
 class Partition:
     """The result of :func:`partition`: a BSP tree over the body's planes.
 
-    ``tokens`` (uint32) is the preorder token stream of spec §8.4 over the
+    ``tokens`` (uint32) is the preorder token stream of spec §9.7 over the
     plane indices given to :func:`partition`; a convex piece is written as a
     chain (each of its planes splits, the outer side is OUT, the innermost
     leaf IN). ``splits`` counts the split nodes chosen by the splitter,
@@ -172,7 +172,7 @@ def partition(omega: np.ndarray, h: np.ndarray, tri: np.ndarray, tri_plane: np.n
         inner_in = True
         if not (len(tin) and len(tout)):
             inner_in = _inner_is_solid(t[on], omega[p])
-        # Pushed outer first so that the inner subtree is emitted first (preorder, spec §8.4). A side
+        # Pushed outer first so that the inner subtree is emitted first (preorder, spec §9.7). A side
         # without fragments is one leaf, inside or outside as the splitter's fragments say.
         stack.append((tout, np.concatenate(outp)) if len(tout) else (BSP_OUT if inner_in else BSP_IN))
         stack.append((tin, np.concatenate(inp)) if len(tin) else (BSP_IN if inner_in else BSP_OUT))
@@ -280,7 +280,7 @@ def decode_tree(omega: np.ndarray, h: np.ndarray, tokens: np.ndarray, face: np.n
 
     ``omega`` (m, 3), ``h`` (m,) are the group's planes in reference order,
     ``face`` (m,) True for face planes (cut planes carry no surface, spec
-    §8.2.1); ``plane`` is the reference each triangle lies on. Raises
+    §9.4); ``plane`` is the reference each triangle lies on. Raises
     ``BAD_GROUP_STRUCTURE`` for a malformed tree and ``UNBOUNDED_POLYTOPE``
     when an IN leaf does not end.
     """

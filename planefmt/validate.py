@@ -1,7 +1,7 @@
 """Validation of a .pln file: findings as data (code, severity, message, location).
 
 ``validate`` reads the whole file as the spec's reader must (every CRC, every
-structural rule of spec §10.1) and, with ``geometry=True``, decodes every part
+structural rule of spec §12.2) and, with ``geometry=True``, decodes every part
 group so that empty and unbounded polytopes and redundant planes are found too.
 A container error ends the reading (what follows cannot be trusted); geometry
 errors are reported per part group and reading goes on.

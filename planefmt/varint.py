@@ -1,4 +1,4 @@
-"""Unsigned LEB128 varints and zigzag signs (spec 2.0, §2.3), vectorized over whole arrays.
+"""Unsigned LEB128 varints and zigzag signs (spec §2.2), vectorized over whole arrays.
 
 A value is written 7 bits at a time, least significant group first, each byte
 but the last with its high bit set; values are below 2^64 and minimal (no
@@ -40,7 +40,11 @@ def decode(data: bytes | memoryview | np.ndarray, count: int, what: str) -> tupl
     b = np.frombuffer(data, dtype=np.uint8) if not isinstance(data, np.ndarray) else data
     if count == 0:
         return np.zeros(0, dtype=np.uint64), 0
-    ends = np.flatnonzero(b < 0x80)
+    # Valid varints end within count * MAX_BYTES bytes: a few header fields need not scan a whole
+    # payload. Fewer ends there is an error, told apart by a scan of the rest.
+    ends = np.flatnonzero(b[:count * MAX_BYTES] < 0x80)
+    if len(ends) < count:
+        ends = np.flatnonzero(b < 0x80)
     if len(ends) < count:
         raise FormatError(f"{what}: the data ends inside varint {len(ends)} of {count}", code="BAD_PAYLOAD")
     ends = ends[:count]

@@ -1,4 +1,4 @@
-"""Streaming writer of .pln files (spec §4, §9).
+"""Streaming writer of .pln files (spec §4, §11).
 
 Objects, planes and part groups are written as they come; counts need not be
 known in advance. On ``close()`` the writer appends the iNDX and PEND chunks,
@@ -20,7 +20,7 @@ import numpy as np
 from . import records, schema
 from .chunks import chunk_bytes, is_ancillary, valid_type
 from .errors import PlnError
-from .model import (Colours, GroupKind, Header, ObjectRecord, PartGroup, PlaneBlock, Record, Shell,
+from .model import (Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record, Shell,
                     UnknownChunk)
 
 def _read_umask() -> int:
@@ -34,6 +34,8 @@ _NEW_FILE_MODE = 0o666 & ~_read_umask()
 
 #: Planes per PLNS chunk: bounds the memory a streaming reader needs per chunk.
 BLOCK_PLANES = 1 << 16
+#: Bytes before the index from which ``index=None`` writes one (a few milliseconds of streaming read).
+INDEX_MIN_BYTES = 1 << 16
 
 
 class Writer:
@@ -41,15 +43,16 @@ class Writer:
 
     ``header`` gives version, coding, quantization, units, bbox and error
     bound. Versions 1 and 2: its counts are ignored and replaced by the actual
-    ones where the output is seekable. Version 3 (spec/pln-3.md): counts given
+    ones where the output is seekable. Version 3 (spec/pln.md): counts given
     in it are written and must match what is written by :meth:`close`
     (``COUNT_MISMATCH`` otherwise, and the output is discarded); without them
-    the file declares none. Use as a context manager: leaving the block by an exception
+    the file declares none. ``index``: write an ``iNDX`` chunk; None writes
+    one when the file is :data:`INDEX_MIN_BYTES` or more before it. Use as a context manager: leaving the block by an exception
     discards a path target's temporary file.
     """
 
     def __init__(self, target: str | os.PathLike | BinaryIO, header: Header, *, compress: bool = False,
-                 index: bool = True) -> None:
+                 index: bool | None = True) -> None:
         if int(header.coding) not in records.CODINGS.get(header.version[0], ()):
             raise PlnError(f"coding {int(header.coding)} cannot be written in a version {header.version[0]} file",
                            code="UNSUPPORTED_CODING")
@@ -84,6 +87,7 @@ class Writer:
         self._objects = 0
         self._groups: list[int] = []  # reference count per group, for cOLR checks
         self._entries: list[tuple[int, bytes, int]] = []
+        self._metadata: set[str] = set()
         self._closed = False
         try:
             self._emit_raw(schema.SIGNATURE)
@@ -146,8 +150,8 @@ class Writer:
 
         ``bounding[i]`` marks ``refs[i]`` as a bounding/cut plane (default: all faces). A BSP
         group needs ``tree``, a CELLS group ``cells``, a SEALED group (version 3.1 and later)
-        ``vertex_planes`` and ``facets`` in local references (spec 3.1 §8.8), a SHELL group
-        (version 3.2 and later) ``shell`` (spec 3.2 §8.9).
+        ``vertex_planes`` and ``facets`` in local references (spec §9.9), a SHELL group
+        (version 3.2 and later) ``shell`` (spec §9.10).
         """
         refs = np.asarray(refs, dtype=np.int64).reshape(-1)
         if len(refs) == 0:
@@ -198,6 +202,17 @@ class Writer:
             raise PlnError("colours need a written group and one colour per reference", code="BAD_COLOURS")
         self._emit(schema.COLR, records.encode_colours(Colours(group, rgba)))
 
+    def add_metadata(self, key: str, value: str) -> None:
+        """Write a mETA chunk (spec §10.3): ``key`` = ``value``, each key once, before any object,
+        plane or group. ``add_metadata(planefmt.UP_AXIS, "Z")`` records that +z points up."""
+        if self._entries:
+            raise PlnError("metadata is written before the first object, plane block and part group",
+                           code="BAD_METADATA")
+        if key in self._metadata:
+            raise PlnError(f"mETA {key} is already written", code="BAD_METADATA")
+        self._emit(schema.META, records.encode_metadata(Metadata(key, value)))
+        self._metadata.add(key)
+
     def add_chunk(self, ctype: bytes, payload: bytes) -> None:
         """Write an ancillary chunk verbatim (e.g. one a reader did not know)."""
         if not valid_type(ctype) or not is_ancillary(ctype) or ctype == schema.INDX:
@@ -217,6 +232,8 @@ class Writer:
                            facets=record.facets, shell=record.shell)
         elif isinstance(record, Colours):
             self.add_colours(record.group, record.rgba)
+        elif isinstance(record, Metadata):
+            self.add_metadata(record.key, record.value)
         elif isinstance(record, UnknownChunk):
             self.add_chunk(record.type, record.payload)
         else:
@@ -228,7 +245,9 @@ class Writer:
             return
         try:
             index_offset = 0
-            if self._index:
+            # Auto (None): an index only where random access saves reading much; in a small file
+            # it is bytes for nothing (simple_pole.glb at 1e-6: 736 of 4,000 bytes).
+            if self._index or (self._index is None and self._pos >= INDEX_MIN_BYTES):
                 index_offset = self._pos
                 entries = np.array(self._entries, dtype=schema.INDEX_ENTRY_DTYPE)
                 self._emit(schema.INDX, records.encode_index(entries))

@@ -23,6 +23,8 @@ from scipy.spatial import cKDTree
 BATCH = 1 << 18
 #: Samples per spatial chunk of points that share one box test.
 CHUNK = 256
+#: Grid steps per triangle side of the points whose nearest one bounds each sample's distance.
+UPPER_STEPS = 4
 
 
 def point_triangle_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -50,7 +52,7 @@ def point_triangle_distance(p: np.ndarray, a: np.ndarray, b: np.ndarray, c: np.n
         t_ab = d1 / (d1 - d3)
         t_ac = d2 / (d2 - d6)
         t_bc = (d4 - d3) / ((d4 - d3) + (d5 - d6))
-    closest = a + ab * v_face[..., None] + ac * w_face[..., None]
+        closest = a + ab * v_face[..., None] + ac * w_face[..., None]
     # Regions in Ericson's order of tests, the last one tested first so that earlier ones win.
     closest = np.where(((va <= 0) & (d4 - d3 >= 0) & (d5 - d6 >= 0))[..., None], b + (c - b) * t_bc[..., None], closest)
     closest = np.where(((vb <= 0) & (d2 >= 0) & (d6 <= 0))[..., None], a + ac * t_ac[..., None], closest)
@@ -99,21 +101,52 @@ def distances(points: np.ndarray, vertices: np.ndarray, faces: np.ndarray) -> np
     f = np.asarray(faces, dtype=np.int64)
     tri = v[f]
     lo, hi = tri.min(axis=1), tri.max(axis=1)
-    # Each point's distance to the nearest triangle vertex bounds its distance to the surface.
-    best, _ = cKDTree(v[np.unique(f)]).query(points)
+    # Each point's distance to the nearest point of a grid on every triangle bounds its distance
+    # to the surface; a grid, not the vertices alone, keeps that bound short beside long thin
+    # triangles (CAD), whose box test would otherwise take in most of the mesh.
+    best, _ = cKDTree(np.concatenate([v[np.unique(f)], grid(v, f, UPPER_STEPS)[0]])).query(points)
+    levels = _Levels(lo, hi)
     order = _spatial_order(points)
     for start in range(0, len(points), CHUNK):
         idx = order[start:start + CHUNK]
         p = points[idx]
         reach = float(best[idx].max())
-        gap = np.maximum(np.maximum(lo - p.max(axis=0), p.min(axis=0) - hi), 0.0)
-        candidates = np.flatnonzero(np.einsum("ij,ij->i", gap, gap) <= reach * reach)
+        p_lo, p_hi = p.min(axis=0), p.max(axis=0)
+        near = levels.near((p_lo + p_hi) / 2, float(np.linalg.norm(p_hi - p_lo)) / 2 + reach)
+        gap = np.maximum(np.maximum(lo[near] - p_hi, p_lo - hi[near]), 0.0)
+        candidates = near[np.einsum("ij,ij->i", gap, gap) <= reach * reach]
         step = max(1, BATCH // len(p))
         for k in range(0, len(candidates), step):
-            t = tri[candidates[k:k + step]]
-            d = point_triangle_distance(p[:, None], t[None, :, 0], t[None, :, 1], t[None, :, 2])
-            best[idx] = np.minimum(best[idx], d.min(axis=1))
+            c = candidates[k:k + step]
+            # Only the pairs whose box test leaves the triangle within the point's own bound.
+            gap = np.maximum(np.maximum(lo[c][None] - p[:, None], p[:, None] - hi[c][None]), 0.0)
+            point, which = np.nonzero(np.einsum("ijk,ijk->ij", gap, gap) <= best[idx][:, None] ** 2)
+            t = tri[c[which]]
+            d = point_triangle_distance(p[point], t[:, 0], t[:, 1], t[:, 2])
+            nearest = best[idx]
+            np.minimum.at(nearest, point, d)
+            best[idx] = nearest
     return best
+
+
+class _Levels:
+    """Triangles by the size of their boxes, in powers of two, a k-d tree of box centres each:
+    a ball query on a level, widened by that level's largest half-diagonal, finds every box
+    that meets the ball, so long triangles do not widen the search around short ones."""
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray):
+        centre, radius = (lo + hi) / 2, np.linalg.norm(hi - lo, axis=1) / 2
+        level = np.floor(np.log2(np.maximum(radius, np.finfo(float).tiny))).astype(np.int64)
+        self.levels = []
+        for value in np.unique(level):
+            members = np.flatnonzero(level == value)
+            self.levels.append((cKDTree(centre[members]), members, float(radius[members].max())))
+
+    def near(self, centre: np.ndarray, radius: float) -> np.ndarray:
+        """Indices of the triangles whose box may meet the ball (``centre``, ``radius``)."""
+        found = [members[tree.query_ball_point(centre, radius + widest)]
+                 for tree, members, widest in self.levels]
+        return np.concatenate(found).astype(np.int64)
 
 
 def directed(source_vertices: np.ndarray, source_faces: np.ndarray, vertices: np.ndarray, faces: np.ndarray,

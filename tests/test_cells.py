@@ -1,4 +1,4 @@
-"""Cells groups (kind 1, spec §8.3): decoded as the union of their cells, defects found with their codes."""
+"""Cells groups (kind 1, spec §9.6): decoded as the union of their cells, defects found with their codes."""
 
 from __future__ import annotations
 

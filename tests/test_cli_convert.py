@@ -384,7 +384,7 @@ def test_readme_cube_figures_are_what_pln_convert_writes(tmp_path: Path) -> None
 def test_compact_help_names_the_default(capsys: pytest.CaptureFixture) -> None:
     assert main(["convert", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())
-    assert "(spec/pln-3.md; the default)" in text and "--no-compact writes version 1.0" in text
+    assert "(spec/pln.md; the default)" in text and "--no-compact writes version 1.0" in text
 
 
 # --------------------------------------------------------------------------- progress and summary

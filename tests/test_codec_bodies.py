@@ -233,9 +233,9 @@ def test_float_planes_uncertified_within_the_budget_are_verified_again_with_a_la
     real = codec._verify
     asked = []
 
-    def needs_3m(mesh, obj, target, pieces):
+    def needs_3m(mesh, obj, target, pieces, decoded=None):
         asked.append(pieces)
-        return real(mesh, obj, target, pieces) if pieces >= 3_000_000 else (math.inf, 0.0)
+        return real(mesh, obj, target, pieces, decoded) if pieces >= 3_000_000 else (math.inf, 0.0)
 
     monkeypatch.setattr(codec, "_verify", needs_3m)
     enc = codec.encode_mesh(v, f, tolerance=TOL, scheme="paper")

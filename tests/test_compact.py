@@ -1,4 +1,4 @@
-"""Version 2.0 (spec/pln-2.md): varints, the predicted plane coding and varint group bodies. A
+"""Version 2.0 (spec/pln.md, Appendix A.2): varints, the predicted plane coding and varint group bodies. A
 compact file holds the planes and groups of the version 1 file, in fewer bytes."""
 
 from __future__ import annotations

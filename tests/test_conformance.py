@@ -1,5 +1,6 @@
 """The conformance suite (issue 6): planefmt passes it, the files regenerate byte for byte,
-and the cube is the one printed in spec §12."""
+and the files printed in the specs are the golden files (spec/pln.md §14; the history documents'
+spec/pln-1.md §12 and spec/pln-3.md §12)."""
 
 from __future__ import annotations
 
@@ -134,7 +135,7 @@ def test_regenerating_gives_identical_files(tmp_path):
 
 
 def spec_hexdump() -> bytes:
-    """The bytes of the file printed in spec §12, parsed from its hex dump.
+    """The bytes of the file printed in spec/pln-1.md §12, parsed from its hex dump.
 
     Rows are ``NNNN: hex bytes  comment``; ``00..`` stands for zeros up to the
     next row's offset and ``(× n)`` repeats a row's bytes n times. Every row
@@ -165,7 +166,7 @@ def test_cube_is_the_file_of_spec_section_12():
 
 def test_cube_v3_is_the_file_of_spec_3_section_12():
     """Every byte of cube_v3.pln as spec/pln-3.md §12 lists it: the hex rows (``(xN)`` repeats the
-    bytes before it), each ``(CRC)`` the CRC-32 of its chunk's type and payload (spec 1.0 §4.1),
+    bytes before it), each ``(CRC)`` the CRC-32 of its chunk's type and payload (spec §4.1),
     the plane payload the 72 bytes of the version 1.0 cube, the index entries (offset u64, type,
     ordinal u32) as the row under iNDX names them, followed by the index's CRC."""
     import zlib
@@ -221,6 +222,36 @@ def test_cube_v3_is_the_file_of_spec_3_section_12():
         assert data[pos:pos + len(got)] == bytes(got), f"row {offset:04x}"
         pos += len(got)
     assert pos == len(data) == 281
+
+
+def test_shell_mixed_is_the_file_of_spec_section_14():
+    """Every byte of shell_mixed_v3_2.pln as spec/pln.md §14 prints it: rows ``NNNN: hex bytes  comment``,
+    each starting where the one before ended, every byte written out; each chunk's CRC row is the CRC-32
+    of its type and payload (spec/pln.md §4.1), and the rows account for the whole file."""
+    import zlib
+
+    text = (ROOT / "spec/pln.md").read_text(encoding="utf-8")
+    block = text.split("## 14. Example")[1].split("```")[1]
+    data = bytearray()
+    for line in block.splitlines():
+        if not line.strip():
+            continue
+        m = re.fullmatch(r"([0-9a-f]{4}): (.*)", line)
+        assert m, f"not a row: {line!r}"
+        assert int(m[1], 16) == len(data), f"row {m[1]} starts at {len(data):04x}"
+        tokens = m[2].split()
+        n = next((i for i, t in enumerate(tokens) if not re.fullmatch(r"[0-9a-f]{2}", t)), len(tokens))
+        assert n, f"row {m[1]} has no bytes"
+        data += bytes.fromhex("".join(tokens[:n]))
+    golden = (SUITE / "valid/shell_mixed_v3_2.pln").read_bytes()
+    assert bytes(data) == golden and len(golden) == 431
+    pos = 8
+    while pos < len(data):
+        length = int.from_bytes(data[pos + 4:pos + 8], "little")
+        end = pos + 8 + length
+        assert data[end:end + 4] == zlib.crc32(data[pos:pos + 4] + data[pos + 8:end]).to_bytes(4, "little")
+        pos = end + 4
+    assert pos == len(data)
 
 
 def test_zlib_case_is_compressed_and_suite_is_small():

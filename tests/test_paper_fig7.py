@@ -3,7 +3,7 @@
 The paper stores it as one pseudo-convex part (9 polygons and 4 bounding
 planes) and one pseudo-concave part (5 polygons and 4 bounding planes):
 22 planes, 264 bytes of float32 planes. In PLN a patch's face on a plane is
-that plane's face of one convex polytope, a convex polygon (spec §8.2.2), so
+that plane's face of one convex polytope, a convex polygon (spec §9.8), so
 the top face, a rectangle with the pocket's hole, needs at least four
 patches: the pseudo-convex part cannot be one group. The test builds the
 block, encodes it with the patch encoder, checks the pocket is the one

@@ -13,6 +13,8 @@ import trimesh
 
 from planefmt import codec
 from planefmt.model import Mesh, Node, Scene
+from planefmt_converters.assemble import up_rotation
+from planefmt_converters.cli import main
 from planefmt_converters.render import BACKGROUND, PALETTE, png_bytes, render
 
 PLN = [sys.executable, "-m", "planefmt_converters.cli"]
@@ -86,3 +88,44 @@ def test_cli_preview_bad_input_is_one_line_and_no_file(tmp_path: Path):
     p = subprocess.run([*PLN, "preview", str(bad), "-o", str(out)], capture_output=True, text=True)
     assert p.returncode == 2 and len(p.stderr.strip().splitlines()) == 1 and "Traceback" not in p.stderr
     assert not out.exists()
+
+
+def _pole_scene(up: str | None, along: str) -> Scene:
+    """A pole 10 long along +``along`` beside a small block: what stands upright when ``along`` is up."""
+    pole_v, pole_f = box([0, 5, 0], [1, 10, 1])
+    block_v, block_f = box([2, 0.25, 0], [1, 0.5, 1])
+    if along == "Z":  # (x, y, z) -> (x, -z, y): exact, the same model standing on another axis
+        pole_v, block_v = (v @ up_rotation("Y", "Z")[:3, :3].T for v in (pole_v, block_v))
+    return Scene((Node("pole", mesh=Mesh(pole_v, pole_f)), Node("block", mesh=Mesh(block_v, block_f))), up_axis=up)
+
+
+def _preview(scene: Scene, folder: Path, name: str, *options: str) -> np.ndarray:
+    codec.encode_scene(scene, folder / f"{name}.pln")
+    assert main(["preview", str(folder / f"{name}.pln"), "-o", str(folder / f"{name}.png"), "--size", "120",
+                 *options]) == 0
+    return read_png((folder / f"{name}.png").read_bytes())
+
+
+def _drawn_extent(img: np.ndarray) -> tuple[int, int]:
+    """Height and width of what is drawn, in pixels."""
+    rows, cols = np.nonzero((img != BACKGROUND).any(axis=2))
+    return rows.max() - rows.min() + 1, cols.max() - cols.min() + 1
+
+
+def test_preview_draws_the_file_up_axis_upwards(tmp_path: Path):
+    y_up = _preview(_pole_scene("Y", "Y"), tmp_path, "y")
+    z_up = _preview(_pole_scene("Z", "Z"), tmp_path, "z")
+    # A glTF-like Y-up file is drawn as its Z-up twin is: the same upright view, pixel for pixel.
+    assert np.array_equal(y_up, z_up)
+    height, width = _drawn_extent(y_up)
+    assert height > 2 * width
+    # A file that names no axis is drawn Z up, as before.
+    assert np.array_equal(_preview(_pole_scene(None, "Z"), tmp_path, "none"), z_up)
+
+
+def test_preview_up_option_overrides_the_file(tmp_path: Path):
+    lying = _preview(_pole_scene("Y", "Y"), tmp_path, "y", "--up", "Z")
+    height, width = _drawn_extent(lying)
+    assert width > height  # the Y pole drawn as if Z were up lies on its side
+    assert np.array_equal(_preview(_pole_scene("Z", "Y"), tmp_path, "z", "--up", "Y"),
+                          _preview(_pole_scene("Y", "Y"), tmp_path, "y"))

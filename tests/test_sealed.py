@@ -1,4 +1,4 @@
-"""Sealed surfaces (kind 5, spec 3.1 §8.8): closed bodies whose BSP trees do not decode faithfully."""
+"""Sealed surfaces (kind 5, spec §9.9): closed bodies whose BSP trees do not decode faithfully."""
 
 from __future__ import annotations
 

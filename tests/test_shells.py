@@ -1,6 +1,6 @@
-"""Shell groups (kind 6, spec 3.2 §8.9) and shell trees (kind 7, spec 3.3 §8.10): the default
-scheme's encoding of every body that is not a small convex one, its error bound by construction, and
-its structure kept."""
+"""Shell groups (kind 6, spec §9.10) and shell trees (kind 7, spec §9.11): the default scheme's
+encoding of every body that is not a small convex one, its error bound by construction, and its
+structure kept."""
 
 from __future__ import annotations
 

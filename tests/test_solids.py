@@ -116,7 +116,7 @@ def test_inside_out_and_open_bodies_are_not_solids() -> None:
     assert (np.einsum("ij,ij->i", n, centre) < 0).all()
 
 
-# -- the token stream (spec §8.4) ------------------------------------------------------------------
+# -- the token stream (spec §9.7) ------------------------------------------------------------------
 
 @pytest.mark.parametrize("tokens", [
     [], [0], [0, BSP_IN], [BSP_IN, BSP_OUT], [0, BSP_IN, BSP_OUT, BSP_OUT], [5, BSP_IN, BSP_OUT],

@@ -1,4 +1,4 @@
-"""Version 3.0 (spec/pln-3.md): compact chunk heads around the planes and group bodies of 2.0."""
+"""Version 3.0 (spec/pln.md): compact chunk heads around the planes and group bodies of 2.0."""
 
 from __future__ import annotations
 

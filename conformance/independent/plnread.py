@@ -10,9 +10,11 @@ own document says).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
 was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
 text and the golden files' JSON, not planefmt's shell code; its version 3.3
-part, the shell trees of pln-3 §8.10, by the session that wrote planefmt's
-(from the spec text, decoding triangle by triangle where planefmt jumps
-pointers over arrays).
+part, the shell trees of pln-3 §8.10 (pln.md §9.11), by the session that wrote
+planefmt's (from the spec text, decoding triangle by triangle where planefmt
+jumps pointers over arrays).  Its mETA part (pln.md §10.3, ancillary metadata
+of any version) was added with that section, from its text; a valid file's
+JSON lists the chunks as "metadata": {keyword: value}.
 
 It checks everything a reader must check without decoding geometry
 (signature, chunk framing, CRC-32, header, plane table in every coding,
@@ -46,7 +48,12 @@ TRAILING_DATA here.
 
 Section numbers below are those of spec/pln-1.md; "pln-2 §x" and "pln-3 §x"
 mark a section of spec/pln-2.md or spec/pln-3.md (which use the section
-numbers of pln-1).
+numbers of pln-1), the documents it was written from, kept as history.
+Four places follow spec/pln.md, the one document that replaced them, where
+this reader had read the old text otherwise (each marked "pln.md §x"): the
+h range and widths of codings 0 and 1 are ignored, not checked; a zlib
+stream that the stored bytes end inside is SIZE_MISMATCH; and a version 2
+group's references are all read before any is checked.
 
 Usage:
     python conformance/independent/plnread.py FILE.pln
@@ -87,7 +94,11 @@ LIMIT_OBJECTS = 2**24
 
 READ_BLOCK = 1 << 20  # payloads are read in bounded blocks (§4.1)
 
-KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"iNDX", b"PEND"}
+KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
+
+# pln.md §10.3: a keyword is 1-79 bytes of 0x21-0x7E; the values of the keywords it defines
+META_KEYWORD_MAX = 79
+META_VALUES = {"up_axis": ("Y", "Z")}
 
 FLAG_LOSSY, FLAG_COUNTS_KNOWN, FLAG_BBOX_KNOWN = 1, 2, 4  # §5
 OBJ_HAS_TRANSFORM = 1  # §8.1
@@ -306,10 +317,11 @@ def decompress(method, raw_size, stored, what):
     if len(out) > raw_size:
         raise PlnError("SIZE_MISMATCH", "%s: inflates to more than raw size %d" % (what, raw_size))
     if not d.eof:
+        # pln.md §6 step 5: a stream the stored bytes end inside (no error from
+        # the inflater on what it consumed) is SIZE_MISMATCH, however much it
+        # inflated to; an error the inflater reports is BAD_COMPRESSION
         if len(out) < raw_size:
-            raise PlnError("BAD_COMPRESSION", "%s: zlib stream ends early" % what)
-        # exactly raw_size bytes so far but the stream is not finished: see
-        # whether it would produce more (SIZE_MISMATCH) or is cut (BAD_COMPRESSION)
+            raise PlnError("SIZE_MISMATCH", "%s: zlib stream ends early" % what)
         try:
             more = d.decompress(d.unconsumed_tail, 1)
         except zlib.error as e:
@@ -317,7 +329,7 @@ def decompress(method, raw_size, stored, what):
         if more:
             raise PlnError("SIZE_MISMATCH", "%s: inflates to more than raw size %d" % (what, raw_size))
         if not d.eof:
-            raise PlnError("BAD_COMPRESSION", "%s: zlib stream ends early" % what)
+            raise PlnError("SIZE_MISMATCH", "%s: zlib stream ends early" % what)
     if len(out) != raw_size:
         raise PlnError(
             "SIZE_MISMATCH", "%s: inflates to %d bytes, raw size %d" % (what, len(out), raw_size)
@@ -347,6 +359,7 @@ class Reader:
         self.groups = []  # JSON dicts
         self.group_refcounts = []
         self.colours = []
+        self.metadata = {}
         self.findings = []
         self.chunk_list = []  # (offset, type, ordinal) of OBJT, PLNS, GRUP
         self.index_offset = None  # offset of the iNDX chunk, if seen
@@ -442,6 +455,8 @@ class Reader:
                     self.read_group(payload, offset)
                 elif ctype == b"cOLR":
                     self.read_colours(payload)
+                elif ctype == b"mETA":
+                    self.read_metadata(payload)
                 elif ctype == b"iNDX":
                     self.read_index(payload, offset)
                 elif ctype[0] & 0x20:
@@ -497,8 +512,14 @@ class Reader:
             for w in (bn, bp, bh):
                 if not 1 <= w <= 32:
                     raise PlnError("UNSUPPORTED_CODING", "quantized width %d outside 1-32" % w)
-        if not (math.isfinite(h_min) and math.isfinite(h_max)) or h_min > h_max:
-            raise PlnError("BAD_HEADER_VALUE", "h range [%r, %r]" % (h_min, h_max))
+        # pln.md §5: the h range exists for codings 2 and 3 only; otherwise
+        # it and the widths are ignored (pln.md §2.1), whatever they hold
+        if coding in (CODING_QUANTIZED, CODING_PREDICTED):
+            if not (math.isfinite(h_min) and math.isfinite(h_max)) or h_min > h_max:
+                raise PlnError("BAD_HEADER_VALUE", "h range [%r, %r]" % (h_min, h_max))
+        else:
+            bn = bp = bh = 0
+            h_min = h_max = 0.0
         if units > 7:
             raise PlnError("BAD_HEADER_VALUE", "units %d" % units)
         if flags & FLAG_BBOX_KNOWN:
@@ -857,8 +878,9 @@ class Reader:
         n_planes = len(self.planes)
         refs = []
         r = 0
-        for i in range(m):
-            d = c.varint("reference difference %d" % i)
+        # pln.md §9.2: all m differences are read (BAD_PAYLOAD) before any is checked
+        diffs = [c.varint("reference difference %d" % i) for i in range(m)]
+        for i, d in enumerate(diffs):
             if d >= n_planes or r + d >= n_planes:
                 raise PlnError("BAD_PLANE_REFERENCE",
                                "reference %d: %d + difference %d, %d planes defined"
@@ -1281,6 +1303,28 @@ class Reader:
         rgba = [list(p[8 + 4 * i:12 + 4 * i]) for i in range(count)]
         self.colours.append({"group": group, "rgba": rgba})
 
+    # -- pln.md §10.3 metadata ---------------------------------------------
+
+    def read_metadata(self, p):
+        if self.chunk_list:
+            raise PlnError("BAD_METADATA", "mETA after an OBJT, PLNS or GRUP chunk")
+        nul = p.find(b"\x00")
+        if nul < 0:
+            raise PlnError("BAD_METADATA", "mETA without a 0x00 after its keyword")
+        keyword = p[:nul]
+        if not 1 <= len(keyword) <= META_KEYWORD_MAX or any(c < 0x21 or c > 0x7E for c in keyword):
+            raise PlnError("BAD_METADATA", "mETA keyword %r is not 1-79 printable ASCII bytes" % keyword)
+        try:
+            value = p[nul + 1:].decode("utf-8")
+        except UnicodeDecodeError:
+            raise PlnError("BAD_METADATA", "mETA value is not UTF-8")
+        key = keyword.decode("ascii")
+        if key in self.metadata:
+            raise PlnError("BAD_METADATA", "a second mETA %s" % key)
+        if key in META_VALUES and value not in META_VALUES[key]:
+            raise PlnError("BAD_METADATA", "mETA %s = %r" % (key, value))
+        self.metadata[key] = value
+
     # -- §8.6 index --------------------------------------------------------
 
     def read_index(self, p, offset):
@@ -1357,6 +1401,7 @@ class Reader:
             "objects": self.objects,
             "groups": self.groups,
             "colours": self.colours,
+            "metadata": self.metadata,
             "findings": self.findings,
             "geometry": None,
         }

@@ -59,7 +59,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--compress", action=argparse.BooleanOptionalAction, default=True,
                    help="deflate plane and group payloads where that saves bytes (spec §6; the default)")
     g.add_argument("--compact", action=argparse.BooleanOptionalAction, default=True,
-                   help="write version 3.0 (spec/pln-3.md; the default): bit-packed or predicted plane codes, "
+                   help="write version 3.0 (spec/pln.md; the default): bit-packed or predicted plane codes, "
                         "whichever is smaller, varint group bodies and chunk heads. --no-compact writes version "
                         "1.0, for readers of 1.x only")
     g.add_argument("--allow-open", action="store_true",

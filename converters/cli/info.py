@@ -13,7 +13,7 @@ import sys
 from collections import Counter
 
 from planefmt import errors, reader, salvage
-from planefmt.model import GroupKind, ObjectRecord, PartGroup, PlaneBlock
+from planefmt.model import GroupKind, Metadata, ObjectRecord, PartGroup, PlaneBlock
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -38,9 +38,12 @@ class _Summary:
         self.bounding = 0
         self.planes = 0
         self.groups = 0
+        self.metadata: dict[str, str] = {}
 
     def add(self, rec) -> None:
-        if isinstance(rec, ObjectRecord):
+        if isinstance(rec, Metadata):
+            self.metadata[rec.key] = rec.value
+        elif isinstance(rec, ObjectRecord):
             self.objects[rec.index] = {
                 "index": rec.index, "name": rec.name, "parent": rec.parent,
                 "transform": None if rec.transform is None else rec.transform.tolist(), "groups": 0}
@@ -94,6 +97,7 @@ def _render_dict(name: str, h, summary: _Summary, chunks: dict, file_bytes: int 
             "bits_nu": q.bits_nu, "bits_phi": q.bits_phi, "bits_h": q.bits_h,
             "h_min": q.h_min, "h_max": q.h_max},
         "units": h.units.name.lower(),
+        "metadata": summary.metadata,
         "bbox": None if h.bbox is None else h.bbox.tolist(),
         "tolerance": _num(h.tolerance),
         "error_bound": _num(h.error_bound),
@@ -149,6 +153,7 @@ def render(info: dict) -> str:
         f"version:     {info['version']}   {'lossy' if info['lossy'] else 'lossless'}",
         f"coding:      {coding}",
         f"units:       {info['units']}",
+        *([f"metadata:    {', '.join(f'{k}={v}' for k, v in info['metadata'].items())}"] if info["metadata"] else []),
         f"bbox:        {info['bbox'] if info['bbox'] is not None else '-'}",
         f"error:       requested {tol}, verified {bound} (fraction of the bbox diagonal)",
         f"planes:      {info['planes']}",

@@ -1,0 +1,862 @@
+#!/usr/bin/env python3
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0, 3.1, 3.2), written from
+spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
+
+    python conformance/independent/plnspec.py FILE
+
+prints one JSON object in the form of conformance/README.md ("The contract"): the file's
+header, plane table, objects, part-group records, colours, metadata and findings, and exits 0; or
+prints {"error": "CODE"} and exits 1. It does not decode geometry ("geometry": null).
+
+Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
+comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import struct
+import sys
+import zlib
+
+import numpy as np
+
+SIGNATURE = b"\x89PLN\r\n\x1a\n"
+
+# §12.4: this reader's limits (the same values as the defaults the spec quotes).
+CHUNK_LIMIT = 256 * 1024 * 1024
+PAYLOAD_LIMIT = 256 * 1024 * 1024
+RATIO_LIMIT = 1100
+PLANE_LIMIT = 1 << 28
+REF_LIMIT = 1 << 24
+OBJECT_LIMIT = 1 << 24
+
+KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
+# §10.3: the values of the keywords the spec defines
+META_VALUES = {"up_axis": ("Y", "Z")}
+NEWEST_MINOR = {1: 0, 2: 0, 3: 2}  # §9.3: "for this document: 1.0, 2.0, 3.2"
+
+# §7.2: the f32 and f64 values nearest to pi and 2 pi.
+PI_F32 = np.frombuffer(struct.pack("<I", 0x40490FDB), "<f4")[0]
+TWO_PI_F32 = np.frombuffer(struct.pack("<I", 0x40C90FDB), "<f4")[0]
+PI_F64 = struct.unpack("<d", struct.pack("<Q", 0x400921FB54442D18))[0]
+TWO_PI_F64 = struct.unpack("<d", struct.pack("<Q", 0x401921FB54442D18))[0]
+
+V1_IN, V1_OUT = 0xFFFFFFFE, 0xFFFFFFFF  # README: tree tokens in the numbering of version 1.0
+
+
+class PlnError(Exception):
+    def __init__(self, code: str, why: str = ""):
+        super().__init__(f"{code}: {why}" if why else code)
+        self.code = code
+
+
+def fail(code: str, why: str = ""):
+    raise PlnError(code, why)
+
+
+# ---------------------------------------------------------------------------------------------
+# §2: a cursor over a payload or body; running off its end is BAD_PAYLOAD.
+
+class Cursor:
+    def __init__(self, buf: bytes, pos: int = 0, end: int | None = None):
+        self.buf = buf
+        self.pos = pos
+        self.end = len(buf) if end is None else end
+
+    def left(self) -> int:
+        return self.end - self.pos
+
+    def take(self, n: int, what: str = "field") -> bytes:
+        if n < 0 or n > self.end - self.pos:
+            fail("BAD_PAYLOAD", f"ends inside {what}")
+        out = self.buf[self.pos:self.pos + n]
+        self.pos += n
+        return out
+
+    def unpack(self, fmt: str, what: str = "field"):
+        size = struct.calcsize(fmt)
+        return struct.unpack(fmt, self.take(size, what))
+
+    def u8(self, what="u8") -> int:
+        return self.unpack("<B", what)[0]
+
+    def u16(self, what="u16") -> int:
+        return self.unpack("<H", what)[0]
+
+    def u32(self, what="u32") -> int:
+        return self.unpack("<I", what)[0]
+
+    def u64(self, what="u64") -> int:
+        return self.unpack("<Q", what)[0]
+
+    def f32(self, what="f32") -> float:
+        return self.unpack("<f", what)[0]
+
+    def f64(self, what="f64") -> float:
+        return self.unpack("<d", what)[0]
+
+    def varint(self, what="varint") -> int:
+        """§2.2: unsigned LEB128, minimal, at most 10 bytes, a tenth byte at most 0x01."""
+        value = 0
+        for i in range(10):
+            if self.pos >= self.end:
+                fail("BAD_PAYLOAD", f"ends inside {what}")
+            b = self.buf[self.pos]
+            self.pos += 1
+            value |= (b & 0x7F) << (7 * i)
+            if not b & 0x80:
+                if i > 0 and b == 0:
+                    fail("BAD_PAYLOAD", f"{what} not minimal")
+                if i == 9 and b > 1:
+                    fail("BAD_PAYLOAD", f"{what} of 2^64 or more")
+                return value
+        fail("BAD_PAYLOAD", f"{what} longer than 10 bytes")
+
+    def varint32(self, what="varint32") -> int:
+        value = self.varint(what)
+        if value >= 1 << 32:
+            fail("BAD_PAYLOAD", f"{what} of 2^32 or more")
+        return value
+
+    def varints(self, n: int, what: str) -> list[int]:
+        return [self.varint(what) for _ in range(n)]
+
+
+def unzigzag(z: int) -> int:
+    return z >> 1 if not z & 1 else -((z + 1) >> 1)
+
+
+def bit_string(data: bytes, nbits: int, what: str) -> list[int]:
+    """§2.1: bits least significant first; a set padding bit is BAD_PAYLOAD."""
+    bits = [(data[k >> 3] >> (k & 7)) & 1 for k in range(len(data) * 8)]
+    if any(bits[nbits:]):
+        fail("BAD_PAYLOAD", f"a set padding bit in {what}")
+    return bits[:nbits]
+
+
+def none_if_nan(x: float):
+    return None if math.isnan(x) else x
+
+
+# ---------------------------------------------------------------------------------------------
+# §6: compression
+
+def decompress(method: int, raw_size: int, stored: bytes) -> bytes:
+    if method not in (0, 1):
+        fail("BAD_COMPRESSION", f"method {method}")
+    if raw_size > PAYLOAD_LIMIT:
+        fail("LIMIT_EXCEEDED", f"raw size {raw_size}")
+    if method == 0:
+        if len(stored) != raw_size:
+            fail("SIZE_MISMATCH", f"stored {len(stored)} bytes, raw size {raw_size}")
+        return stored
+    if raw_size > RATIO_LIMIT * len(stored):
+        fail("LIMIT_EXCEEDED", f"raw size {raw_size} from {len(stored)} stored bytes")
+    inflater = zlib.decompressobj()
+    try:
+        out = inflater.decompress(stored, raw_size + 1)  # never more than raw size + 1 bytes
+    except zlib.error as exc:
+        fail("BAD_COMPRESSION", str(exc))
+    if len(out) > raw_size:
+        fail("SIZE_MISMATCH", "inflates to more than raw size")
+    if not inflater.eof:
+        fail("SIZE_MISMATCH", "the stored bytes end inside the zlib stream")
+    if inflater.unused_data:
+        fail("SIZE_MISMATCH", "stored bytes after the zlib stream")
+    if len(out) != raw_size:
+        fail("SIZE_MISMATCH", f"inflates to {len(out)} bytes, raw size {raw_size}")
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+
+class Reader:
+    def __init__(self, data: bytes):
+        self.data = data
+        self.findings: list[str] = []
+        self.header: dict | None = None
+        self.major = self.minor = 0
+        self.coding = 0
+        self.bits = (0, 0, 0)
+        self.h_range = (0.0, 0.0)
+        self.counts: dict | None = None
+        self.phdr_length = 0
+        self.planes: list[list[float]] = []
+        self.objects: list[dict] = []
+        self.groups: list[dict] = []
+        self.group_refs: list[int] = []  # ref_count of every group read, skipped ones included
+        self.colours: list[dict] = []
+        self.metadata: dict[str, str] = {}
+        self.chunks: list[tuple[int, bytes, int]] = []  # (offset, type, ordinal) of OBJT/PLNS/GRUP
+        self.index_offset: int | None = None
+
+    def finding(self, code: str):
+        if code not in self.findings:
+            self.findings.append(code)
+
+    # §3
+    def signature(self):
+        d = self.data
+        if len(d) < 8 and SIGNATURE.startswith(d):
+            fail("TRUNCATED", "inside the signature")
+        if d[:8] == SIGNATURE:
+            return
+        if d[1:4] == b"PLN" and d[0] in (0x89, 0x09):  # SPEC_NOTES 1: §3's rule, literally
+            fail("TEXT_MODE_DAMAGE")
+        fail("BAD_SIGNATURE")
+
+    # §4
+    def read(self) -> dict:
+        self.signature()
+        d = self.data
+        pos = 8
+        after_index = False
+        while True:
+            offset = pos
+            # §4.1 framing
+            if len(d) - pos < 8:
+                fail("TRUNCATED", "no PEND" if pos == len(d) else "inside a chunk head")
+            ctype = d[pos:pos + 4]
+            if not all(0x41 <= b <= 0x5A or 0x61 <= b <= 0x7A for b in ctype):
+                fail("BAD_CHUNK_TYPE", repr(ctype))
+            length = struct.unpack_from("<I", d, pos + 4)[0]
+            if length > 0x7FFFFFFF:
+                fail("CHUNK_TOO_LONG", str(length))
+            if length > CHUNK_LIMIT:
+                fail("LIMIT_EXCEEDED", f"chunk length {length}")
+            if len(d) - pos - 8 < length + 4:
+                fail("TRUNCATED", f"inside {ctype!r}")
+            payload = d[pos + 8:pos + 8 + length]
+            crc = struct.unpack_from("<I", d, pos + 8 + length)[0]
+            if zlib.crc32(ctype + payload) != crc:
+                fail("CRC_MISMATCH", repr(ctype))
+            pos += 12 + length
+            # §4.3 place, in the order of §12.1 item 3.2
+            if self.header is None and ctype != b"PHDR":  # SPEC_NOTES 2: ancillary ones too
+                fail("MISSING_HEADER", repr(ctype))
+            if after_index and ctype != b"PEND":
+                fail("CHUNK_ORDER", f"{ctype!r} after iNDX")
+            if ctype == b"PHDR" and self.header is not None:
+                fail("DUPLICATE_HEADER")
+            if ctype not in KNOWN_CHUNKS and not ctype[0] & 0x20:
+                fail("UNKNOWN_CRITICAL_CHUNK", repr(ctype))
+            # payload
+            if ctype == b"PHDR":
+                self.phdr(payload)
+                self.phdr_length = length
+            elif ctype == b"OBJT":
+                self.objt(payload, offset)
+            elif ctype == b"PLNS":
+                self.plns(payload, offset)
+            elif ctype == b"GRUP":
+                self.grup(payload, offset)
+            elif ctype == b"cOLR":
+                self.colr(payload)
+            elif ctype == b"mETA":
+                self.meta(payload)
+            elif ctype == b"iNDX":
+                self.indx(payload, offset)
+                self.index_offset = offset
+                after_index = True
+            elif ctype == b"PEND":
+                self.pend(payload)
+                if pos != len(d):
+                    fail("TRAILING_DATA", f"{len(d) - pos} bytes after PEND")
+                return self.result()
+            else:
+                self.finding("UNKNOWN_ANCILLARY_CHUNK")
+
+    # §5 and A.1
+    def phdr(self, p: bytes):
+        if len(p) < 2:
+            fail("BAD_PAYLOAD", "PHDR under 2 bytes")
+        major, minor = p[0], p[1]
+        if major not in (1, 2, 3):
+            fail("UNSUPPORTED_VERSION", f"{major}.{minor}")
+        self.major, self.minor = major, minor
+        if major == 3:
+            self.phdr_v3(p)
+        else:
+            self.phdr_v1(p)
+        if minor > NEWEST_MINOR[major]:
+            self.finding("NEWER_MINOR_VERSION")
+
+    def phdr_v3(self, p: bytes):
+        if len(p) < 9:
+            fail("BAD_PAYLOAD", "PHDR under 9 bytes")
+        c = Cursor(p, 2)
+        flags = c.u16()
+        coding = c.u8()
+        if coding > 3:
+            fail("UNSUPPORTED_CODING", str(coding))
+        bits = tuple(c.take(3))
+        units = c.u8()
+        h_range = (c.f64("h_min"), c.f64("h_max")) if coding >= 2 else None
+        bbox = [c.f32("bbox") for _ in range(6)] if flags & 4 else None
+        tolerance = c.f32("tolerance")
+        error_bound = c.f32("error_bound")
+        counts = None
+        if flags & 2:
+            counts = {"planes": c.varint("plane_count"), "objects": c.varint32("object_count"),
+                      "groups": c.varint32("group_count")}
+        self.header_checks(flags, coding, bits, units, h_range, bbox, tolerance, error_bound, counts)
+
+    def phdr_v1(self, p: bytes):
+        # A.1: at least 108 bytes, after the version check; the coding check (SPEC_NOTES 4: after
+        # the length, as in §5 steps 3-4), then §5 steps 6-9.
+        if len(p) < 108:
+            fail("BAD_PAYLOAD", "version 1/2 PHDR under 108 bytes")
+        c = Cursor(p, 2)
+        flags = c.u16()
+        coding = c.u8()
+        if coding > (2 if self.major == 1 else 3):  # A.2: version 2 adds coding 3
+            fail("UNSUPPORTED_CODING", str(coding))
+        bits = tuple(c.take(3))
+        units = c.u8()
+        c.take(3)  # reserved
+        h_range = (c.f64(), c.f64())
+        bbox = [c.f64() for _ in range(6)]
+        tolerance, error_bound = c.f64(), c.f64()
+        plane_count = c.u64()
+        object_count, group_count = c.u32(), c.u32()
+        counts = {"planes": plane_count, "objects": object_count, "groups": group_count} \
+            if flags & 2 else None
+        self.header_checks(flags, coding, bits, units, h_range if coding >= 2 else None,
+                           bbox if flags & 4 else None, tolerance, error_bound, counts)
+
+    def header_checks(self, flags, coding, bits, units, h_range, bbox, tolerance, error_bound, counts):
+        if coding >= 2:
+            if any(not 1 <= b <= 32 for b in bits):
+                fail("UNSUPPORTED_CODING", f"widths {bits}")
+            if not all(math.isfinite(h) for h in h_range) or h_range[0] > h_range[1]:
+                fail("BAD_HEADER_VALUE", f"h range {h_range}")
+            if not math.isfinite(h_range[1] - h_range[0]):  # SPEC_NOTES 9: a range too wide for §7.3
+                fail("BAD_HEADER_VALUE", f"h range {h_range}: h_max - h_min overflows")
+        if units > 7:
+            fail("BAD_HEADER_VALUE", f"units {units}")
+        if bbox is not None:
+            if not all(math.isfinite(v) for v in bbox) or any(bbox[i] > bbox[i + 3] for i in range(3)):
+                fail("BAD_HEADER_VALUE", f"bbox {bbox}")
+        for name, v in (("tolerance", tolerance), ("error_bound", error_bound)):
+            if not (math.isnan(v) or (math.isfinite(v) and v >= 0)):
+                fail("BAD_HEADER_VALUE", f"{name} {v}")
+        self.coding = coding
+        self.bits = bits if coding >= 2 else (0, 0, 0)
+        self.h_range = h_range if coding >= 2 else (0.0, 0.0)
+        self.counts = counts
+        self.header = {
+            "version": [self.major, self.minor],
+            "lossy": bool(flags & 1),
+            "coding": coding,
+            "bits": list(self.bits),
+            "h_range": list(self.h_range),
+            "units": units,
+            "bbox": [bbox[:3], bbox[3:]] if bbox is not None else None,
+            "tolerance": none_if_nan(tolerance),
+            "error_bound": none_if_nan(error_bound),
+            "counts": counts,
+        }
+
+    # §7
+    def plns(self, p: bytes, offset: int):
+        c = Cursor(p)
+        if self.major == 3:
+            first = c.varint("first")
+            count = c.varint32("count")
+            method = c.u8("compression")
+            raw_size = c.varint32("raw_size")
+        else:  # A.1: a 20-byte head
+            if len(p) < 20:
+                fail("BAD_PAYLOAD", "PLNS head under 20 bytes")
+            first, count, method = c.u64(), c.u32(), c.u8()
+            c.take(3)
+            raw_size = c.u32()
+        if first != len(self.planes):
+            fail("PLANE_INDEX_MISMATCH", f"first {first}, {len(self.planes)} planes before")
+        if first + count > PLANE_LIMIT:
+            fail("LIMIT_EXCEEDED", f"{first + count} planes")
+        coding = self.coding
+        if coding == 0:
+            ok = raw_size == 12 * count
+        elif coding == 1:
+            ok = raw_size == 24 * count
+        elif coding == 2:
+            ok = raw_size == (count * sum(self.bits) + 7) // 8
+        else:
+            ok = 3 * count <= raw_size <= 15 * count
+        if not ok:
+            fail("SIZE_MISMATCH", f"raw size {raw_size} for {count} planes")
+        raw = decompress(method, raw_size, p[c.pos:])
+        if coding in (0, 1):
+            planes = self.float_planes(raw, count, coding)
+        elif coding == 2:
+            planes = self.quantized_planes(raw, count)
+        else:
+            planes = self.predicted_planes(raw, count)
+        self.chunks.append((offset, b"PLNS", first))
+        self.planes.extend(planes)
+
+    @staticmethod
+    def float_planes(raw: bytes, count: int, coding: int) -> list[list[float]]:
+        """§7.2"""
+        if coding == 0:
+            a = np.frombuffer(raw, "<f4").reshape(count, 3)
+            pi, two_pi = PI_F32, TWO_PI_F32
+        else:
+            a = np.frombuffer(raw, "<f8").reshape(count, 3)
+            pi, two_pi = PI_F64, TWO_PI_F64
+        with np.errstate(invalid="ignore"):
+            if not np.isfinite(a).all():
+                fail("BAD_TRIPLET", "a value not finite")
+            nu, phi = a[:, 0], a[:, 1]
+            if not ((nu >= 0) & (nu <= pi) & (phi >= 0) & (phi < two_pi)).all():
+                fail("BAD_TRIPLET", "nu or phi out of range")
+        return a.astype(np.float64).tolist()
+
+    def dequantize(self, qn, qp, qh) -> list[list[float]]:
+        """§7.3, in binary64: nu = q * (pi / M), phi = q * (2 pi / N), h = h_min + q * (range / M_h)."""
+        bn, bp, bh = self.bits
+        m_nu, n_phi, m_h = 2 ** (bn - 1), 2 ** bp, 2 ** bh - 1
+        h_min, h_max = self.h_range
+        nu = np.asarray(qn, np.float64) * (math.pi / m_nu)
+        phi = np.asarray(qp, np.float64) * (2 * math.pi / n_phi)
+        h = h_min + np.asarray(qh, np.float64) * ((h_max - h_min) / m_h)
+        return np.stack([nu, phi, h], axis=1).tolist() if len(nu) else []
+
+    def quantized_planes(self, raw: bytes, count: int) -> list[list[float]]:
+        """§7.3: a bit string of count records (q_nu, q_phi, q_h), a padding bit before a code."""
+        bn, bp, bh = self.bits
+        width = bn + bp + bh
+        bits = np.unpackbits(np.frombuffer(raw, np.uint8), bitorder="little")
+        if bits[count * width:].any():
+            fail("BAD_PAYLOAD", "a set padding bit in quantized planes")
+        rec = bits[:count * width].reshape(count, width).astype(np.uint64)
+
+        def field(lo, n):
+            weights = np.left_shift(np.uint64(1), np.arange(n, dtype=np.uint64))
+            return (rec[:, lo:lo + n] * weights).sum(axis=1, dtype=np.uint64)
+
+        qn, qp, qh = field(0, bn), field(bn, bp), field(bn + bp, bh)
+        if (qn > np.uint64(2 ** (bn - 1))).any():
+            fail("BAD_TRIPLET", "a nu code above M_nu")
+        return self.dequantize(qn, qp, qh)
+
+    def predicted_planes(self, raw: bytes, count: int) -> list[list[float]]:
+        """§7.4, checks in its order, each over the whole block before the next (SPEC_NOTES 5)."""
+        c = Cursor(raw)
+        streams = [c.varints(count, "predicted plane data") for _ in range(3)]
+        if c.left():
+            fail("SIZE_MISMATCH", f"{c.left()} bytes after the predicted varints")
+        if any(v >= 1 << 33 for s in streams for v in s):
+            fail("BAD_PAYLOAD", "a predicted varint of 2^33 or more")
+        bn, bp, bh = self.bits
+        m_nu, n_phi, m_h = 2 ** (bn - 1), 2 ** bp, 2 ** bh - 1
+        qn, qp, qh = [], [], []
+        a = b = h = 0
+        for i in range(count):
+            prev_a, prev_b = a, b
+            a = prev_a + unzigzag(streams[0][i])
+            same_a = i > 0 and a == prev_a
+            b = prev_b + unzigzag(streams[1][i]) if same_a else streams[1][i]
+            same_b = same_a and b == prev_b
+            h = h + unzigzag(streams[2][i]) if same_b else streams[2][i]
+            if not (0 <= a <= m_nu and 0 <= b <= n_phi - 1 and 0 <= h <= m_h):
+                fail("BAD_TRIPLET", f"predicted plane {i}: codes {a}, {b}, {h}")
+            qn.append(a)
+            qp.append(b)
+            qh.append(h)
+        return self.dequantize(qn, qp, qh)
+
+    # §8 and A.1
+    def objt(self, p: bytes, offset: int):
+        if len(self.objects) >= OBJECT_LIMIT:
+            fail("LIMIT_EXCEEDED", "objects")
+        c = Cursor(p)
+        if self.major == 3:
+            index = c.varint32("index")
+            parent = c.varint32("parent")
+            flags = c.u8("flags")
+            name_length = c.varint("name_length")
+            if name_length > 65535:
+                fail("BAD_OBJECT", f"name_length {name_length}")
+            parent = None if parent == 0 else parent - 1
+        else:
+            index, parent, flags = c.u32("index"), c.u32("parent"), c.u8("flags")
+            c.u8("reserved")
+            name_length = c.u16("name_length")
+            parent = None if parent == 0xFFFFFFFF else parent
+        name = c.take(name_length, "the name")
+        transform = [c.f64("the transform") for _ in range(16)] if flags & 1 else None
+        n = len(self.objects)
+        if index != n:
+            fail("BAD_OBJECT", f"index {index}, {n} objects before")
+        if parent is not None and parent >= n:
+            fail("BAD_OBJECT", f"parent {parent} not an earlier object")
+        try:
+            name = name.decode("utf-8")
+        except UnicodeDecodeError:
+            fail("BAD_OBJECT", "name not UTF-8")
+        if transform is not None:
+            if not all(math.isfinite(v) for v in transform) or transform[12:] != [0.0, 0.0, 0.0, 1.0]:
+                fail("BAD_OBJECT", f"transform {transform}")
+        self.chunks.append((offset, b"OBJT", index))
+        self.objects.append({"name": name, "parent": parent, "transform": transform})
+
+    # §9
+    def kinds(self) -> set[int]:
+        if self.major == 3:
+            return set(range(5 + min(self.minor, 2)))
+        return set(range(5))
+
+    def grup(self, p: bytes, offset: int):
+        c = Cursor(p)
+        if self.major == 3:
+            index = c.varint32("index")
+            obj = c.varint32("object")
+            kind = c.u8("kind")
+            method = c.u8("compression")
+            raw_size = c.varint32("raw_size")
+        else:  # A.1: a 16-byte head
+            if len(p) < 16:
+                fail("BAD_PAYLOAD", "GRUP head under 16 bytes")
+            index, obj, kind, method = c.u32(), c.u32(), c.u8(), c.u8()
+            c.take(2)
+            raw_size = c.u32()
+        if index != len(self.groups):
+            fail("GROUP_INDEX_MISMATCH", f"index {index}, {len(self.groups)} groups before")
+        if obj >= len(self.objects):
+            fail("BAD_OBJECT_REFERENCE", f"object {obj}, {len(self.objects)} defined")
+        skipped = False
+        if kind not in self.kinds():
+            if self.minor <= NEWEST_MINOR[self.major]:
+                fail("UNKNOWN_GROUP_KIND", f"kind {kind} in {self.major}.{self.minor}")
+            skipped = True
+        body = decompress(method, raw_size, p[c.pos:])  # skipped kinds too (SPEC_NOTES 12)
+        b = Cursor(body)
+        if self.major == 1:
+            refs, roles = self.common_body_v1(b)
+        else:
+            refs, roles = self.common_body(b)
+        group = {"index": index, "object": obj, "kind": kind, "refs": refs,
+                 "bounding": [i for i, r in enumerate(roles) if r]}
+        if skipped:
+            self.finding("SKIPPED_GROUP_KIND")
+        elif kind in (0, 3, 4):
+            if b.left():
+                fail("BAD_PAYLOAD", f"kind data after the roles of kind {kind}")
+        elif kind == 1:
+            group["cells"] = self.cells_v1(b, len(refs)) if self.major == 1 else self.cells(b, len(refs))
+        elif kind == 2:
+            group["tree"] = self.tree_v1(b, len(refs)) if self.major == 1 else self.tree(b, len(refs))
+        elif kind == 5:
+            group.update(self.sealed(b, refs, roles))
+        elif kind == 6:
+            group["shell"] = self.shell(b, refs, roles)
+        self.chunks.append((offset, b"GRUP", index))
+        self.groups.append(group)
+        self.group_refs.append(len(refs))
+
+    def common_body(self, b: Cursor) -> tuple[list[int], list[int]]:
+        """§9.2 (versions 2 and 3)."""
+        m = b.varint("ref_count")
+        if m > REF_LIMIT:
+            fail("LIMIT_EXCEEDED", f"ref_count {m}")
+        if m == 0:
+            fail("BAD_GROUP_STRUCTURE", "ref_count 0")
+        diffs = b.varints(m, "the references")
+        n = len(self.planes)
+        refs, total = [], 0
+        for d in diffs:
+            if d >= n:
+                fail("BAD_PLANE_REFERENCE", f"difference {d}, {n} planes defined")
+            total += d
+            if total >= n:
+                fail("BAD_PLANE_REFERENCE", f"reference {total}, {n} planes defined")
+            refs.append(total)
+        roles = bit_string(b.take((m + 7) // 8, "the roles"), m, "the roles")
+        return refs, roles
+
+    def common_body_v1(self, b: Cursor) -> tuple[list[int], list[int]]:
+        """A.1: u32 references in any order."""
+        if b.left() < 4:
+            fail("BAD_PAYLOAD", "body under 4 bytes")
+        m = b.u32()
+        if m > REF_LIMIT:
+            fail("LIMIT_EXCEEDED", f"ref_count {m}")
+        if b.left() < 4 * m + (m + 7) // 8:
+            fail("BAD_PAYLOAD", "body shorter than its references and roles")
+        if m == 0:
+            fail("BAD_GROUP_STRUCTURE", "ref_count 0")
+        refs = list(struct.unpack(f"<{m}I", b.take(4 * m)))
+        n = len(self.planes)
+        for r in refs:
+            if r >= n:
+                fail("BAD_PLANE_REFERENCE", f"reference {r}, {n} planes defined")
+        roles = bit_string(b.take((m + 7) // 8), m, "the roles")
+        return refs, roles
+
+    # §9.6
+    def cells(self, b: Cursor, m: int) -> list[list[int]]:
+        kind_size = b.left()
+        c = b.varint("cell_count")
+        if c > b.left() or c > REF_LIMIT:  # SPEC_NOTES 6 (bytes after cell_count), 8 (the code)
+            fail("BAD_GROUP_STRUCTURE", f"cell_count {c}")
+        sizes = b.varints(c, "the cell sizes")
+        if c == 0 or 0 in sizes:
+            fail("BAD_GROUP_STRUCTURE", "no cell, or an empty cell")
+        if any(s > kind_size for s in sizes) or sum(sizes) > b.left():  # SPEC_NOTES 7
+            fail("BAD_GROUP_STRUCTURE", "cell sizes above the bytes left")
+        cells = [b.varints(s, "the cell entries") for s in sizes]
+        if b.left():
+            fail("BAD_GROUP_STRUCTURE", "bytes after the cell entries")
+        if any(e >> 1 >= m for cell in cells for e in cell):
+            fail("BAD_GROUP_STRUCTURE", "an entry on a reference >= m")
+        return cells
+
+    def cells_v1(self, b: Cursor, m: int) -> list[list[int]]:
+        c = b.u32("cell_count")  # SPEC_NOTES 11: no limit but the body's size
+        sizes = list(struct.unpack(f"<{c}I", b.take(4 * c, "the cell sizes")))
+        if c == 0 or 0 in sizes:
+            fail("BAD_GROUP_STRUCTURE", "no cell, or an empty cell")
+        if b.left() != 4 * sum(sizes):
+            fail("BAD_GROUP_STRUCTURE", "entries not exactly the cells' sizes")
+        cells = [list(struct.unpack(f"<{s}I", b.take(4 * s))) for s in sizes]
+        if any(e >> 1 >= m for cell in cells for e in cell):
+            fail("BAD_GROUP_STRUCTURE", "an entry on a reference >= m")
+        return cells
+
+    # §9.7
+    @staticmethod
+    def check_tree(tokens: list[int], is_split):
+        slots = 1
+        for k, t in enumerate(tokens):
+            if slots <= 0:
+                fail("BAD_GROUP_STRUCTURE", "tokens after a complete tree")
+            slots += 1 if is_split(t) else -1
+        if slots != 0:
+            fail("BAD_GROUP_STRUCTURE", "not one complete tree")
+
+    def tree(self, b: Cursor, m: int) -> list[int]:
+        t = b.varint("token_count")
+        if t > b.left():  # SPEC_NOTES 6: the bytes after token_count
+            fail("BAD_GROUP_STRUCTURE", f"token_count {t}")
+        tokens = b.varints(t, "the tokens")
+        if b.left():
+            fail("BAD_GROUP_STRUCTURE", "bytes after the tokens")
+        if any(tok > m + 1 for tok in tokens):
+            fail("BAD_GROUP_STRUCTURE", "a split on a reference >= m")
+        self.check_tree(tokens, lambda tok: tok >= 2)
+        return [V1_IN if tok == 0 else V1_OUT if tok == 1 else tok - 2 for tok in tokens]
+
+    def tree_v1(self, b: Cursor, m: int) -> list[int]:
+        t = b.u32("token_count")  # SPEC_NOTES 10: ending inside it is BAD_PAYLOAD
+        tokens = list(struct.unpack(f"<{t}I", b.take(4 * t, "the tokens")))
+        if b.left():
+            fail("BAD_GROUP_STRUCTURE", "bytes after the tokens")
+        if t == 0:
+            fail("BAD_GROUP_STRUCTURE", "no token")
+        for tok in tokens:
+            if 0xFFFFFFF0 <= tok <= 0xFFFFFFFD:
+                fail("BAD_GROUP_STRUCTURE", f"reserved token {tok:#x}")
+            if tok < 0xFFFFFFF0 and tok >= m:
+                fail("BAD_GROUP_STRUCTURE", "a split on a reference >= m")
+        self.check_tree(tokens, lambda tok: tok < 0xFFFFFFF0)
+        return tokens
+
+    # §9.9
+    def sealed(self, b: Cursor, refs: list[int], roles: list[int]) -> dict:
+        m = len(refs)
+        v = b.varint("vertex_count")
+        if v < 3 or 3 * v > b.left():
+            fail("BAD_GROUP_STRUCTURE", f"vertex_count {v}")
+        flat = b.varints(3 * v, "the vertex planes")
+        vertex_planes = [flat[3 * k:3 * k + 3] for k in range(v)]
+        t = b.varint("triangle_count")
+        if t < 1 or 4 * t > b.left():
+            fail("BAD_GROUP_STRUCTURE", f"triangle_count {t}")
+        tri = b.varints(4 * t, "the triangles")
+        if b.left():
+            fail("BAD_GROUP_STRUCTURE", "bytes after the triangles")
+        facets, f, used = [], 0, [False] * v  # f never decreases (SPEC_NOTES 13)
+        for k in range(t):
+            d, i0, i1, i2 = tri[4 * k:4 * k + 4]
+            f += d
+            if f >= m or roles[f]:
+                fail("BAD_GROUP_STRUCTURE", f"triangle {k}: face reference {f}")
+            if max(i0, i1, i2) >= v or len({i0, i1, i2}) < 3:
+                fail("BAD_GROUP_STRUCTURE", f"triangle {k}: vertices {i0, i1, i2}")
+            for i in (i0, i1, i2):
+                used[i] = True
+            facets.append([f, i0, i1, i2])
+        for k, abc in enumerate(vertex_planes):
+            if max(abc) >= m or len(set(abc)) < 3:
+                fail("BAD_GROUP_STRUCTURE", f"vertex {k}: planes {abc}")
+        if not all(used):
+            fail("BAD_GROUP_STRUCTURE", "a vertex on no triangle")
+        return {"vertex_planes": vertex_planes, "facets": facets}
+
+    # §9.10
+    def shell(self, b: Cursor, refs: list[int], roles: list[int]) -> dict:
+        m = len(refs)
+        v = b.varint("corner_count")
+        t = b.varint("triangle_count")
+        u = b.varint("free_count")
+        left = b.left()
+        if v < 3 or v > 8 * left or t < 1 or 3 * t > left or u > t:
+            fail("BAD_GROUP_STRUCTURE", f"counts V={v} T={t} U={u} with {left} bytes left")
+        flags = bit_string(b.take((v + 7) // 8, "the corner flags"), v, "the corner flags")
+        explicit = [k for k in range(v) if flags[k]]
+        e = len(explicit)
+        flat = b.varints(3 * (v - e), "the corner planes")
+        named = [flat[3 * k:3 * k + 3] for k in range(v - e)]
+        origin = step = None
+        steps = []
+        if e:
+            ox, oy, oz, step = struct.unpack("<4d", b.take(32, "the grid"))
+            origin = [ox, oy, oz]
+            steps = b.varints(3 * e, "the coordinates")
+        faces = b.varints(t - u, "the faces")
+        codes = b.varints(3 * t, "the corner codes")
+        if b.left():
+            fail("BAD_GROUP_STRUCTURE", "bytes after the corner codes")
+        # step 5
+        lim = 1 << 52
+        grid, xyz = [], [0, 0, 0]
+        for k in range(e):
+            st = [unzigzag(z) for z in steps[3 * k:3 * k + 3]]
+            xyz = [a + s for a, s in zip(xyz, st)]
+            if any(abs(s) > lim for s in st) or any(abs(a) > lim for a in xyz):
+                fail("BAD_GROUP_STRUCTURE", f"explicit corner {k}: beyond 2^52")
+            grid.append(list(xyz))
+        f, face_refs = 0, []
+        for j, d in enumerate(faces):
+            f += d
+            if f >= m or roles[f]:
+                fail("BAD_GROUP_STRUCTURE", f"planar triangle {j}: face reference {f}")
+            face_refs.append(f)
+        n, corners = 0, []
+        for k, code in enumerate(codes):
+            if code == 0:
+                corners.append(n)
+                n += 1
+            else:
+                if n - code < 0:
+                    fail("BAD_GROUP_STRUCTURE", f"corner code {k} names a corner below 0")
+                corners.append(n - code)
+        for k, abc in enumerate(named):
+            if max(abc) >= m or len(set(abc)) < 3:
+                fail("BAD_GROUP_STRUCTURE", f"named corner {k}: planes {abc}")
+        if e and not (all(math.isfinite(x) for x in origin) and math.isfinite(step) and step > 0):
+            fail("BAD_GROUP_STRUCTURE", f"grid origin {origin}, step {step}")
+        facets = []
+        for j in range(t):
+            tri = corners[3 * j:3 * j + 3]
+            if len(set(tri)) < 3:
+                fail("BAD_GROUP_STRUCTURE", f"triangle {j} names one corner twice")
+            facets.append([face_refs[j] if j < t - u else -1, *tri])
+        if n != v:
+            fail("BAD_GROUP_STRUCTURE", f"{n} corners used of {v}")
+        return {"explicit": explicit, "vertex_planes": named, "grid": grid,
+                "origin": origin, "step": step, "facets": facets}
+
+    # §10.1
+    def colr(self, p: bytes):
+        c = Cursor(p)
+        group, count = c.u32("the cOLR head"), c.u32("the cOLR head")
+        rgba = c.take(4 * count, "the colours")
+        if c.left():
+            fail("BAD_COLOURS", "bytes after the colours")
+        if group >= len(self.groups):
+            fail("BAD_COLOURS", f"group {group} not read yet")
+        if count != self.group_refs[group]:
+            fail("BAD_COLOURS", f"{count} colours for {self.group_refs[group]} references")
+        self.colours.append({"group": group, "rgba": [list(rgba[4 * i:4 * i + 4]) for i in range(count)]})
+
+    # §10.3 (added with that section, from its text)
+    def meta(self, p: bytes):
+        if self.chunks:
+            fail("BAD_METADATA", "mETA after an OBJT, PLNS or GRUP")
+        if b"\x00" not in p:
+            fail("BAD_METADATA", "no 0x00 after the keyword")
+        keyword, value = p.split(b"\x00", 1)
+        if not 1 <= len(keyword) <= 79 or any(b < 0x21 or b > 0x7E for b in keyword):
+            fail("BAD_METADATA", f"keyword {keyword!r}")
+        try:
+            text = value.decode("utf-8")
+        except UnicodeDecodeError:
+            fail("BAD_METADATA", "value not UTF-8")
+        key = keyword.decode("ascii")
+        if key in self.metadata:
+            fail("BAD_METADATA", f"{key} twice")
+        if key in META_VALUES and text not in META_VALUES[key]:
+            fail("BAD_METADATA", f"{key} = {text!r}")
+        self.metadata[key] = text
+
+    # §10.2
+    def indx(self, p: bytes, offset: int):
+        c = Cursor(p)
+        count = c.u32("the index count")
+        raw = c.take(16 * count, "the index entries")
+        if c.left():
+            fail("BAD_INDEX", "bytes after the entries")
+        entries = [struct.unpack_from("<Q4sI", raw, 16 * i) for i in range(count)]
+        lowest = 8 + 12 + self.phdr_length
+        last = -1
+        for off, ctype, ordinal in entries:
+            if off < lowest or off >= offset:
+                fail("BAD_INDEX", f"offset {off} outside [{lowest}, {offset})")
+            if off <= last:
+                fail("BAD_INDEX", "offsets do not increase")
+            last = off
+            if ctype not in (b"OBJT", b"PLNS", b"GRUP"):
+                fail("BAD_INDEX", f"type {ctype!r}")
+        if [tuple(e) for e in entries] != self.chunks:
+            fail("BAD_INDEX", "entries do not match the chunks read")
+
+    # §4.4 and A.1
+    def pend(self, p: bytes):
+        if self.major == 3:
+            if len(p) not in (0, 8):
+                fail("BAD_PAYLOAD", f"PEND of {len(p)} bytes")
+            if len(p) == 8:
+                off = struct.unpack("<Q", p)[0]
+                if off == 0 or off != self.index_offset:
+                    fail("BAD_INDEX", f"PEND index offset {off}")
+        else:
+            if len(p) != 8:
+                fail("BAD_PAYLOAD", f"version {self.major} PEND of {len(p)} bytes")
+            off = struct.unpack("<Q", p)[0]
+            if off != 0 and off != self.index_offset:  # SPEC_NOTES 3: 0 is accepted after an iNDX
+                fail("BAD_INDEX", f"PEND index offset {off}")
+        if self.counts is not None:
+            got = {"planes": len(self.planes), "objects": len(self.objects), "groups": len(self.groups)}
+            if got != self.counts:
+                fail("COUNT_MISMATCH", f"header {self.counts}, file {got}")
+
+    def result(self) -> dict:
+        return {"header": self.header, "planes": self.planes, "objects": self.objects,
+                "groups": self.groups, "colours": self.colours, "metadata": self.metadata,
+                "findings": self.findings,
+                "geometry": None}
+
+
+def main(argv: list[str]) -> int:
+    if len(argv) != 2:
+        print("usage: plnspec.py FILE", file=sys.stderr)
+        return 2
+    with open(argv[1], "rb") as fh:
+        data = fh.read()
+    try:
+        result = Reader(data).read()
+    except PlnError as exc:
+        print(json.dumps({"error": exc.code}))
+        print(str(exc), file=sys.stderr)
+        return 1
+    print(json.dumps(result, allow_nan=False))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
