@@ -21,14 +21,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planefmt.container import records, schema, varint
+from planefmt.container import records, schema, shellfields, varint
 from planefmt.container.chunks import chunk_bytes
 from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization, Units
 
 from . import reference
 from .build import CUBE, SPEC_HEADER, Layout, box, finish, frame, offsets
 from .cases_valid import (IN, L_CELLS, L_PLANES, L_TREE, OUT, SEALED_CUBE_FACETS, SEALED_CUBE_VERTICES, SHELL_CUBE,
-                          SHELL_MIXED, SHELL_PYRAMID)
+                          SHELL_MIXED, SHELL_PYRAMID, TREE_APEX, TREE_CUBE, TREE_MIXED, TREE_PYRAMID)
 
 
 @dataclass(frozen=True)
@@ -721,11 +721,11 @@ def _():
 
 # -- shell groups (spec/pln.md §9.10, version 3.2) ----------------------------------------------
 
-def shell_file(body: bytes, version: tuple[int, int] = (3, 2), colours: bytes | None = None) -> bytes:
-    """The cube of spec/pln-1.md §12 as a version 3.2 file (or ``version``), float64, with a shell group of
-    ``body`` (its references and roles included) in place of the convex one, and a cOLR chunk of
-    ``colours`` after it if given."""
-    group = schema.GroupHead3.build(dict(index=0, object=0, kind=6, compression=0, raw_size=len(body), body=body))
+def shell_file(body: bytes, version: tuple[int, int] = (3, 2), colours: bytes | None = None, kind: int = 6) -> bytes:
+    """The cube of spec/pln-1.md §12 as a version 3.2 file (or ``version``), float64, with a shell group (or
+    a group of ``kind``) of ``body`` (its references and roles included) in place of the convex one, and a
+    cOLR chunk of ``colours`` after it if given."""
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=kind, compression=0, raw_size=len(body), body=body))
     layout = cube(PHDR=header(version=version, coding=Coding.FLOAT64), OBJT=records.encode_object(
         ObjectRecord(0, "cube", None, None), 3), PLNS=records.encode_planes(0, CUBE, V3_F64, False), GRUP=group)
     if colours is not None:
@@ -735,7 +735,7 @@ def shell_file(body: bytes, version: tuple[int, int] = (3, 2), colours: bytes | 
 
 def shell_body(shell=SHELL_CUBE, refs: bytes = b"\x06\x00\x01\x01\x01\x01\x01", roles: bytes = b"\0") -> bytes:
     """A shell group's body: 6 references 0..5 as differences, their roles, the kind data."""
-    return refs + roles + records._shell_body(shell)
+    return refs + roles + shellfields._shell_body(shell)
 
 
 @case("xv3_shell_in_3_1", "UNKNOWN_GROUP_KIND", "a well-formed shell cube (kind 6) in a version 3.1 file, whose "
@@ -764,7 +764,7 @@ def _():
 @case("xv3_shell_flag_padding", "BAD_PAYLOAD", "version 3.2 shell pyramid (5 explicit corners: flags 0x1f) with "
       "padding bit 7 set (flags 0x9f); read as flags, the rest of the body is well formed")
 def _():
-    b = bytearray(records._shell_body(SHELL_PYRAMID))
+    b = bytearray(shellfields._shell_body(SHELL_PYRAMID))
     assert b[3] == 0x1F  # after the three one-byte counts
     b[3] = 0x9F
     return shell_file(b"\x01\x00\0" + bytes(b))
@@ -793,6 +793,130 @@ def _():
       "at least one, shells too")
 def _():
     return shell_file(shell_body(SHELL_PYRAMID, refs=b"\x00", roles=b""))
+
+
+# -- shell trees (spec/pln-3.md §8.10, version 3.3) ----------------------------------------------
+
+CUBE_REFS = b"\x06\x00\x01\x01\x01\x01\x01\0"  # 6 references 0..5 as differences, role bits 0
+
+
+def tree_file(fields: dict[str, bytes], refs: bytes = CUBE_REFS, version: tuple[int, int] = (3, 3)) -> bytes:
+    """The cube file of ``shell_file`` with a shell tree (kind 7) of the body ``fields`` (spec 3.3 §8.10)."""
+    return shell_file(refs + b"".join(fields.values()), version, kind=7)
+
+
+def tree_fields(shell=TREE_CUBE, **changed: bytes) -> dict[str, bytes]:
+    """The fields of ``shell``'s body by name, ``changed`` ones replaced."""
+    return {**shellfields.shell_tree_fields(shell), **changed}
+
+
+def tree_codes(codes: list[int]) -> bytes:
+    return varint.encode(np.array(codes, dtype=np.uint64))
+
+
+#: TREE_CUBE's corner codes: the root's three new corners, then each attached triangle's third.
+CUBE_TREE_CODES = list(varint.decode(shellfields.shell_tree_fields(TREE_CUBE)["codes"], 14, "codes")[0])
+
+
+@case("xv3_tree_in_3_2", "UNKNOWN_GROUP_KIND", "a well-formed shell tree cube (kind 7) in a version 3.2 file, "
+      "whose version has no kind 7")
+def _():
+    return tree_file(tree_fields(), version=(3, 2))
+
+
+@case("xv3_tree_link_back", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube whose second triangle's link is 4: "
+      "attached to edge 0 of the triangle two before it, before the first")
+def _():
+    links = bytearray(tree_fields()["links"])
+    links[1] = 4
+    return tree_file(tree_fields(links=bytes(links)))
+
+
+@case("xv3_tree_root_code_back", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube whose root's second corner "
+      "code is 2: two corners back from the only one named so far")
+def _():
+    return tree_file(tree_fields(codes=tree_codes([0, 2] + CUBE_TREE_CODES[2:])))
+
+
+@case("xv3_tree_third_unnamed", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube whose second triangle's code "
+      "is 3: its second corner (2) plus 1, corner 3, which is not named yet (code 0 names it)")
+def _():
+    return tree_file(tree_fields(codes=tree_codes(CUBE_TREE_CODES[:3] + [3] + CUBE_TREE_CODES[4:])))
+
+
+@case("xv3_tree_corner_twice", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube whose sixth triangle's code is "
+      "1 (not 2): its second corner (2) plus 0, which it then names twice")
+def _():
+    assert CUBE_TREE_CODES[7] == 2
+    return tree_file(tree_fields(codes=tree_codes(CUBE_TREE_CODES[:7] + [1] + CUBE_TREE_CODES[8:])))
+
+
+@case("xv3_tree_corner_count", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube declaring 9 corners where its "
+      "codes name 8 anew")
+def _():
+    return tree_file(tree_fields(counts=bytes([9, 12]), flags=b"\0\0"))
+
+
+@case("xv3_tree_face_range", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube whose first triangle's face code "
+      "is 8: local reference 6, of 6")
+def _():
+    return tree_file(tree_fields(faces=b"\x08" + tree_fields()["faces"][1:]))
+
+
+@case("xv3_tree_face_bounding", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube whose reference 4 (z <= 1) has "
+      "role bit 1: a bounding plane, which two triangles lie on")
+def _():
+    return tree_file(tree_fields(), refs=CUBE_REFS[:-1] + b"\x10")
+
+
+@case("xv3_tree_few_planes", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube whose last triangle is free (face "
+      "code 1): its corner 6, named, is then on two face planes only")
+def _():
+    return tree_file(tree_fields(faces=tree_fields()["faces"][:-1] + b"\x01"))
+
+
+@case("xv3_tree_picks_order", "BAD_GROUP_STRUCTURE", "version 3.3 closed pyramid as a shell tree whose apex, on four "
+      "face planes, picks 0 2 1: not ascending")
+def _():
+    return tree_file(tree_fields(TREE_APEX, picks=bytes([0, 2, 1])), refs=b"\x05\x00\x01\x01\x01\x01\0")
+
+
+@case("xv3_tree_picks_range", "BAD_GROUP_STRUCTURE", "version 3.3 closed pyramid as a shell tree whose apex, on four "
+      "face planes, picks 0 1 4: past the fourth")
+def _():
+    return tree_file(tree_fields(TREE_APEX, picks=bytes([0, 1, 4])), refs=b"\x05\x00\x01\x01\x01\x01\0")
+
+
+@case("xv3_tree_trailing", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube with one byte after its flags (no "
+      "corner picks, no explicit corner: the body ends there)")
+def _():
+    return tree_file(tree_fields(flags=tree_fields()["flags"] + b"\0"))
+
+
+@case("xv3_tree_cut", "BAD_PAYLOAD", "version 3.3 shell tree cube whose body ends before its corner flags")
+def _():
+    return tree_file(tree_fields(flags=b""))
+
+
+@case("xv3_tree_flag_padding", "BAD_PAYLOAD", "version 3.3 open pyramid as a shell tree (5 explicit corners: flags "
+      "0x1f) with padding bit 7 set (flags 0x9f); read as flags, the rest of the body is well formed")
+def _():
+    assert tree_fields(TREE_PYRAMID)["flags"] == b"\x1f"
+    return tree_file(tree_fields(TREE_PYRAMID, flags=b"\x9f"), refs=b"\x01\x00\0")
+
+
+@case("xv3_tree_zero_step", "BAD_GROUP_STRUCTURE", "version 3.3 shell tree cube with four explicit corners whose "
+      "grid has step 0")
+def _():
+    return tree_file(tree_fields(dataclasses.replace(TREE_MIXED, step=0.0)))
+
+
+@case("xv3_tree_coordinate_range", "BAD_GROUP_STRUCTURE", "version 3.3 open pyramid as a shell tree whose first "
+      "corner's x residual is 2^52 + 1")
+def _():
+    coordinates = varint.decode(tree_fields(TREE_PYRAMID)["coordinates"], 15, "coordinates")[0]
+    coordinates[0] = varint.zigzag(np.array([2**52 + 1]))[0]
+    return tree_file(tree_fields(TREE_PYRAMID, coordinates=varint.encode(coordinates)), refs=b"\x01\x00\0")
 
 
 @case("xgrup_deflate_bomb", "LIMIT_EXCEEDED", "a deflated GRUP body declaring raw_size 2^32-1 (a deflate bomb)",
@@ -1299,7 +1423,7 @@ def _():
       "(spec/pln.md §9.10 steps 3, 5)")
 def _():
     good = shell_body(SHELL_MIXED)
-    big = records._shell_body(dataclasses.replace(SHELL_MIXED, grid=np.array([[1 << 53, 0, 0]])))
+    big = shellfields._shell_body(dataclasses.replace(SHELL_MIXED, grid=np.array([[1 << 53, 0, 0]])))
     b = good[:8] + big
     return shell_file(b[:-1] + bytes([b[-1] | 0x80]))
 

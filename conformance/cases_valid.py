@@ -416,6 +416,41 @@ SHELL_PYRAMID = shell_of((("grid", 0, 0, 0), ("grid", 2, 0, 0), ("grid", 2, 2, 0
                          [(-1, 0, 1, 4), (-1, 1, 2, 4), (-1, 2, 3, 4), (-1, 3, 0, 4)], step=0.5)
 V32_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 2))
 
+
+def tree_of(explicit, vertex_planes, grid, facets, links, step: float = 1.0) -> Shell:
+    """A shell tree (kind 7, spec 3.3 §8.10) as its fields: corner flags (1 explicit), each named
+    corner's references ascending, explicit corners' integer coordinates, triangles (face or -1,
+    i0, i1, i2) in tree order, each attached one starting with the edge it shares, and links."""
+    return Shell(explicit=np.array(explicit, dtype=bool), vertex_planes=np.array(vertex_planes, dtype=np.int64).reshape(-1, 3),
+                 grid=np.array(grid, dtype=np.int64).reshape(-1, 3), origin=np.zeros(3), step=float(step),
+                 facets=np.array(facets, dtype=np.int64), links=np.array(links, dtype=np.int64))
+
+
+#: SHELL_CUBE as a shell tree: one root, eleven triangles each attached to the one before (links 2
+#: and 3: edges 1 and 2 of it); every corner on exactly three face planes, so no picks.
+TREE_CUBE = tree_of([0] * 8, [(0, 3, 5), (0, 1, 5), (0, 1, 4), (0, 3, 4), (2, 3, 4), (1, 2, 4), (1, 2, 5), (2, 3, 5)],
+                    [], [(0, 0, 1, 2), (0, 0, 2, 3), (4, 3, 2, 4), (4, 4, 2, 5), (1, 5, 2, 6), (1, 6, 2, 1),
+                         (5, 6, 1, 7), (5, 7, 1, 0), (3, 7, 0, 3), (3, 7, 3, 4), (2, 7, 4, 5), (2, 7, 5, 6)],
+                    [0, 3, 2, 2, 2, 2, 3, 2, 3, 3, 3, 3])
+#: TREE_CUBE with the two triangles of face 5 (z >= 0) free: its four corners, no longer on three face
+#: planes, are explicit (grid step 0.25), the other four named.
+TREE_MIXED = tree_of([1, 1, 0, 0, 0, 0, 1, 1], TREE_CUBE.vertex_planes[2:6], [(4, 0, 0), (4, 4, 0), (0, 4, 0), (0, 0, 0)],
+                     [(-1 if f == 5 else f, a, b, c) for f, a, b, c in TREE_CUBE.facets], TREE_CUBE.links, step=0.25)
+#: SHELL_PYRAMID as a shell tree: corner 2, the apex (1, 1, 2), is named anew by the root, so its
+#: coordinates are coded from corner 1's; corners 3 and 4 from the first corner (2, the apex) of the
+#: attached triangles that name them.
+TREE_PYRAMID = tree_of([1] * 5, [], [(0, 0, 0), (2, 0, 0), (1, 1, 2), (2, 2, 0), (0, 2, 0)],
+                       [(-1, 0, 1, 2), (-1, 2, 1, 3), (-1, 2, 3, 4), (-1, 2, 4, 0)], [0, 2, 3, 3], step=0.5)
+#: A closed square pyramid over the unit square, apex (0.5, 0.5, 0.5): the base z >= 0 (reference 0)
+#: and the sides y >= 0, x <= 1, y <= 1, x >= 0 leaning in at 45 degrees (1 to 4). The apex is on all
+#: four sides: its picks 0, 1, 2 name it by 1, 2, 3.
+APEX_PLANES = np.array([[math.pi, 0.0, 0.0], [math.pi / 4, 1.5 * math.pi, 0.0], [math.pi / 4, 0.0, math.sqrt(0.5)],
+                        [math.pi / 4, math.pi / 2, math.sqrt(0.5)], [math.pi / 4, math.pi, 0.0]])
+TREE_APEX = tree_of([0] * 5, [(0, 1, 4), (0, 2, 3), (0, 1, 2), (0, 3, 4), (1, 2, 3)], [],
+                    [(0, 0, 1, 2), (0, 1, 0, 3), (4, 3, 0, 4), (1, 4, 0, 2), (2, 4, 2, 1), (3, 4, 1, 3)],
+                    [0, 1, 2, 2, 3, 3])
+V33_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 3))
+
 #: A newer minor version's additions: OBJT bytes after the transform, a group of unknown kind 9
 #: between two known ones, a new flag bit (the PHDR bytes are each case's header extra).
 NEWER_MINOR = dict(
@@ -605,9 +640,9 @@ CASES = [
                Group(0, GroupKind.SEALED, tuple(range(7)), bounding=(6,), vertex_planes=SEALED_CORNER_VERTICES,
                      facets=SEALED_CUBE_FACETS)),
               decoded_bbox=True, index=False),
-    ValidCase("minor_3_3", "version 3.3: 8 more PHDR bytes after the counts and a new flag bit, 5 more OBJT bytes "
+    ValidCase("minor_3_4", "version 3.4: 8 more PHDR bytes after the counts and a new flag bit, 5 more OBJT bytes "
               "after the transform, a group of unknown kind 9 (skipped) between two known ones",
-              dataclasses.replace(V3_CUBE, version=(3, 3), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
+              dataclasses.replace(V3_CUBE, version=(3, 4), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
               **NEWER_MINOR),
     ValidCase("shell_cube_v3_2", "version 3.2: the unit cube as a shell (kind 6), float32, with index: 8 corners "
               "each named by its three face planes, 12 triangles on the 6 faces, corners numbered by first use",
@@ -622,6 +657,26 @@ CASES = [
               V32_CUBE,
               (Obj("pyramid"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL, (0,), shell=SHELL_PYRAMID),
                Colour(0, np.array([[0, 128, 0, 255]], dtype=np.uint8))), decoded_bbox=True),
+    ValidCase("shell_tree_cube_v3_3", "version 3.3: the unit cube as a shell tree (kind 7), float32, with index: 12 "
+              "triangles, the first a root, each other attached to an edge of the one before; 8 corners each named "
+              "by the three face planes of the triangles around it (no picks)",
+              V33_CUBE, (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL_TREE, tuple(range(6)), shell=TREE_CUBE))),
+    ValidCase("shell_tree_mixed_v3_3", "version 3.3: the shell tree cube with the two triangles of z >= 0 free "
+              "(face codes 1, then 0: the parent's, free) and the four corners of that face explicit (grid origin 0, "
+              "step 0.25), with a cOLR of 6 colours (free triangles take the last one's)", V33_CUBE,
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL_TREE, tuple(range(6)), shell=TREE_MIXED),
+               Colour(0, np.array([[255, 0, 0, 255]] * 5 + [[0, 0, 255, 255]], dtype=np.uint8)))),
+    ValidCase("shell_tree_pyramid_v3_3", "version 3.3: the open square pyramid as a shell tree of one reference: 5 "
+              "explicit corners on a grid of step 0.5 coded as residuals from their predictors (the previous explicit "
+              "corner, or the first corner of the attached triangle naming them), x of every corner, then y, then z",
+              V33_CUBE,
+              (Obj("pyramid"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_TREE, (0,), shell=TREE_PYRAMID),
+               Colour(0, np.array([[0, 128, 0, 255]], dtype=np.uint8))), decoded_bbox=True),
+    ValidCase("shell_tree_apex_v3_3", "version 3.3, float64: a closed square pyramid as a shell tree: its base "
+              "corners on three face planes each, its apex on four, named by the three its picks 0 1 2 choose",
+              dataclasses.replace(V33_CUBE, coding=Coding.FLOAT64),
+              (Obj("pyramid"), Planes(APEX_PLANES), Group(0, GroupKind.SHELL_TREE, tuple(range(5)), shell=TREE_APEX)),
+              decoded_bbox=True),
     ValidCase("cube_meta_up_z", "version 3.0: the cube of cube_v3 with a mETA chunk up_axis = Z right after PHDR "
               "(spec §10.3: any version may hold it; its version stays 3.0)", V3_CUBE,
               (Meta(UP_AXIS, "Z"), *cube_ops())),

@@ -51,7 +51,7 @@ class Units(IntEnum):
 
 class GroupKind(IntEnum):
     """Part group kinds: 0-4 of version 1.0 (spec §9), 5 of version 3.1 (spec §9.9), 6 of
-    version 3.2 (spec §9.10)."""
+    version 3.2 (spec §9.10), 7 of version 3.3 (spec §9.11)."""
 
     CONVEX = 0
     CELLS = 1
@@ -60,6 +60,7 @@ class GroupKind(IntEnum):
     PSEUDO_CONCAVE = 4
     SEALED = 5
     SHELL = 6
+    SHELL_TREE = 7
 
 
 #: BSP tree leaf tokens in version 1.0's numbering (spec Appendix A.1), which the model uses for every
@@ -154,6 +155,12 @@ class Shell:
     each triangle's face reference (:data:`FREE` for none) and its three
     corners, planar triangles in non-decreasing face order, then free ones;
     corners numbered in order of first use.
+
+    A shell tree (kind 7, spec 3.3 §8.10) has ``links`` (T,): 0 for a root
+    triangle, ``3 * (d - 1) + e + 1`` for one attached to edge ``e`` of the
+    triangle ``d`` before it; its triangles are in that order (any face order),
+    each starting with the gate edge it shares with its parent, and its named
+    corners' references ascending.
     """
 
     explicit: np.ndarray
@@ -162,6 +169,7 @@ class Shell:
     origin: np.ndarray
     step: float
     facets: np.ndarray
+    links: np.ndarray | None = None
 
     def __repr__(self) -> str:
         return (f"Shell({len(self.explicit)} corners, {len(self.vertex_planes)} named, "

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import math
 import os
@@ -16,6 +17,7 @@ import planefmt
 from planefmt import chunk_bytes
 from planefmt.container import quantize, records, schema, shellfields
 from planefmt.model import BSP_IN, BSP_OUT, Coding, GroupKind, Header, PartGroup, PlaneBlock, Quantization, Shell
+from planefmt.groups.shells import shell_tree
 
 from streams import TrickleReader, TrickleWriter
 
@@ -55,7 +57,7 @@ quantizations = st.builds(
 
 def groups_for(n: int, draw, version: tuple[int, int] = (1, 0)) -> list[dict]:
     kinds = [k for k in GroupKind if (k != GroupKind.SEALED or (version >= (3, 1) and n >= 3))
-             and (k != GroupKind.SHELL or version >= (3, 2))]
+             and (k != GroupKind.SHELL or version >= (3, 2)) and (k != GroupKind.SHELL_TREE or version >= (3, 3))]
     out = []
     for kind in draw(st.lists(st.sampled_from(kinds), min_size=1, max_size=4)):
         m = draw(st.integers(3 if kind == GroupKind.SEALED else 1, min(n, 12)))
@@ -77,6 +79,8 @@ def groups_for(n: int, draw, version: tuple[int, int] = (1, 0)) -> list[dict]:
                                                                  max_size=len(corners)))), corners])
         if kind == GroupKind.SHELL:
             g["shell"] = draw(shells(m, bounding))
+        if kind == GroupKind.SHELL_TREE:
+            g["shell"] = as_tree(draw(shells(m, bounding)))
         if kind == GroupKind.CELLS:
             g["cells"] = (np.array([0, 3], dtype=np.uint32) % (2 * m), np.array([1], dtype=np.uint32))
         if kind == GroupKind.BSP:
@@ -113,6 +117,16 @@ def shells(draw, m: int, bounding: np.ndarray) -> Shell:
                  step=draw(st.floats(1e-9, 1e3)), facets=np.column_stack([face, tri]))
 
 
+def as_tree(shell: Shell) -> Shell:
+    """``shell`` as a shell tree (spec 3.3 §8.10) with every corner explicit: a tree's named corners
+    are named by the face planes of the triangles around them, which a drawn shell's need not be."""
+    explicit = np.asarray(shell.explicit, dtype=bool)
+    grid = np.zeros((len(explicit), 3), dtype=np.int64)
+    grid[explicit] = shell.grid
+    return shell_tree(dataclasses.replace(shell, explicit=np.ones(len(explicit), dtype=bool),
+                                          vertex_planes=np.zeros((0, 3), dtype=np.int64), grid=grid))[0]
+
+
 @st.composite
 def files(draw):
     """Planes, coding, quantization, groups, compression and version: the predicted coding only in
@@ -120,8 +134,8 @@ def files(draw):
     planes = draw(plane_sets)
     coding = draw(st.sampled_from(list(Coding)))
     q = draw(quantizations) if coding.quantized else None
-    versions = [(2, 0), (3, 0), (3, 1), (3, 2)] if coding == Coding.PREDICTED else \
-        [(1, 0), (2, 0), (3, 0), (3, 1), (3, 2)]
+    versions = [(2, 0), (3, 0), (3, 1), (3, 2), (3, 3)] if coding == Coding.PREDICTED else \
+        [(1, 0), (2, 0), (3, 0), (3, 1), (3, 2), (3, 3)]
     version = draw(st.sampled_from(versions))
     groups = groups_for(len(planes), draw, version)
     if version[0] >= 2:
@@ -177,6 +191,7 @@ def test_write_read_roundtrip_trickled(spec):
             assert np.array_equal(s.explicit, w.explicit) and np.array_equal(s.facets, w.facets)
             assert np.array_equal(s.vertex_planes, w.vertex_planes) and np.array_equal(s.grid, w.grid)
             assert s.origin.tobytes() == w.origin.tobytes() and s.step == w.step
+            assert (s.links is None) == (w.links is None) and (w.links is None or np.array_equal(s.links, w.links))
 
 
 @pytest.mark.parametrize("widths", [(8, 8, 8), (16, 16, 16), (32, 32, 32), (8, 16, 32), (7, 9, 13),

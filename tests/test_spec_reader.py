@@ -23,7 +23,9 @@ from conformance.runner import Case, Outcome  # noqa: E402
 
 SUITE = ROOT / "conformance"
 READER = SUITE / "independent" / "plnspec.py"
-CASES = runner.load_manifest()
+#: plnspec.py reads version 3.2 (it was written from spec/pln.md at 3.2): the shell trees of 3.3
+#: (§9.11) are not yet in it, and a 3.2 reader rightly skips them.
+CASES = [c for c in runner.load_manifest() if "shell_tree_" not in c.path and "/xv3_tree_" not in c.path]
 
 _spec = importlib.util.spec_from_file_location("plnspec", READER)
 plnspec = importlib.util.module_from_spec(_spec)

@@ -5,14 +5,16 @@ alone (plus the output contract of `conformance/README.md`), without looking
 at planefmt or at the suite's generator, to show that the written spec and
 the conformance contract are enough for a second implementation.  It uses
 the Python 3.11 standard library only.  It reads versions 1.0, 2.0, 3.0,
-3.1 and 3.2 (pln-3 §11: files of major versions 1, 2 and 3, each as its own
-document says).  Its version 3.1 part, the sealed groups of pln-3 §8.8, was
-added later by a session that had seen planefmt's version 3.1 code; its
+3.1, 3.2 and 3.3 (pln-3 §11: files of major versions 1, 2 and 3, each as its
+own document says).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
+was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
-text and the golden files' JSON, not planefmt's shell code.  Its mETA part
-(pln.md §10.3, ancillary metadata of any version) was added with that
-section, from its text; a valid file's JSON lists the chunks as
-"metadata": {keyword: value}.
+text and the golden files' JSON, not planefmt's shell code; its version 3.3
+part, the shell trees of pln-3 §8.10 (pln.md §9.11), by the session that wrote
+planefmt's (from the spec text, decoding triangle by triangle where planefmt
+jumps pointers over arrays).  Its mETA part (pln.md §10.3, ancillary metadata
+of any version) was added with that section, from its text; a valid file's
+JSON lists the chunks as "metadata": {keyword: value}.
 
 It checks everything a reader must check without decoding geometry
 (signature, chunk framing, CRC-32, header, plane table in every coding,
@@ -36,7 +38,8 @@ adds "shell": {"explicit": the explicit corners' indices, "vertex_planes":
 each named corner's three local references, "grid": each explicit corner's
 integer coordinates (the zigzag steps summed), "origin" and "step" (null
 without explicit corners), "facets": each triangle as [face local reference
-or -1 for a free one, i0, i1, i2] with the corner codes resolved}.
+or -1 for a free one, i0, i1, i2] with the corner codes resolved}; a shell
+tree (kind 7, version 3.3) the same object, its triangles in tree order.
 
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
@@ -76,8 +79,8 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0, 2.0 and 3.2; pln-3 §11: a reader of 3.m reads major versions 1, 2 and 3)
-READER_VERSIONS = {1: 0, 2: 0, 3: 2}
+# (1.0, 2.0 and 3.3; pln-3 §11: a reader of 3.m reads major versions 1, 2 and 3)
+READER_VERSIONS = {1: 0, 2: 0, 3: 3}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 
@@ -101,10 +104,11 @@ FLAG_LOSSY, FLAG_COUNTS_KNOWN, FLAG_BBOX_KNOWN = 1, 2, 4  # §5
 OBJ_HAS_TRANSFORM = 1  # §8.1
 KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
 # pln-3 §8.2: kind 5, the sealed surface (§8.8), exists in files of version 3.1
-# and later only, kind 6, the shell (§8.9), in files of version 3.2 and later;
-# in older files each is a kind the file's version does not have
-SEALED_KIND, SHELL_KIND = 5, 6
-KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2)}
+# and later only, kind 6, the shell (§8.9), in files of version 3.2 and later,
+# kind 7, the shell tree (§8.10), in files of version 3.3 and later; in older
+# files each is a kind the file's version does not have
+SEALED_KIND, SHELL_KIND, SHELL_TREE_KIND = 5, 6, 7
+KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3)}
 SHELL_COORD_LIMIT = 2**52  # pln-3 §8.9: each grid step and coordinate of magnitude at most 2^52
 SHELL_GRID_BYTES = 32  # pln-3 §8.9: origin x, y, z and step s, f64 each
 
@@ -830,6 +834,8 @@ class Reader:
             g["vertex_planes"], g["facets"] = self.read_sealed(c, m, set(bounding))
         elif shell:
             g["shell"] = self.read_shell(c, m, set(bounding))
+        elif kind == SHELL_TREE_KIND:
+            g["shell"] = self.read_shell_tree(c, m, set(bounding))
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.chunk_list.append((offset, b"GRUP", index))
@@ -1117,6 +1123,150 @@ class Reader:
             raise PlnError("BAD_GROUP_STRUCTURE", "%d corners used, corner_count %d" % (n, v))
         return {"explicit": explicit, "vertex_planes": named, "grid": grid,
                 "origin": origin, "step": step, "facets": facets}
+
+    def read_shell_tree(self, c, m, bounding):
+        """pln-3 §8.10, kind 7: corner_count V, triangle_count T; T links
+        (0 a root, else 3(d - 1) + e + 1: attached to edge e of triangle
+        j - d); the corner codes (three for a root, one for an attached
+        triangle); T face codes (0 the parent's, or the previous triangle's
+        for a root, 1 free, r + 2 reference r); the corner flags; three picks
+        per named corner on more than three face planes; the grid and the
+        coordinate residuals (every x, then every y, then every z) if any
+        corner is explicit.  Read in the order the section gives: counts
+        (checked against the bytes left), links, codes, faces, flags (padding
+        checked as read); then the triangles and faces are checked, which
+        decide the number of picks; then the rest.  Returned as the JSON
+        "shell" object of a kind 6 group (the triangles decoded in order,
+        each attached one from its parent's corners)."""
+        v = c.varint("corner_count")
+        t = c.varint("triangle_count")
+        left = c.remaining()
+        if not 3 <= v <= 8 * left:
+            raise PlnError("BAD_GROUP_STRUCTURE", "corner_count %d, %d bytes left" % (v, left))
+        if not 1 <= t <= left // 3:
+            raise PlnError("BAD_GROUP_STRUCTURE", "triangle_count %d, %d bytes left" % (t, left))
+        links = [c.varint("link %d" % j) for j in range(t)]
+        roots = sum(1 for link in links if link == 0)
+        codes = [c.varint("corner code %d" % k) for k in range(t + 2 * roots)]
+        face_codes = [c.varint("face code %d" % j) for j in range(t)]
+        flags = c.take((v + 7) // 8, "corner flags")
+        check_bit_padding(flags, v, "GRUP shell tree corner flags")
+        explicit = [k for k in range(v) if (flags[k >> 3] >> (k & 7)) & 1]
+        is_explicit = set(explicit)
+        # the triangles, in order: a parent comes before its children
+        tris = []
+        n = 0
+        next_code = 0
+        creator = {}  # corner -> the triangle whose code named it anew
+        for j, link in enumerate(links):
+            if link == 0:
+                corners = []
+                for _ in range(3):
+                    code = codes[next_code]
+                    next_code += 1
+                    if code == 0:
+                        creator[n] = j
+                        corners.append(n)
+                        n += 1
+                    elif code > n:
+                        raise PlnError("BAD_GROUP_STRUCTURE",
+                                       "triangle %d: corner code %d, %d corners named so far" % (j, code, n))
+                    else:
+                        corners.append(n - code)
+            else:
+                d, e = (link - 1) // 3 + 1, (link - 1) % 3
+                if d > j:
+                    raise PlnError("BAD_GROUP_STRUCTURE", "triangle %d: link %d, parent before the first" % (j, link))
+                q = tris[j - d]
+                corners = [q[(e + 1) % 3], q[e]]
+                code = codes[next_code]
+                next_code += 1
+                if code == 0:
+                    creator[n] = j
+                    corners.append(n)
+                    n += 1
+                else:
+                    third = corners[1] + unzigzag(code - 1)
+                    if not 0 <= third < n:
+                        raise PlnError("BAD_GROUP_STRUCTURE",
+                                       "triangle %d: third corner %d, %d corners named so far" % (j, third, n))
+                    corners.append(third)
+            if len(set(corners)) != 3:
+                raise PlnError("BAD_GROUP_STRUCTURE", "triangle %d: corners %r" % (j, corners))
+            tris.append(corners)
+        if n != v:
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d corners named anew, corner_count %d" % (n, v))
+        faces = []
+        for j, code in enumerate(face_codes):
+            if code == 0:
+                link = links[j]
+                if link:
+                    face = faces[j - ((link - 1) // 3 + 1)]
+                else:
+                    face = faces[j - 1] if j else -1
+            elif code == 1:
+                face = -1
+            else:
+                face = code - 2
+                if face >= m:
+                    raise PlnError("BAD_GROUP_STRUCTURE", "triangle %d: face code %d, of %d" % (j, code, m))
+                if face in bounding:
+                    raise PlnError("BAD_GROUP_STRUCTURE",
+                                   "triangle %d: local reference %d is a bounding plane (role bit 1)" % (j, face))
+            faces.append(face)
+        around = [set() for _ in range(v)]
+        for face, corners in zip(faces, tris):
+            if face >= 0:
+                for k in corners:
+                    around[k].add(face)
+        named = []
+        for k in range(v):
+            if k in is_explicit:
+                continue
+            planes = sorted(around[k])
+            if len(planes) < 3:
+                raise PlnError("BAD_GROUP_STRUCTURE", "named corner %d on face planes %r" % (k, planes))
+            named.append((k, planes))
+        vertex_planes = []
+        for k, planes in named:
+            if len(planes) == 3:
+                vertex_planes.append(planes)
+                continue
+            i, jj, ll = (c.varint("a pick of corner %d" % k) for _ in range(3))
+            if not i < jj < ll < len(planes):
+                raise PlnError("BAD_GROUP_STRUCTURE", "corner %d: picks %d %d %d of %d" % (k, i, jj, ll, len(planes)))
+            vertex_planes.append([planes[i], planes[jj], planes[ll]])
+        origin = step = None
+        grid = []
+        if explicit:
+            origin = c.f64s(3, "grid origin")
+            step = c.f64s(1, "grid step")[0]
+            e = len(explicit)
+            residuals = [[unzigzag(c.varint("a coordinate residual")) for _ in range(e)] for _ in range(3)]
+            if c.remaining():
+                raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the coordinates" % c.remaining())
+            if not all(math.isfinite(x) for x in origin) or not (math.isfinite(step) and step > 0):
+                raise PlnError("BAD_GROUP_STRUCTURE", "grid origin %r, step %r" % (origin, step))
+            xyz = {}
+            previous = None
+            for r, k in enumerate(explicit):  # corner order: every predictor comes first
+                j = creator[k]
+                first = tris[j][0]
+                pred = first if links[j] and first in is_explicit else previous
+                xyz[k] = []
+                for a in range(3):
+                    value = residuals[a][r] + (xyz[pred][a] if pred is not None else 0)
+                    if abs(residuals[a][r]) > SHELL_COORD_LIMIT or abs(value) > SHELL_COORD_LIMIT:
+                        raise PlnError("BAD_GROUP_STRUCTURE",
+                                       "explicit corner %d: residual %d to coordinate %d, beyond 2^52"
+                                       % (k, residuals[a][r], value))
+                    xyz[k].append(value)
+                previous = k
+            grid = [xyz[k] for k in explicit]
+        elif c.remaining():
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the corner picks" % c.remaining())
+        return {"explicit": explicit, "vertex_planes": vertex_planes, "grid": grid,
+                "origin": origin, "step": step, "facets": [[f] + k for f, k in zip(faces, tris)]}
 
     def check_tree(self, tokens, m):
         """§8.4: exactly one complete tree in preorder (tokens numbered as in §8.4)."""

@@ -61,7 +61,7 @@ from ..geometry.hausdorff import DEFAULT_MAX_PIECES
 from ..model import Coding, GroupKind, Mesh
 from .checks import check_group, validate
 from .choosing import MAX_BITS, MIN_BITS, SHELL_WIDTHS
-from .decoding import (DECODERS, EXACT, DecodedGroup, GroupLike, PlaneError, decode_bsp, decode_cells,
+from .decoding import (DECODERS, EXACT, SHELL_KINDS, DecodedGroup, GroupLike, PlaneError, decode_bsp, decode_cells,
                        decode_convex_group, decode_group, decode_groups, decode_patch, decode_sealed_group,
                        decode_shell_group, header_plane_error, plane_error)
 from .encoding import Encoded, encode_mesh, encode_scene
@@ -75,7 +75,7 @@ from .strategies import (BODY_STRATEGIES, CONVEX_MAX_PLANES, SCHEMES, SHELL_STRA
 __all__ = [
     "BODY_STRATEGIES", "Body", "CONVEX_MAX_PLANES", "Coding", "DECODERS", "DEFAULT_MAX_PIECES", "DecodedGroup",
     "EXACT", "Encoded", "GroupKind", "GroupLike", "GroupSpec", "LOSSLESS_TOLERANCE", "MAX_BITS", "MIN_BITS", "Mesh",
-    "PlaneError", "SCHEMES", "SHELL_STRATEGIES", "SHELL_WIDTHS", "SOLID_KINDS", "STRUCTURE_TOLERANCE",
+    "PlaneError", "SCHEMES", "SHELL_KINDS", "SHELL_STRATEGIES", "SHELL_WIDTHS", "SOLID_KINDS", "STRUCTURE_TOLERANCE",
     "UNCOLOURED", "check_group", "decode_bsp", "decode_cells", "decode_convex_group", "decode_group",
     "decode_groups", "decode_mesh", "decode_patch", "decode_scene", "decode_sealed_group", "decode_shell_group",
     "drop_planes", "encode_convex_body", "encode_convex_or_shell", "encode_general_body", "encode_mesh",

@@ -10,6 +10,7 @@ are correct by construction.
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 from collections.abc import Callable, Sequence
@@ -18,15 +19,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .. import progress
-from ..container import quantize
+from ..container import quantize, records, shellfields
 from ..errors import GeometryError, PlnError, PlnWarning
 from ..geometry.hausdorff import DEFAULT_MAX_PIECES
 from ..geometry.planes import from_triplets, transform_points
 from ..geometry.trianglegeom import TriangleIndex
 from ..geometry.topology import euler_characteristic, signed_volume
-from ..groups.shells import FREE, ShellPlan, decode_shell, encode_shell, plan_shell
+from ..groups.shells import FREE, ShellPlan, decode_shell, encode_shell, plan_shell, shell_tree
 from ..model import Coding, GroupKind, Mesh, Quantization
-from .decoding import EXACT, _concatenate, plane_error
+from .decoding import EXACT, SHELL_KINDS, _concatenate, plane_error
 from .preparing import (LOSSLESS_TOLERANCE, STRUCTURE_TOLERANCE, _Object, _area, _diagonal, _fit_error, _one_shell,
                       structure_problem)
 from .strategies import GroupSpec
@@ -298,6 +299,11 @@ SHELL_WIDTHS = tuple(range(8, 33, 2))
 _SHELL_TIGHTENINGS = 6
 
 
+#: The shell layouts the encoder chooses among (``bench/shell_bits.py`` measures version 3.2's alone
+#: by setting it to ``(GroupKind.SHELL,)``).
+SHELL_LAYOUTS = SHELL_KINDS
+
+
 def _shell_plans(obj: _Object) -> dict[int, ShellPlan]:
     """The :class:`ShellPlan` of each shell group of ``obj`` (by position), from its exact planes."""
     plans = {}
@@ -325,9 +331,23 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         g = groups[k]
         omega, h = from_triplets(planes[g.refs])
         shell = encode_shell(plan, omega, h, budget)
-        decoded, _ = decode_shell(omega, h, shell)
-        moved = max(moved, float(np.linalg.norm(decoded - plan.points, axis=1).max(initial=0.0)))
-        groups[k] = replace(g, shell=shell)
+        options = [(GroupKind.SHELL, shell, plan.points)] if GroupKind.SHELL in SHELL_LAYOUTS else []
+        if GroupKind.SHELL_TREE in SHELL_LAYOUTS:
+            tree, source = shell_tree(shell, plan.walk)
+            options.append((GroupKind.SHELL_TREE, tree, plan.points[source]))
+        # Whichever layout deflates smaller: the tree on every corpus mesh measured (bench/shell_bits.py),
+        # though a soup of separate triangles pays a link and a root's three codes for each.
+        kind, shell, points = min(options, key=lambda c: len(records.pack(shellfields.shell_kind_data(c[0], c[1]), True,
+                                                                          records.SHELL_TREE_LEVEL)[1]))
+        # A tree's named corners are solved with their planes in ascending order of reference, which the
+        # writer renumbers (``reordered_tree``): every order of the three is measured, so the bound
+        # holds for the one written.
+        orders = itertools.permutations(range(3)) if kind == GroupKind.SHELL_TREE else [(0, 1, 2)]
+        for order in orders:
+            vp = np.asarray(shell.vertex_planes, dtype=np.int64).reshape(-1, 3)[:, list(order)]
+            decoded, _ = decode_shell(omega, h, replace(shell, vertex_planes=vp))
+            moved = max(moved, float(np.linalg.norm(decoded - points, axis=1).max(initial=0.0)))
+        groups[k] = replace(g, kind=kind, shell=shell)
     return replace(obj, groups=tuple(groups)), moved
 
 
@@ -338,8 +358,16 @@ def _planeless(obj: _Object) -> _Object | None:
         return None
     if obj.face_colours is not None and (obj.face_colours != obj.face_colours[0]).any():
         return None
-    # A group keeps one reference (spec §9: m >= 1), which its free triangles take their colour from.
-    return replace(obj, groups=tuple(replace(g, refs=g.refs[:1], bounding=g.bounding[:1]) for g in obj.groups))
+    # A group keeps one reference (spec §9: m >= 1), which its free triangles take their colour from;
+    # the table keeps only those planes (CAD/box.STL at draco-14's error: 2.4 kB of 14 kB were planes
+    # nothing referred to).
+    keep = np.unique([g.refs[0] for g in obj.groups])
+    fp = obj.face_plane
+    face_plane = None if fp is None else np.where(np.isin(fp, keep), np.searchsorted(keep, fp), -1)
+    return replace(obj, triplets=obj.triplets[keep], face_plane=face_plane,
+                   plane_colours=None if obj.plane_colours is None else obj.plane_colours[keep],
+                   groups=tuple(replace(g, refs=np.searchsorted(keep, g.refs[:1]), bounding=g.bounding[:1])
+                                for g in obj.groups))
 
 
 def _as_shells(obj: _Object) -> _Object:
@@ -393,8 +421,8 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
         else:
             candidates = [(c.coding, c.quantization)]
             convex_error = c.error_bound * c.diagonal
-    table = np.concatenate([o.triplets for o in objects])
     if not candidates:
+        table = np.concatenate([o.triplets for o in objects])
         radius = max(float(np.linalg.norm(o.vertices, axis=1).max()) for o in objects)
         every = _candidates(coding, bits, table, radius)
         candidates = every if forced else \
@@ -402,7 +430,6 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     band = tolerance if tolerance > LOSSLESS_TOLERANCE else 0.0
     best: tuple[int, list[_Object], _Choice] | None = None
     why = ""
-    offsets = np.cumsum([0] + [len(o.triplets) for o in objects])
     # Planes that name no corner within the budget only cost bytes: the same shells without them
     # (every corner explicit, every triangle free) compete too, where colours do not ride on them.
     freed = [_planeless(o) for o in objects]
@@ -413,7 +440,8 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants}
     for k, (objs, cod, q) in enumerate(trials):
         progress.report("choosing a coding", k, len(trials))
-        rt = quantize.roundtrip(table, cod, q)
+        offsets = np.cumsum([0] + [len(o.triplets) for o in objs])
+        rt = quantize.roundtrip(np.concatenate([o.triplets for o in objs]), cod, q)
         budget = tolerance * diag_src / (1.0 + 2.0 * tolerance)
         for _ in range(_SHELL_TIGHTENINGS):
             built, moved = zip(*(_shells_for(o, pl, rt[a:b], budget / sc)
@@ -423,7 +451,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
                       for o, a, b in zip(built, offsets[:-1], offsets[1:])]
             # Shells alone keep the source's topology by construction: only volume or area can move.
             problems = [structure_problem(m, o, band * diag_src / sc,
-                                          topology=any(g.kind != GroupKind.SHELL for g in o.groups))
+                                          topology=any(g.kind not in SHELL_KINDS for g in o.groups))
                         for m, o, sc in zip(meshes, built, scale)]
             problems = [p for p in problems if p is not None]
             if not problems:

@@ -129,12 +129,12 @@ def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: Pla
 
 
 def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``SHELL`` group: its triangles over its corners, named by three planes or explicit (spec
-    §9.10). Linear time: one batched 3×3 solve."""
+    """A ``SHELL`` or ``SHELL_TREE`` group: its triangles over its corners, named by three planes or
+    explicit (spec §9.10, §9.11). Linear time: one batched 3×3 solve."""
     shell = group.shell
     if shell is None:
-        raise GeometryError(f"part group {label}: shell groups are kind 6 only from version 3.2 on",
-                            code="UNKNOWN_GROUP_KIND")
+        raise GeometryError(f"part group {label}: shell groups are kind 6 only from version 3.2 on, kind 7 "
+                            f"from 3.3", code="UNKNOWN_GROUP_KIND")
     omega, h = from_triplets(planes)
     try:
         v, t = decode_shell(omega, h, shell)
@@ -156,7 +156,11 @@ DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], Deco
     GroupKind.PSEUDO_CONCAVE: decode_patch,
     GroupKind.SEALED: decode_sealed_group,
     GroupKind.SHELL: decode_shell_group,
+    GroupKind.SHELL_TREE: decode_shell_group,
 }
+#: The kinds of shell groups, which the encoder chooses between by size once their corners are known
+#: (:data:`planefmt.codec.choosing.SHELL_LAYOUTS`).
+SHELL_KINDS = (GroupKind.SHELL, GroupKind.SHELL_TREE)
 
 
 @dataclass(frozen=True)

@@ -180,9 +180,13 @@ class Writer:
             if shell is None:
                 raise PlnError("a shell group needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
             shellfields.check_shell(shell, bounding)
+        elif kind == GroupKind.SHELL_TREE and int(kind) in records.kinds_of(*self._version):
+            if shell is None:
+                raise PlnError("a shell tree needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
+            shellfields.check_shell_tree(shell, bounding)
         elif shell is not None:
-            raise PlnError(f"shell groups need version 3.2, not {self._version[0]}.{self._version[1]}",
-                           code="UNKNOWN_GROUP_KIND")
+            raise PlnError(f"shell groups need version 3.2 (shell trees 3.3), not {self._version[0]}."
+                           f"{self._version[1]}", code="UNKNOWN_GROUP_KIND")
         index = len(self._groups)
         group = PartGroup(index=index, object=obj, kind=int(kind), refs=refs.astype(np.uint32),
                           bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
