@@ -23,9 +23,7 @@ from conformance.runner import Case, Outcome  # noqa: E402
 
 SUITE = ROOT / "conformance"
 READER = SUITE / "independent" / "plnspec.py"
-#: plnspec.py reads version 3.2 (it was written from spec/pln.md at 3.2): the shell trees of 3.3
-#: (§9.11) are not yet in it, and a 3.2 reader rightly skips them.
-CASES = [c for c in runner.load_manifest() if "shell_tree_" not in c.path and "/xv3_tree_" not in c.path]
+CASES = runner.load_manifest()
 
 _spec = importlib.util.spec_from_file_location("plnspec", READER)
 plnspec = importlib.util.module_from_spec(_spec)
@@ -50,7 +48,8 @@ def test_spec_reader_conforms_at_container_level(case: Case):
 #: One valid and one broken case of each version, through the command line (the in-process test
 #: above covers every case; the whole suite by subprocess took 162 s on two loaded cores).
 BY_COMMAND = ["valid/cube_float32.pln", "valid/cube_v3.pln", "valid/shell_mixed_v3_2.pln",
-              "invalid/xv3_shell_code_back.pln", "invalid/xcrc_and_payload.pln"]
+              "valid/shell_tree_mixed_v3_3.pln", "invalid/xv3_shell_code_back.pln",
+              "invalid/xv3_tree_third_unnamed.pln", "invalid/xcrc_and_payload.pln"]
 
 
 @pytest.mark.parametrize("path", BY_COMMAND)

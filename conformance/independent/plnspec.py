@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0, 3.1, 3.2), written from
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0, 3.1, 3.2, 3.3), written from
 spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
 
     python conformance/independent/plnspec.py FILE
@@ -35,7 +35,7 @@ OBJECT_LIMIT = 1 << 24
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 # §10.3: the values of the keywords the spec defines
 META_VALUES = {"up_axis": ("Y", "Z")}
-NEWEST_MINOR = {1: 0, 2: 0, 3: 2}  # §9.3: "for this document: 1.0, 2.0, 3.2"
+NEWEST_MINOR = {1: 0, 2: 0, 3: 3}  # §9.3: "for this document: 1.0, 2.0, 3.3"
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
 PI_F32 = np.frombuffer(struct.pack("<I", 0x40490FDB), "<f4")[0]
@@ -507,7 +507,7 @@ class Reader:
     # §9
     def kinds(self) -> set[int]:
         if self.major == 3:
-            return set(range(5 + min(self.minor, 2)))
+            return set(range(5 + min(self.minor, 3)))  # §9.3: 3.1 adds kind 5, 3.2 kind 6, 3.3 kind 7
         return set(range(5))
 
     def grup(self, p: bytes, offset: int):
@@ -554,6 +554,8 @@ class Reader:
             group.update(self.sealed(b, refs, roles))
         elif kind == 6:
             group["shell"] = self.shell(b, refs, roles)
+        elif kind == 7:
+            group["shell"] = self.shell_tree(b, refs, roles)
         self.chunks.append((offset, b"GRUP", index))
         self.groups.append(group)
         self.group_refs.append(len(refs))
@@ -759,6 +761,158 @@ class Reader:
         if n != v:
             fail("BAD_GROUP_STRUCTURE", f"{n} corners used of {v}")
         return {"explicit": explicit, "vertex_planes": named, "grid": grid,
+                "origin": origin, "step": step, "facets": facets}
+
+    # §9.11 (added at version 3.3, from §9.11 and the sections it refers to)
+    def shell_tree(self, b: Cursor, refs: list[int], roles: list[int]) -> dict:
+        """A shell stored along a spanning tree of its triangles. Reported as the shell of §9.10
+        with the same corners and triangles (conformance/README.md, kind 7)."""
+        m = len(refs)
+        # 1. the two counts, read, then checked against the bytes left after both (as §9.11 says;
+        #    the same pattern as §9.10, SPEC_NOTES 15)
+        v = b.varint("corner_count")
+        t = b.varint("triangle_count")
+        left = b.left()
+        if v < 3 or v > 8 * left or t < 1 or 3 * t > left:
+            fail("BAD_GROUP_STRUCTURE", f"counts V={v} T={t} with {left} bytes left")
+        # 2. the links, the corner codes, the faces and the flags, read
+        links = b.varints(t, "the links")
+        roots = sum(1 for ell in links if ell == 0)
+        codes = b.varints(t + 2 * roots, "the corner codes")
+        face_codes = b.varints(t, "the faces")
+        flags = bit_string(b.take((v + 7) // 8, "the corner flags"), v, "the corner flags")
+        # 3. the links, the corner codes and the faces, checked
+        parents = []
+        for j, ell in enumerate(links):
+            if ell == 0:
+                parents.append(None)
+                continue
+            d, e = (ell - 1) // 3 + 1, (ell - 1) % 3
+            if j - d < 0:
+                fail("BAD_GROUP_STRUCTURE", f"triangle {j}: link {ell} past the first triangle")
+            parents.append((j - d, e))
+        n, k, tris = 0, 0, []
+        named_by = []  # the triangle whose code names each corner anew, in corner order
+        for j in range(t):
+            if parents[j] is None:
+                tri = []
+                for _ in range(3):
+                    code = codes[k]
+                    k += 1
+                    if code == 0:
+                        tri.append(n)
+                        named_by.append(j)
+                        n += 1
+                    elif n - code < 0:
+                        fail("BAD_GROUP_STRUCTURE", f"root triangle {j}: code {code} names a corner below 0")
+                    else:
+                        tri.append(n - code)
+            else:
+                p, e = parents[j]
+                q = tris[p]
+                i0, i1 = q[(e + 1) % 3], q[e]
+                code = codes[k]
+                k += 1
+                if code == 0:
+                    i2 = n
+                    named_by.append(j)
+                    n += 1
+                else:
+                    i2 = i1 + unzigzag(code - 1)  # SPEC_NOTES 20: code 1 names i1 itself
+                    if not 0 <= i2 < n:
+                        fail("BAD_GROUP_STRUCTURE", f"triangle {j}: code {code} names corner {i2}, "
+                                                    f"{n} named before it")
+                tri = [i0, i1, i2]
+            if len(set(tri)) < 3:
+                fail("BAD_GROUP_STRUCTURE", f"triangle {j} names one corner twice: {tri}")
+            tris.append(tri)
+        if n != v:  # with the corner codes, before the picks are read (SPEC_NOTES 18)
+            fail("BAD_GROUP_STRUCTURE", f"{n} corners named, V = {v}")
+        faces = []  # local reference of each triangle, -1 for a free one
+        for j, fc in enumerate(face_codes):
+            if fc == 0:
+                # the parent's face as resolved, free included (SPEC_NOTES 22); for a root j > 0
+                # triangle j - 1's, for triangle 0 free
+                if parents[j] is not None:
+                    f = faces[parents[j][0]]
+                else:
+                    f = faces[j - 1] if j > 0 else -1
+            elif fc == 1:
+                f = -1
+            else:
+                f = fc - 2
+                if f >= m:
+                    fail("BAD_GROUP_STRUCTURE", f"triangle {j}: face code {fc} above m + 1 = {m + 1}")
+                if roles[f]:
+                    fail("BAD_GROUP_STRUCTURE", f"triangle {j}: face {f} is a bounding plane")
+            faces.append(f)
+        # the face planes of every corner: distinct local references, ascending (SPEC_NOTES 21);
+        # they decide how many picks follow
+        planes_of = [set() for _ in range(v)]
+        for tri, f in zip(tris, faces):
+            if f >= 0:
+                for i in tri:
+                    planes_of[i].add(f)
+        named = [c for c in range(v) if not flags[c]]
+        pk = {c: sorted(planes_of[c]) for c in named}
+        w = sum(1 for c in named if len(pk[c]) > 3)
+        # 4. the picks, the grid and the coordinates, read
+        picks = b.varints(3 * w, "the picks")
+        explicit = [c for c in range(v) if flags[c]]
+        e_count = len(explicit)
+        origin = step = None
+        residuals = []
+        if e_count:
+            ox, oy, oz, step = struct.unpack("<4d", b.take(32, "the grid"))
+            origin = [ox, oy, oz]
+            residuals = b.varints(3 * e_count, "the coordinates")
+        # 5. the rest, checked: bytes left first, as §9.10 step 4 and §12.1 item 6 (SPEC_NOTES 19)
+        if b.left():
+            fail("BAD_GROUP_STRUCTURE", f"{b.left()} bytes after the "
+                                        f"{'coordinates' if e_count else 'picks'}")
+        vertex_planes, w_at = [], 0
+        for c in named:
+            ps = pk[c]
+            if len(ps) < 3:  # among "the rest", after the picks are read (SPEC_NOTES 18)
+                fail("BAD_GROUP_STRUCTURE", f"named corner {c} on {len(ps)} face planes")
+            if len(ps) == 3:
+                vertex_planes.append(ps)
+                continue
+            i, j, l = picks[3 * w_at:3 * w_at + 3]
+            w_at += 1
+            if not i < j < l:
+                fail("BAD_GROUP_STRUCTURE", f"named corner {c}: picks {i, j, l} not ascending")
+            if l >= len(ps):
+                fail("BAD_GROUP_STRUCTURE", f"named corner {c}: pick {l} past its {len(ps)} face planes")
+            vertex_planes.append([ps[i], ps[j], ps[l]])
+        grid = []
+        if e_count:
+            if not (all(math.isfinite(x) for x in origin) and math.isfinite(step) and step > 0):
+                fail("BAD_GROUP_STRUCTURE", f"grid origin {origin}, step {step}")
+            # the predictor of each explicit corner: i0 of the attached triangle that names it anew,
+            # where that i0 is explicit; otherwise the previous explicit corner (none for the first).
+            # The rule of the "Explicit corners" paragraph, not the overview's bullet (SPEC_NOTES 23)
+            lim = 1 << 52
+            res = [[unzigzag(r) for r in residuals[a * e_count:(a + 1) * e_count]] for a in range(3)]
+            xyz = {}
+            for x, c in enumerate(explicit):
+                r = [res[a][x] for a in range(3)]
+                if any(abs(s) > lim for s in r):
+                    fail("BAD_GROUP_STRUCTURE", f"explicit corner {c}: residual {r} beyond 2^52")
+                j = named_by[c]
+                pred = None
+                if parents[j] is not None and flags[tris[j][0]]:
+                    pred = tris[j][0]
+                elif x > 0:
+                    pred = explicit[x - 1]
+                base = xyz[pred] if pred is not None else [0, 0, 0]
+                point = [a + s for a, s in zip(base, r)]
+                if any(abs(a) > lim for a in point):
+                    fail("BAD_GROUP_STRUCTURE", f"explicit corner {c}: coordinate {point} beyond 2^52")
+                xyz[c] = point
+            grid = [xyz[c] for c in explicit]
+        facets = [[f, *tri] for f, tri in zip(faces, tris)]
+        return {"explicit": explicit, "vertex_planes": vertex_planes, "grid": grid,
                 "origin": origin, "step": step, "facets": facets}
 
     # §10.1
