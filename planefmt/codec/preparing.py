@@ -26,10 +26,10 @@ from .lossy import drop_planes, merge_planes
 from .strategies import BODY_STRATEGIES, Body, GroupSpec, SCHEMES
 
 
-#: Closing the cracks of open meshes (:func:`planefmt.geometry.repair.mend_cracks`), as fractions of the tolerance: vertices
-#: closer than ``_MERGE`` of it (capped at the lossless tolerance) are one point written with two
-#: roundings (angle_block.STL: 46 pairs 6e-17 apart, so the solid looked open and took 24x the
-#: bytes as patches); T-vertices within ``_SPLIT`` of it of an edge split that edge.
+#: Closing the cracks of open meshes (:func:`planefmt.geometry.repair.mend_cracks`), as fractions of
+#: the tolerance: vertices closer than ``_MERGE`` of it (capped at the lossless tolerance) are one
+#: point written with two roundings (angle_block.STL: 46 pairs 6e-17 apart, so the solid looked open
+#: and took 24x the bytes as patches); T-vertices within ``_SPLIT`` of it of an edge split that edge.
 _MERGE = 1e-3
 
 _SPLIT = 0.1
