@@ -7,7 +7,7 @@ OUT    := out
 
 .PHONY: setup demo test test-slow mutate bench benchmarks roundtrip clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml planefmt/container/_chains.c
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e '.[test]'

@@ -274,3 +274,17 @@ def test_shell_tree_is_chosen_where_smaller_and_its_bound_holds(path, tolerance,
     diag = float(np.linalg.norm(np.ptp(decoded.vertices, axis=0)))
     bound = float(header.error_bound) * diag * (1 + 1e-6) + 1e-12 * diag
     assert independent_distance.hausdorff_lower_bound(v, f, decoded.vertices, decoded.faces) <= bound
+
+
+@pytest.mark.skipif(shellfields._resolve_forward is None, reason="the C extension was not built")
+def test_chains_resolve_the_same_in_c_and_in_numpy():
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 50, 5000):
+        back = rng.integers(1, 4, n)
+        pointer = np.where((np.arange(n) - back >= 0) & (rng.random(n) > 0.05), np.arange(n) - back, -1)
+        value, offset = rng.integers(-9, 9, n), rng.integers(-9, 9, n)
+        fast = shellfields.resolve_chains(value, pointer, offset)
+        slow = shellfields._jump(value.copy(), pointer.copy(), offset.copy())
+        assert np.array_equal(fast, slow)
+    with pytest.raises(FormatError, match="not an earlier entry"):
+        shellfields.resolve_chains(np.zeros(3, np.int64), np.array([-1, 2, 0]), np.zeros(3, np.int64))

@@ -11,6 +11,11 @@ from ..errors import FormatError
 from ..model import FREE, MAX_GRID, GroupKind, Shell
 from . import schema, varint
 
+try:
+    from ._chains import resolve as _resolve_forward
+except ImportError:  # built without a C compiler: pointer jumping in numpy does the same, more slowly
+    _resolve_forward = None
+
 
 def corner_codes(triangles: np.ndarray) -> np.ndarray:
     """The corner codes of spec §9.10 of ``triangles`` (T, 3) whose corners are numbered by first
@@ -149,10 +154,22 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
 
 def resolve_chains(value: np.ndarray, pointer: np.ndarray, offset: np.ndarray) -> np.ndarray:
     """``value[k]`` where ``pointer[k] < 0``, else ``offset[k]`` plus the resolved value at
-    ``pointer[k]``, which is always an earlier entry. Pointer jumping: each round halves every chain,
-    so a tree of depth 817 (CAD/box.STL) takes 11 rounds of numpy work over the arrays, where
-    following parents would take 817 or a loop over triangles."""
-    value, pointer, offset = value.copy(), pointer.copy(), offset.copy()
+    ``pointer[k]``, which is always an earlier entry. One forward pass in C (``_chains.c``) where the
+    extension was built; otherwise pointer jumping: each round halves every chain, so a tree of depth
+    817 (CAD/box.STL) takes 11 rounds of numpy work over the arrays."""
+    value = np.array(value, dtype=np.int64)
+    if _resolve_forward is not None:
+        try:
+            _resolve_forward(value, np.ascontiguousarray(pointer, dtype=np.int64),
+                             np.ascontiguousarray(offset, dtype=np.int64))
+        except ValueError as exc:
+            raise FormatError(f"shell tree: {exc}", code="BAD_GROUP_STRUCTURE") from None
+        return value
+    return _jump(value, np.array(pointer, dtype=np.int64), np.array(offset, dtype=np.int64))
+
+
+def _jump(value: np.ndarray, pointer: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    """:func:`resolve_chains` in numpy alone, in place on its (copied) arguments."""
     pending = np.flatnonzero(pointer >= 0)
     while len(pending):
         target = pointer[pending]
