@@ -342,13 +342,23 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         # A tree's named corners are solved with their planes in ascending order of reference, which the
         # writer renumbers (``reordered_tree``): every order of the three is measured, so the bound
         # holds for the one written.
-        orders = itertools.permutations(range(3)) if kind == GroupKind.SHELL_TREE else [(0, 1, 2)]
+        orders = itertools.permutations(range(3)) if kind == GroupKind.SHELL_TREE and not shell.explicit.all() \
+            else [(0, 1, 2)]
         for order in orders:
             vp = np.asarray(shell.vertex_planes, dtype=np.int64).reshape(-1, 3)[:, list(order)]
             decoded, _ = decode_shell(omega, h, replace(shell, vertex_planes=vp))
             moved = max(moved, float(np.linalg.norm(decoded - points, axis=1).max(initial=0.0)))
         groups[k] = replace(g, kind=kind, shell=shell)
     return replace(obj, groups=tuple(groups)), moved
+
+
+def _named_corners(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray, budget: float) -> int:
+    """How many corners of ``obj``'s shells the coded ``planes`` name within ``budget`` (model units)."""
+    count = 0
+    for k, plan in plans.items():
+        omega, h = from_triplets(planes[obj.groups[k].refs])
+        count += int((~encode_shell(plan, omega, h, budget).explicit).sum())
+    return count
 
 
 def _planeless(obj: _Object) -> _Object | None:
@@ -436,13 +446,25 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     variants = [(objects, candidates)]
     if not forced and all(f is not None for f in freed):
         variants.append((freed, candidates[:1]))
-    trials = [(objs, cod, q) for objs, cands in variants for cod, q in cands]
+    # The planeless variant first: a width whose planes name no corner only adds a plane table and face
+    # references to it, and is passed over unwritten.
+    trials = [(objs, cod, q) for objs, cands in variants[::-1] for cod, q in cands]
     plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants}
+    named_before = -1
     for k, (objs, cod, q) in enumerate(trials):
         progress.report("choosing a coding", k, len(trials))
         offsets = np.cumsum([0] + [len(o.triplets) for o in objs])
         rt = quantize.roundtrip(np.concatenate([o.triplets for o in objs]), cod, q)
         budget = tolerance * diag_src / (1.0 + 2.0 * tolerance)
+        if len(variants) > 1 and objs is objects:
+            named = sum(_named_corners(o, pl, rt[a:b], budget / sc)
+                        for o, pl, a, b, sc in zip(objs, plans[id(objs)], offsets[:-1], offsets[1:], scale))
+            if named == 0:
+                continue
+            if named == named_before:
+                # Finer planes name no more corners (SHELL_WIDTHS ascend): from here only the table grows.
+                break
+            named_before = named
         for _ in range(_SHELL_TIGHTENINGS):
             built, moved = zip(*(_shells_for(o, pl, rt[a:b], budget / sc)
                                  for o, pl, a, b, sc in zip(objs, plans[id(objs)], offsets[:-1], offsets[1:], scale)))

@@ -155,7 +155,8 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
 
     def size(objects: list[_Object], choice: _Choice) -> int:
         buf = io.BytesIO()
-        _write(scene, buf, meshes, objects, choice, tolerance, compress, compact)
+        # A candidate measured for its size only: the file written is verified.
+        _write(scene, buf, meshes, objects, choice, tolerance, compress, compact, verify=False)
         return len(buf.getvalue())
 
     objects, choice = _encode_objects(prepare, len(meshes), tolerance, coding, bits, watertight, size, scheme)
@@ -209,7 +210,7 @@ def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: floa
 
 
 def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int], objects: list[_Object],
-           choice: _Choice, tolerance: float, compress: bool, compact: bool) -> Header:
+           choice: _Choice, tolerance: float, compress: bool, compact: bool, verify: bool = True) -> Header:
     """Write the scene's ``objects`` (those of nodes ``meshes``) in the chosen coding; its header."""
     sealed = any(g.kind == GroupKind.SEALED for o in objects for g in o.groups)
     shells = any(g.kind in SHELL_KINDS for o in objects for g in o.groups)
@@ -245,7 +246,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     by_node = {i: (o, a) for i, o, a in zip(meshes, objects, offsets)}
     # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
     index = True if not compact else None
-    with _writer(target, header, compress, index) as w:
+    with _writer(target, header, compress, index, verify) as w:
         if scene.up_axis is not None:
             w.add_metadata(UP_AXIS, scene.up_axis)
         for i, node in enumerate(scene.nodes):
@@ -310,5 +311,6 @@ def _scene_diagonal(scene: Scene, worlds: list[np.ndarray], meshes: list[int]) -
     return d if math.isfinite(d) else None
 
 
-def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True) -> Writer:
-    return Writer(target, header, compress=compress, index=index)
+def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True,
+            verify: bool = True) -> Writer:
+    return Writer(target, header, compress=compress, index=index, verify=verify)

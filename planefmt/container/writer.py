@@ -47,17 +47,20 @@ class Writer:
     in it are written and must match what is written by :meth:`close`
     (``COUNT_MISMATCH`` otherwise, and the output is discarded); without them
     the file declares none. ``index``: write an ``iNDX`` chunk; None writes
-    one when the file is :data:`INDEX_MIN_BYTES` or more before it. Use as a context manager: leaving the block by an exception
-    discards a path target's temporary file.
+    one when the file is :data:`INDEX_MIN_BYTES` or more before it. ``verify``: check that each
+    shell group's body decodes to the shell given (spec §9.10, §9.11); the encoder turns it off only
+    to measure the size of a candidate it may not write. Use as a context manager: leaving the block
+    by an exception discards a path target's temporary file.
     """
 
     def __init__(self, target: str | os.PathLike | BinaryIO, header: Header, *, compress: bool = False,
-                 index: bool | None = True) -> None:
+                 index: bool | None = True, verify: bool = True) -> None:
         if int(header.coding) not in records.CODINGS.get(header.version[0], ()):
             raise PlnError(f"coding {int(header.coding)} cannot be written in a version {header.version[0]} file",
                            code="UNSUPPORTED_CODING")
         self._compress = compress
         self._index = index
+        self._verify = verify
         self._path: Path | None = None
         self._tmp: str | None = None
         if isinstance(target, (str, os.PathLike)):
@@ -179,11 +182,13 @@ class Writer:
         if kind == GroupKind.SHELL and int(kind) in records.kinds_of(*self._version):
             if shell is None:
                 raise PlnError("a shell group needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
-            shellfields.check_shell(shell, bounding)
+            if self._verify:
+                shellfields.check_shell(shell, bounding)
         elif kind == GroupKind.SHELL_TREE and int(kind) in records.kinds_of(*self._version):
             if shell is None:
                 raise PlnError("a shell tree needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
-            shellfields.check_shell_tree(shell, bounding)
+            if self._verify:
+                shellfields.check_shell_tree(shell, bounding)
         elif shell is not None:
             raise PlnError(f"shell groups need version 3.2 (shell trees 3.3), not {self._version[0]}."
                            f"{self._version[1]}", code="UNKNOWN_GROUP_KIND")
