@@ -1,12 +1,12 @@
 """Where a shell's bytes go on the corpus: version 3.2's layout (§8.9) against the shell tree of
-version 3.3 (§8.10), at draco-14's error, with draco-14 measured in the same run (issues 30, 31).
+version 3.3 (§9.11) and 3.4's (§9.12, the default choice since), at draco-14's error, with draco-14 measured in the same run (issues 30, 31).
 
 For each mesh, at draco-14's measured error on it (``D14_ERROR``: the
 certified measure of ``bench/compare.py``, as docs/benchmarks.md records it,
 to two digits), the default encoder (``codec.encode_scene``, shell scheme,
 deflate) writes the file twice: with version 3.2's shell layout only
 (``planefmt.codec.choosing.SHELL_LAYOUTS = (GroupKind.SHELL,)``, what the encoder wrote before
-3.3) and with its default choice (the shell tree where smaller). Printed per
+3.3) and with its default choice (a shell tree of kind 7 or 8 where smaller, labelled 3.4). Printed per
 mesh: triangles; draco-14's bytes (DracoPy, quantization 14, compression
 level 10); each file's bytes, its ratio to draco-14 and its plane table's
 bytes; bits per triangle of each field of the shell body, each field
@@ -16,7 +16,7 @@ is deflated whole):
 * 3.2: ``flags`` (explicit bits), ``planes`` (three references per named
   corner), ``grid`` (explicit corners as steps from the previous one),
   ``faces`` (face references), ``codes`` (3 corner codes per triangle);
-* 3.3: ``links`` (each triangle's parent and edge), ``codes`` (a root's
+* 3.4 (kinds 7 and 8 alike): ``links`` (each triangle's parent and edge), ``codes`` (a root's
   three corners, an attached triangle's third), ``faces`` (0 on the
   parent's plane), ``flags``, ``picks``, ``coordinates`` (residuals);
 
@@ -61,10 +61,10 @@ D14_ERROR = {
 
 
 def shell_fields(group) -> dict[str, bytes]:
-    """The fields of a shell group's kind data by name: spec 3.2 §8.9's or 3.3 §8.10's."""
+    """The fields of a shell group's kind data by name: spec §9.10's, §9.11's or §9.12's."""
     shell = group.shell
-    if group.kind == GroupKind.SHELL_TREE:
-        return shellfields.shell_tree_fields(shell)
+    if group.kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM):
+        return shellfields.shell_tree_fields(shell, group.kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
     fc = np.asarray(shell.facets, dtype=np.int64)
     grid = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
     return {"flags": np.packbits(np.asarray(shell.explicit, dtype=bool), bitorder="little").tobytes(),
@@ -105,7 +105,7 @@ def describe(data: bytes, triangles: int) -> dict:
     for g in groups:
         for name, field in shell_fields(g).items():
             bits[name] = bits.get(name, 0.0) + 8.0 * (len(zlib.compress(field, 9)) if field else 0) / triangles
-    trees = [g.shell.links for g in groups if g.kind == GroupKind.SHELL_TREE]
+    trees = [g.shell.links for g in groups if g.kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM)]
     depth = max(map(tree_depth, trees), default=0)
     return dict(bytes=len(data), planes=pln_parts(data)["planes"], bits=bits,
                 named=sum(int((~np.asarray(g.shell.explicit)).sum()) for g in groups),
@@ -119,7 +119,7 @@ def measure(rel: str) -> dict:
     scene, v, f = load(os.path.join(CORPUS, rel))
     draco = len(DracoPy.encode(v, f, quantization_bits=14, compression_level=10))
     row = dict(mesh=rel, triangles=len(f), draco=draco)
-    for name, layouts in (("3.2", (GroupKind.SHELL,)), ("3.3", codec.SHELL_KINDS)):
+    for name, layouts in (("3.2", (GroupKind.SHELL,)), ("3.4", codec.SHELL_KINDS)):
         data, enc, dec = encoded(scene, D14_ERROR[rel], layouts)
         row[name] = dict(describe(data, len(f)), encode=enc, decode=dec)
     return row
@@ -131,7 +131,7 @@ def main(argv: list[str]) -> int:
         r = measure(rel)
         rows.append(r)
         print(f"{r['mesh']}: {r['triangles']} triangles, draco-14 {r['draco']} B", flush=True)
-        for name in ("3.2", "3.3"):
+        for name in ("3.2", "3.4"):
             x = r[name]
             fields = " ".join(f"{k} {b:.1f}" for k, b in x["bits"].items())
             print(f"  {name}: {x['bytes']} B ({x['bytes'] / r['draco']:.2f}x draco-14; planes {x['planes']} B); "
@@ -140,7 +140,7 @@ def main(argv: list[str]) -> int:
     cad = [r for r in rows if r["mesh"].startswith("cad/")]
     if cad:
         print("CAD median pln@d14 / draco-14: " + ", ".join(
-            f"{name} {statistics.median(r[name]['bytes'] / r['draco'] for r in cad):.2f}" for name in ("3.2", "3.3")))
+            f"{name} {statistics.median(r[name]['bytes'] / r['draco'] for r in cad):.2f}" for name in ("3.2", "3.4")))
     return 0
 
 

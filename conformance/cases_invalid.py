@@ -28,7 +28,7 @@ from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Qua
 from . import reference
 from .build import CUBE, SPEC_HEADER, Layout, box, finish, frame, offsets
 from .cases_valid import (IN, L_CELLS, L_PLANES, L_TREE, OUT, SEALED_CUBE_FACETS, SEALED_CUBE_VERTICES, SHELL_CUBE,
-                          SHELL_MIXED, SHELL_PYRAMID, TREE_APEX, TREE_CUBE, TREE_MIXED, TREE_PYRAMID)
+                          SHELL_MIXED, SHELL_PYRAMID, TREE_APEX, TREE_CUBE, TREE_MIXED, TREE_PYRAMID, tree_of)
 
 
 @dataclass(frozen=True)
@@ -800,14 +800,14 @@ def _():
 CUBE_REFS = b"\x06\x00\x01\x01\x01\x01\x01\0"  # 6 references 0..5 as differences, role bits 0
 
 
-def tree_file(fields: dict[str, bytes], refs: bytes = CUBE_REFS, version: tuple[int, int] = (3, 3)) -> bytes:
-    """The cube file of ``shell_file`` with a shell tree (kind 7) of the body ``fields`` (spec 3.3 §8.10)."""
-    return shell_file(refs + b"".join(fields.values()), version, kind=7)
+def tree_file(fields: dict[str, bytes], refs: bytes = CUBE_REFS, version: tuple[int, int] = (3, 3), kind: int = 7) -> bytes:
+    """The cube file of ``shell_file`` with a shell tree (kind 7, or 8) of the body ``fields`` (spec §9.11, §9.12)."""
+    return shell_file(refs + b"".join(fields.values()), version, kind=kind)
 
 
-def tree_fields(shell=TREE_CUBE, **changed: bytes) -> dict[str, bytes]:
-    """The fields of ``shell``'s body by name, ``changed`` ones replaced."""
-    return {**shellfields.shell_tree_fields(shell), **changed}
+def tree_fields(shell=TREE_CUBE, parallelogram: bool = False, **changed: bytes) -> dict[str, bytes]:
+    """The fields of ``shell``'s body by name (kind 8's with ``parallelogram``), ``changed`` ones replaced."""
+    return {**shellfields.shell_tree_fields(shell, parallelogram), **changed}
 
 
 def tree_codes(codes: list[int]) -> bytes:
@@ -816,6 +816,31 @@ def tree_codes(codes: list[int]) -> bytes:
 
 #: TREE_CUBE's corner codes: the root's three new corners, then each attached triangle's third.
 CUBE_TREE_CODES = list(varint.decode(shellfields.shell_tree_fields(TREE_CUBE)["codes"], 14, "codes")[0])
+
+
+@case("xv3_parallelogram_in_3_3", "UNKNOWN_GROUP_KIND", "a well-formed kind 8 shell tree pyramid in a version 3.3 "
+      "file, whose version has no kind 8")
+def _():
+    return tree_file(tree_fields(TREE_PYRAMID, parallelogram=True), refs=b"\x01\x00\0", kind=8)
+
+
+#: A zigzag strip of 100 free triangles (links alternately 2 and 3), 102 explicit corners: as kind 8
+#: every corner from the fourth on is predicted x_(k-1) + x_(k-2) - x_(k-3).
+STRIP = tree_of([1] * 102, [], np.zeros((102, 3), dtype=np.int64),
+                [(-1, 0, 1, 2)] + [(-1, k + 1, k, k + 2) if k % 2 else (-1, k, k + 1, k + 2) for k in range(1, 100)],
+                [0] + [2 if k % 2 else 3 for k in range(1, 100)])
+
+
+@case("xv3_parallelogram_grows", "BAD_GROUP_STRUCTURE", "version 3.4 kind 8 zigzag strip of 100 triangles whose "
+      "explicit corners' x residuals are all 2^52 (the most the spec allows): through the parallelograms the "
+      "coordinates grow with the square of the corner's place, past 2^52 at once and past 2^63 by corner 91, "
+      "so a reader that checks only after the last, in 64-bit integers, may see them wrap")
+def _():
+    residuals = np.zeros((3, 102), dtype=np.int64)
+    residuals[0, 1:] = 1 << 52
+    coordinates = varint.encode(varint.zigzag(residuals.reshape(-1)))
+    return tree_file(tree_fields(STRIP, parallelogram=True, coordinates=coordinates), refs=b"\x01\x00\0",
+                     version=(3, 4), kind=8)
 
 
 @case("xv3_tree_in_3_2", "UNKNOWN_GROUP_KIND", "a well-formed shell tree cube (kind 7) in a version 3.2 file, "

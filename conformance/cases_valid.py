@@ -450,6 +450,12 @@ TREE_APEX = tree_of([0] * 5, [(0, 1, 4), (0, 2, 3), (0, 1, 2), (0, 3, 4), (1, 2,
                     [(0, 0, 1, 2), (0, 1, 0, 3), (4, 3, 0, 4), (1, 4, 0, 2), (2, 4, 2, 1), (3, 4, 1, 3)],
                     [0, 1, 2, 2, 3, 3])
 V33_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 3))
+#: TREE_CUBE with every corner explicit, on the grid of step 1 at the origin: as kind 8 (spec §9.12),
+#: corners 3 to 7 are each predicted by the parallelogram of their triangle's shared edge and the
+#: parent's opposite corner (corner 3: 0 + 2 - 1 = (1, 0, 1), residual 0).
+TREE_BOX = tree_of([1] * 8, [], [(1, 0, 0), (1, 1, 0), (1, 1, 1), (1, 0, 1), (0, 0, 1), (0, 1, 1), (0, 1, 0), (0, 0, 0)],
+                   TREE_CUBE.facets, TREE_CUBE.links)
+V34_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 4))
 
 #: A newer minor version's additions: OBJT bytes after the transform, a group of unknown kind 9
 #: between two known ones, a new flag bit (the PHDR bytes are each case's header extra).
@@ -640,9 +646,9 @@ CASES = [
                Group(0, GroupKind.SEALED, tuple(range(7)), bounding=(6,), vertex_planes=SEALED_CORNER_VERTICES,
                      facets=SEALED_CUBE_FACETS)),
               decoded_bbox=True, index=False),
-    ValidCase("minor_3_4", "version 3.4: 8 more PHDR bytes after the counts and a new flag bit, 5 more OBJT bytes "
+    ValidCase("minor_3_5", "version 3.5: 8 more PHDR bytes after the counts and a new flag bit, 5 more OBJT bytes "
               "after the transform, a group of unknown kind 9 (skipped) between two known ones",
-              dataclasses.replace(V3_CUBE, version=(3, 4), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
+              dataclasses.replace(V3_CUBE, version=(3, 5), extra=b"\x01\x02\x03\x04\x05\x06\x07\x08"),
               **NEWER_MINOR),
     ValidCase("shell_cube_v3_2", "version 3.2: the unit cube as a shell (kind 6), float32, with index: 8 corners "
               "each named by its three face planes, 12 triangles on the 6 faces, corners numbered by first use",
@@ -677,6 +683,16 @@ CASES = [
               dataclasses.replace(V33_CUBE, coding=Coding.FLOAT64),
               (Obj("pyramid"), Planes(APEX_PLANES), Group(0, GroupKind.SHELL_TREE, tuple(range(5)), shell=TREE_APEX)),
               decoded_bbox=True),
+    ValidCase("shell_tree_box_v3_4", "version 3.4: the shell tree cube (kind 8) with every corner explicit on the "
+              "grid of step 1: the root's three corners coded from the previous explicit corner, every later one "
+              "from the parallelogram of its triangle's shared edge and the parent's opposite corner (all residuals "
+              "0 but the root's)", V34_CUBE,
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL_TREE_PARALLELOGRAM, tuple(range(6)), shell=TREE_BOX))),
+    ValidCase("shell_tree_pyramid_v3_4", "version 3.4: the open square pyramid of shell_tree_pyramid_v3_3 as kind 8: "
+              "corners 3 and 4 coded as residuals from parallelograms, (3, 1, 2) and (1, 3, 2) on the grid",
+              V34_CUBE,
+              (Obj("pyramid"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_TREE_PARALLELOGRAM, (0,), shell=TREE_PYRAMID),
+               Colour(0, np.array([[0, 128, 0, 255]], dtype=np.uint8))), decoded_bbox=True),
     ValidCase("cube_meta_up_z", "version 3.0: the cube of cube_v3 with a mETA chunk up_axis = Z right after PHDR "
               "(spec §10.3: any version may hold it; its version stays 3.0)", V3_CUBE,
               (Meta(UP_AXIS, "Z"), *cube_ops())),

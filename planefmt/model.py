@@ -61,6 +61,11 @@ class GroupKind(IntEnum):
     SEALED = 5
     SHELL = 6
     SHELL_TREE = 7
+    SHELL_TREE_PARALLELOGRAM = 8
+
+
+#: The shell trees (spec §9.11): kind 7, and kind 8 whose explicit corners parallelograms predict (§9.12).
+TREE_KINDS = (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM)
 
 
 #: BSP tree leaf tokens in version 1.0's numbering (spec Appendix A.1), which the model uses for every

@@ -57,7 +57,8 @@ quantizations = st.builds(
 
 def groups_for(n: int, draw, version: tuple[int, int] = (1, 0)) -> list[dict]:
     kinds = [k for k in GroupKind if (k != GroupKind.SEALED or (version >= (3, 1) and n >= 3))
-             and (k != GroupKind.SHELL or version >= (3, 2)) and (k != GroupKind.SHELL_TREE or version >= (3, 3))]
+             and (k != GroupKind.SHELL or version >= (3, 2)) and (k != GroupKind.SHELL_TREE or version >= (3, 3))
+             and (k != GroupKind.SHELL_TREE_PARALLELOGRAM or version >= (3, 4))]
     out = []
     for kind in draw(st.lists(st.sampled_from(kinds), min_size=1, max_size=4)):
         m = draw(st.integers(3 if kind == GroupKind.SEALED else 1, min(n, 12)))
@@ -79,7 +80,7 @@ def groups_for(n: int, draw, version: tuple[int, int] = (1, 0)) -> list[dict]:
                                                                  max_size=len(corners)))), corners])
         if kind == GroupKind.SHELL:
             g["shell"] = draw(shells(m, bounding))
-        if kind == GroupKind.SHELL_TREE:
+        if kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM):
             g["shell"] = as_tree(draw(shells(m, bounding)))
         if kind == GroupKind.CELLS:
             g["cells"] = (np.array([0, 3], dtype=np.uint32) % (2 * m), np.array([1], dtype=np.uint32))
@@ -134,8 +135,8 @@ def files(draw):
     planes = draw(plane_sets)
     coding = draw(st.sampled_from(list(Coding)))
     q = draw(quantizations) if coding.quantized else None
-    versions = [(2, 0), (3, 0), (3, 1), (3, 2), (3, 3)] if coding == Coding.PREDICTED else \
-        [(1, 0), (2, 0), (3, 0), (3, 1), (3, 2), (3, 3)]
+    versions = [(2, 0), (3, 0), (3, 1), (3, 2), (3, 3), (3, 4)] if coding == Coding.PREDICTED else \
+        [(1, 0), (2, 0), (3, 0), (3, 1), (3, 2), (3, 3), (3, 4)]
     version = draw(st.sampled_from(versions))
     groups = groups_for(len(planes), draw, version)
     if version[0] >= 2:

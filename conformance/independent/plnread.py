@@ -80,7 +80,7 @@ SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
 # (1.0, 2.0 and 3.3; pln-3 §11: a reader of 3.m reads major versions 1, 2 and 3)
-READER_VERSIONS = {1: 0, 2: 0, 3: 3}
+READER_VERSIONS = {1: 0, 2: 0, 3: 4}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 
@@ -107,8 +107,8 @@ KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
 # and later only, kind 6, the shell (§8.9), in files of version 3.2 and later,
 # kind 7, the shell tree (§8.10), in files of version 3.3 and later; in older
 # files each is a kind the file's version does not have
-SEALED_KIND, SHELL_KIND, SHELL_TREE_KIND = 5, 6, 7
-KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3)}
+SEALED_KIND, SHELL_KIND, SHELL_TREE_KIND, PARALLELOGRAM_KIND = 5, 6, 7, 8
+KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3), PARALLELOGRAM_KIND: (3, 4)}
 SHELL_COORD_LIMIT = 2**52  # pln-3 §8.9: each grid step and coordinate of magnitude at most 2^52
 SHELL_GRID_BYTES = 32  # pln-3 §8.9: origin x, y, z and step s, f64 each
 
@@ -834,8 +834,8 @@ class Reader:
             g["vertex_planes"], g["facets"] = self.read_sealed(c, m, set(bounding))
         elif shell:
             g["shell"] = self.read_shell(c, m, set(bounding))
-        elif kind == SHELL_TREE_KIND:
-            g["shell"] = self.read_shell_tree(c, m, set(bounding))
+        elif kind in (SHELL_TREE_KIND, PARALLELOGRAM_KIND):
+            g["shell"] = self.read_shell_tree(c, m, set(bounding), kind == PARALLELOGRAM_KIND)
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.chunk_list.append((offset, b"GRUP", index))
@@ -1124,7 +1124,7 @@ class Reader:
         return {"explicit": explicit, "vertex_planes": named, "grid": grid,
                 "origin": origin, "step": step, "facets": facets}
 
-    def read_shell_tree(self, c, m, bounding):
+    def read_shell_tree(self, c, m, bounding, parallelogram=False):
         """pln-3 §8.10, kind 7: corner_count V, triangle_count T; T links
         (0 a root, else 3(d - 1) + e + 1: attached to edge e of triangle
         j - d); the corner codes (three for a root, one for an attached
@@ -1137,7 +1137,10 @@ class Reader:
         checked as read); then the triangles and faces are checked, which
         decide the number of picks; then the rest.  Returned as the JSON
         "shell" object of a kind 6 group (the triangles decoded in order,
-        each attached one from its parent's corners)."""
+        each attached one from its parent's corners).  pln.md §9.12, kind 8
+        (``parallelogram``): an explicit corner named by an attached triangle
+        whose two shared corners and whose parent's opposite corner are
+        explicit is predicted by i0 + i1 - opposite."""
         v = c.varint("corner_count")
         t = c.varint("triangle_count")
         left = c.remaining()
@@ -1253,9 +1256,15 @@ class Reader:
                 j = creator[k]
                 first = tris[j][0]
                 pred = first if links[j] and first in is_explicit else previous
+                base = [xyz[pred][a] if pred is not None else 0 for a in range(3)]
+                if parallelogram and links[j]:
+                    d, e = (links[j] - 1) // 3 + 1, (links[j] - 1) % 3
+                    second, opposite = tris[j][1], tris[j - d][(e + 2) % 3]
+                    if first in is_explicit and second in is_explicit and opposite in is_explicit:
+                        base = [xyz[first][a] + xyz[second][a] - xyz[opposite][a] for a in range(3)]
                 xyz[k] = []
                 for a in range(3):
-                    value = residuals[a][r] + (xyz[pred][a] if pred is not None else 0)
+                    value = residuals[a][r] + base[a]
                     if abs(residuals[a][r]) > SHELL_COORD_LIMIT or abs(value) > SHELL_COORD_LIMIT:
                         raise PlnError("BAD_GROUP_STRUCTURE",
                                        "explicit corner %d: residual %d to coordinate %d, beyond 2^52"

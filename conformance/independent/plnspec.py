@@ -35,7 +35,7 @@ OBJECT_LIMIT = 1 << 24
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 # §10.3: the values of the keywords the spec defines
 META_VALUES = {"up_axis": ("Y", "Z")}
-NEWEST_MINOR = {1: 0, 2: 0, 3: 3}  # §9.3: "for this document: 1.0, 2.0, 3.3"
+NEWEST_MINOR = {1: 0, 2: 0, 3: 4}  # §9.3: "for this document: 1.0, 2.0, 3.4"
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
 PI_F32 = np.frombuffer(struct.pack("<I", 0x40490FDB), "<f4")[0]
@@ -507,7 +507,7 @@ class Reader:
     # §9
     def kinds(self) -> set[int]:
         if self.major == 3:
-            return set(range(5 + min(self.minor, 3)))  # §9.3: 3.1 adds kind 5, 3.2 kind 6, 3.3 kind 7
+            return set(range(5 + min(self.minor, 4)))  # §9.3: 3.1 adds kind 5, 3.2 kind 6, 3.3 kind 7, 3.4 kind 8
         return set(range(5))
 
     def grup(self, p: bytes, offset: int):
@@ -554,8 +554,8 @@ class Reader:
             group.update(self.sealed(b, refs, roles))
         elif kind == 6:
             group["shell"] = self.shell(b, refs, roles)
-        elif kind == 7:
-            group["shell"] = self.shell_tree(b, refs, roles)
+        elif kind in (7, 8):
+            group["shell"] = self.shell_tree(b, refs, roles, parallelogram=kind == 8)
         self.chunks.append((offset, b"GRUP", index))
         self.groups.append(group)
         self.group_refs.append(len(refs))
@@ -764,9 +764,11 @@ class Reader:
                 "origin": origin, "step": step, "facets": facets}
 
     # §9.11 (added at version 3.3, from §9.11 and the sections it refers to)
-    def shell_tree(self, b: Cursor, refs: list[int], roles: list[int]) -> dict:
+    def shell_tree(self, b: Cursor, refs: list[int], roles: list[int], parallelogram: bool = False) -> dict:
         """A shell stored along a spanning tree of its triangles. Reported as the shell of §9.10
-        with the same corners and triangles (conformance/README.md, kind 7)."""
+        with the same corners and triangles (conformance/README.md, kind 7). Kind 8 (§9.12,
+        ``parallelogram``) predicts an explicit corner by the parallelogram of its attached
+        triangle's shared edge and the parent's opposite corner, where all three are explicit."""
         m = len(refs)
         # 1. the two counts, read, then checked against the bytes left after both (as §9.11 says;
         #    the same pattern as §9.10, SPEC_NOTES 15)
@@ -906,6 +908,11 @@ class Reader:
                 elif x > 0:
                     pred = explicit[x - 1]
                 base = xyz[pred] if pred is not None else [0, 0, 0]
+                if parallelogram and parents[j] is not None:
+                    p, e = parents[j]
+                    i0, i1, o = tris[j][0], tris[j][1], tris[p][(e + 2) % 3]
+                    if flags[i0] and flags[i1] and flags[o]:
+                        base = [a + b_ - c_ for a, b_, c_ in zip(xyz[i0], xyz[i1], xyz[o])]
                 point = [a + s for a, s in zip(base, r)]
                 if any(abs(a) > lim for a in point):
                     fail("BAD_GROUP_STRUCTURE", f"explicit corner {c}: coordinate {point} beyond 2^52")

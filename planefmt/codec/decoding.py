@@ -26,7 +26,7 @@ from ..groups.patches import decode_patch_groups
 from ..groups.sealed import decode_sealed
 from ..groups.shells import Shell, decode_shell
 from ..groups.solids import decode_bsp_group
-from ..model import Coding, GroupKind, Header, Mesh, Quantization
+from ..model import TREE_KINDS, Coding, GroupKind, Header, Mesh, Quantization
 
 
 class GroupLike(Protocol):
@@ -129,12 +129,12 @@ def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: Pla
 
 
 def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A ``SHELL`` or ``SHELL_TREE`` group: its triangles over its corners, named by three planes or
-    explicit (spec §9.10, §9.11). Linear time: one batched 3×3 solve."""
+    """A shell group, kind 6, 7 or 8: its triangles over its corners, named by three planes or
+    explicit (spec §9.10 to §9.12). Linear time: one batched 3×3 solve."""
     shell = group.shell
     if shell is None:
         raise GeometryError(f"part group {label}: shell groups are kind 6 only from version 3.2 on, kind 7 "
-                            f"from 3.3", code="UNKNOWN_GROUP_KIND")
+                            f"from 3.3, kind 8 from 3.4", code="UNKNOWN_GROUP_KIND")
     omega, h = from_triplets(planes)
     try:
         v, t = decode_shell(omega, h, shell)
@@ -157,10 +157,11 @@ DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], Deco
     GroupKind.SEALED: decode_sealed_group,
     GroupKind.SHELL: decode_shell_group,
     GroupKind.SHELL_TREE: decode_shell_group,
+    GroupKind.SHELL_TREE_PARALLELOGRAM: decode_shell_group,
 }
 #: The kinds of shell groups, which the encoder chooses between by size once their corners are known
 #: (:data:`planefmt.codec.choosing.SHELL_LAYOUTS`).
-SHELL_KINDS = (GroupKind.SHELL, GroupKind.SHELL_TREE)
+SHELL_KINDS = (GroupKind.SHELL, *TREE_KINDS)
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,7 @@ from ..errors import GeometryError
 from ..geometry.planes import transform_points
 from ..groups.shells import reordered, reordered_tree
 from ..groups.solids import FLAT_STRATEGIES, STRATEGIES, Splitter
-from ..model import BSP_MAX_SPLIT, UP_AXIS, Coding, GroupKind, Header, Mesh, Node, Quantization, Scene, Units
+from ..model import BSP_MAX_SPLIT, TREE_KINDS, UP_AXIS, Coding, GroupKind, Header, Mesh, Node, Quantization, Scene, Units
 from .choosing import _Choice, _choose, _choose_shells
 from .decoding import SHELL_KINDS
 from .preparing import LOSSLESS_TOLERANCE, _Object, _diagonal, _prepare, _world_transforms
@@ -215,6 +215,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     sealed = any(g.kind == GroupKind.SEALED for o in objects for g in o.groups)
     shells = any(g.kind in SHELL_KINDS for o in objects for g in o.groups)
     trees = any(g.kind == GroupKind.SHELL_TREE for o in objects for g in o.groups)
+    parallelograms = any(g.kind == GroupKind.SHELL_TREE_PARALLELOGRAM for o in objects for g in o.groups)
     compact = compact or sealed or shells
     table = quantize.roundtrip(np.concatenate([o.triplets for o in objects]), choice.coding,
                                choice.quantization)
@@ -237,7 +238,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     if compact and stored.quantized:
         stored = min((Coding.QUANTIZED, Coding.PREDICTED), key=lambda c: _table_bytes(rows, c, choice.quantization,
                                                                                        compress))
-    header = Header(version=((3, 3) if trees else (3, 2) if shells else (3, 1) if sealed else (3, 0)) if compact
+    header = Header(version=((3, 4) if parallelograms else (3, 3) if trees else (3, 2) if shells else (3, 1) if sealed else (3, 0)) if compact
                     else (1, 0), lossy=choice.lossy, coding=stored,
                     quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
                     tolerance=float(tolerance), error_bound=choice.error_bound,
@@ -294,7 +295,7 @@ def _permuted(g: GroupSpec, perm: np.ndarray) -> GroupSpec:
         facets = np.asarray(g.facets, dtype=np.int64).copy()
         facets[:, 0] = local[facets[:, 0]]
         facets = facets[np.argsort(facets[:, 0], kind="stable")]
-    shell = None if g.shell is None else (reordered_tree if g.kind == GroupKind.SHELL_TREE else reordered)(g.shell, local)
+    shell = None if g.shell is None else (reordered_tree if g.kind in TREE_KINDS else reordered)(g.shell, local)
     return GroupSpec(g.kind, g.refs[perm], g.bounding[perm], cells, tree, vertex_planes, facets, shell=shell)
 
 

@@ -16,17 +16,18 @@ import numpy as np
 from . import quantize, schema, varint
 from .chunks import Limits
 from ..errors import FormatError, LimitError, PlnError, VersionError
-from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, UP_AXES, UP_AXIS, Coding, Colours, GroupKind, Header,
-                    Metadata, ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
+from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, TREE_KINDS, UP_AXES, UP_AXIS, Coding, Colours,
+                    GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
 from .shellfields import _decode_shell, _decode_shell_tree, _shell_body, _shell_tree_body
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 3}
+VERSIONS = {1: 0, 2: 0, 3: 4}
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
-KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3)}
+KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3),
+                int(GroupKind.SHELL_TREE_PARALLELOGRAM): (3, 4)}
 
 
 def _kind(value: int) -> GroupKind | int:
@@ -299,7 +300,7 @@ def encode_group(g: PartGroup, compress: bool, major: int = 1) -> bytes:
     if g.shell is not None and major != 3:
         raise PlnError("shell groups need version 3.2", code="UNKNOWN_GROUP_KIND")
     body = _compact_body(g) if major >= 2 else _body(g)
-    method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind == GroupKind.SHELL_TREE else 9)
+    method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9)
     if major == 3:
         return schema.GroupHead3.build(dict(index=g.index, object=g.object, kind=int(g.kind), compression=method,
                                             raw_size=len(body), body=stored))
@@ -337,8 +338,8 @@ def _compact_body(g: PartGroup) -> bytes:
                 varint.encode(np.column_stack([gaps, facets[:, 1:]]).astype(np.uint64))]
     elif g.kind == GroupKind.SHELL and g.shell is not None:
         out.append(_shell_body(g.shell))
-    elif g.kind == GroupKind.SHELL_TREE and g.shell is not None:
-        out.append(_shell_tree_body(g.shell))
+    elif g.kind in TREE_KINDS and g.shell is not None:
+        out.append(_shell_tree_body(g.shell, g.kind == GroupKind.SHELL_TREE_PARALLELOGRAM))
     else:
         out.append(g.extra)
     return b"".join(out)
@@ -443,8 +444,8 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
         extra = rest.tobytes()
     elif head.kind == GroupKind.SHELL:
         shell = _decode_shell(rest, bounding)
-    elif head.kind == GroupKind.SHELL_TREE:
-        shell = _decode_shell_tree(rest, bounding)
+    elif head.kind in TREE_KINDS:
+        shell = _decode_shell_tree(rest, bounding, head.kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
     elif head.kind == GroupKind.CELLS:
         cells = _decode_compact_cells(rest, count, limits)
     elif head.kind == GroupKind.BSP:

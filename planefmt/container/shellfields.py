@@ -168,6 +168,45 @@ def resolve_chains(value: np.ndarray, pointer: np.ndarray, offset: np.ndarray) -
     return _jump(value, np.array(pointer, dtype=np.int64), np.array(offset, dtype=np.int64))
 
 
+def resolve_sums(value: np.ndarray, pointer: np.ndarray, plus: np.ndarray, minus: np.ndarray,
+                 offset: np.ndarray) -> np.ndarray:
+    """:func:`resolve_chains` with a second earlier entry added and a third subtracted where ``plus``
+    and ``minus`` are not -1 (a parallelogram's a + b - c, spec §9.12), every ``value`` and ``offset``
+    within :data:`MAX_GRID`; ``BAD_GROUP_STRUCTURE`` where a resolved value is not (checked as each
+    is made: a chain of parallelograms can double at every step). One forward pass in C; without it,
+    the lower-triangular system (I - P) x = value solved by scipy (exact while every value is within
+    2^53; a value beyond that is beyond MAX_GRID, however rounded)."""
+    value = np.array(value, dtype=np.int64)
+    pointer, plus, minus = (np.ascontiguousarray(a, dtype=np.int64) for a in (pointer, plus, minus))
+    if _resolve_forward is not None:
+        try:
+            _resolve_forward(value, pointer, np.ascontiguousarray(offset, dtype=np.int64), plus, minus, MAX_GRID)
+        except ValueError as exc:
+            raise FormatError(f"shell tree: {exc}", code="BAD_GROUP_STRUCTURE") from None
+        except OverflowError:
+            raise FormatError("shell tree: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE") from None
+        return value
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.linalg import spsolve_triangular
+
+    n = len(value)
+    row = np.arange(n)
+    live = pointer >= 0
+    parts = [(row[live], pointer[live], -1.0), (row[live & (plus >= 0)], plus[live & (plus >= 0)], -1.0),
+             (row[live & (minus >= 0)], minus[live & (minus >= 0)], 1.0), (row, row, 1.0)]
+    if any((c >= r).any() for r, c, _ in parts[:3]):
+        raise FormatError("shell tree: a predictor is not an earlier entry", code="BAD_GROUP_STRUCTURE")
+    matrix = coo_matrix((np.concatenate([np.full(len(r), w) for r, _, w in parts]),
+                         (np.concatenate([r for r, _, _ in parts]), np.concatenate([c for _, c, _ in parts]))),
+                        shape=(n, n)).tocsr()
+    rhs = np.where(live, np.asarray(offset, dtype=np.int64), value).astype(np.float64)
+    with np.errstate(over="ignore", invalid="ignore"):
+        solved = spsolve_triangular(matrix, rhs, lower=True)
+    if not (np.abs(solved) <= MAX_GRID).all():
+        raise FormatError("shell tree: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE")
+    return np.rint(solved).astype(np.int64)
+
+
 def _jump(value: np.ndarray, pointer: np.ndarray, offset: np.ndarray) -> np.ndarray:
     """:func:`resolve_chains` in numpy alone, in place on its (copied) arguments."""
     pending = np.flatnonzero(pointer >= 0)
@@ -201,29 +240,53 @@ def _tree_parents(links: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def _tree_predictors(links: np.ndarray, triangles: np.ndarray, explicit: np.ndarray, per: np.ndarray,
-                     new: np.ndarray) -> np.ndarray:
-    """For each corner, the corner its grid coordinates are coded from (spec 3.3 §8.10): the first
-    corner of the attached triangle that names it anew, where that corner is explicit; otherwise the
-    previous explicit corner; -1 for none (coded from 0). ``per``: each triangle's corner codes (3 or
-    1); ``new``: which codes name a corner anew."""
+                     new: np.ndarray, parallelogram: bool = False) -> np.ndarray:
+    """For each corner, the corners its grid coordinates are coded from, ``(V, 3)``: ``(p, a, b)``
+    for the prediction p + a - b, -1 where a term is absent (spec §9.11, §9.12). Kind 7 (§9.11): p the
+    first corner of the attached triangle that names the corner anew, where that corner is explicit;
+    otherwise the previous explicit corner; -1 for none (coded from 0). Kind 8 (``parallelogram``,
+    §9.12): where that triangle's first two corners and its parent's corner opposite them are all
+    explicit, those three. ``per``: each triangle's corner codes (3 or 1); ``new``: which codes name a
+    corner anew."""
     v = len(explicit)
     creator = np.repeat(np.arange(len(triangles)), per)[new]
     gate = triangles[creator, 0]
+    attached = links[creator] != 0
     previous = np.r_[-1, np.maximum.accumulate(np.where(explicit, np.arange(v), -1))[:-1]]
-    return np.where((links[creator] != 0) & explicit[gate], gate, previous)
+    out = np.full((v, 3), -1, dtype=np.int64)
+    out[:, 0] = np.where(attached & explicit[gate], gate, previous)
+    if parallelogram:
+        link = links[creator]
+        parent, edge = creator - (link - 1) // 3 - 1, (link - 1) % 3
+        opposite = triangles[np.maximum(parent, 0), (edge + 2) % 3]
+        second = triangles[creator, 1]
+        use = attached & explicit[gate] & explicit[second] & explicit[opposite]
+        out[use, 1], out[use, 2] = second[use], opposite[use]
+    return out
+
+
+def _predict(grid: np.ndarray, terms: np.ndarray) -> np.ndarray:
+    """The predictions ``(V, 3)`` of :func:`_tree_predictors`' ``terms`` from every corner's ``grid``."""
+    def at(j: np.ndarray) -> np.ndarray:
+        return np.where(j[:, None] >= 0, grid[np.maximum(j, 0)], 0)
+    return at(terms[:, 0]) + at(terms[:, 1]) - at(terms[:, 2])
 
 
 def shell_kind_data(kind: GroupKind, shell: Shell) -> bytes:
-    """The kind data of a SHELL (spec 3.2 §8.9) or SHELL_TREE (3.3 §8.10) group."""
-    return _shell_tree_body(shell) if kind == GroupKind.SHELL_TREE else _shell_body(shell)
+    """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11) or SHELL_TREE_PARALLELOGRAM (§9.12) group."""
+    if kind == GroupKind.SHELL:
+        return _shell_body(shell)
+    return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
 
 
-def check_shell_tree(shell: Shell, bounding: np.ndarray) -> None:
-    """``FormatError`` (``BAD_GROUP_STRUCTURE``) unless ``shell`` is a shell tree of spec 3.3 §8.10 for
-    a group whose references have roles ``bounding``: what its body decodes to, it is."""
+def check_shell_tree(shell: Shell, bounding: np.ndarray, parallelogram: bool = False) -> None:
+    """``FormatError`` (``BAD_GROUP_STRUCTURE``) unless ``shell`` is a shell tree of spec §9.11 (§9.12
+    with ``parallelogram``) for a group whose references have roles ``bounding``: what its body decodes
+    to, it is."""
     if shell.links is None or len(shell.links) != len(shell.facets):
         raise FormatError("shell tree: one link per triangle", code="BAD_GROUP_STRUCTURE")
-    back = _decode_shell_tree(np.frombuffer(_shell_tree_body(shell), dtype=np.uint8), np.asarray(bounding, bool))
+    back = _decode_shell_tree(np.frombuffer(_shell_tree_body(shell, parallelogram), dtype=np.uint8),
+                              np.asarray(bounding, bool), parallelogram)
     fields = ("explicit", "vertex_planes", "grid", "facets", "links")
     if not all(np.array_equal(np.asarray(getattr(back, f)).reshape(-1), np.asarray(getattr(shell, f)).reshape(-1))
                for f in fields) or (back.grid.size and (not np.array_equal(back.origin, shell.origin)
@@ -233,13 +296,15 @@ def check_shell_tree(shell: Shell, bounding: np.ndarray) -> None:
                           "planes in ascending order)", code="BAD_GROUP_STRUCTURE")
 
 
-def _shell_tree_body(shell: Shell) -> bytes:
-    """The kind data of a SHELL_TREE group (spec 3.3 §8.10)."""
-    return b"".join(shell_tree_fields(shell).values())
+def _shell_tree_body(shell: Shell, parallelogram: bool = False) -> bytes:
+    """The kind data of a SHELL_TREE group (spec §9.11), or with ``parallelogram`` of a
+    SHELL_TREE_PARALLELOGRAM group (§9.12)."""
+    return b"".join(shell_tree_fields(shell, parallelogram).values())
 
 
-def shell_tree_fields(shell: Shell) -> dict[str, bytes]:
-    """The fields of a SHELL_TREE body (spec 3.3 §8.10) by name, in body order."""
+def shell_tree_fields(shell: Shell, parallelogram: bool = False) -> dict[str, bytes]:
+    """The fields of a SHELL_TREE body (spec §9.11), or a SHELL_TREE_PARALLELOGRAM one (§9.12), by
+    name, in body order."""
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
     links = np.asarray(shell.links, dtype=np.int64)
@@ -273,8 +338,7 @@ def shell_tree_fields(shell: Shell) -> dict[str, bytes]:
     if explicit.any():
         g_all = np.zeros((v, 3), dtype=np.int64)
         g_all[explicit] = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
-        pred = _tree_predictors(links, tri, explicit, np.where(root, 3, 1), new)
-        base = np.where(pred[:, None] >= 0, g_all[np.maximum(pred, 0)], 0)
+        base = _predict(g_all, _tree_predictors(links, tri, explicit, np.where(root, 3, 1), new, parallelogram))
         out["grid"] = schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step)))
         # Axis by axis: each axis's residuals deflate as one run (CAD/box.STL: 7.5 kB against 8.8 kB
         # interleaved).
@@ -282,8 +346,9 @@ def shell_tree_fields(shell: Shell) -> dict[str, bytes]:
     return out
 
 
-def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray) -> Shell:
-    """The corners and triangles of a SHELL_TREE body (spec 3.3 §8.10), checked."""
+def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: bool = False) -> Shell:
+    """The corners and triangles of a SHELL_TREE body (spec §9.11), or with ``parallelogram`` of a
+    SHELL_TREE_PARALLELOGRAM body (§9.12), checked."""
     def bad(reason: str) -> FormatError:
         return FormatError(f"shell tree: {reason}", code="BAD_GROUP_STRUCTURE")
     (v, t), pos = varint.decode(raw, 2, "shell tree counts")
@@ -380,12 +445,14 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray) -> Shell:
         steps = varint.unzigzag(deltas).reshape(3, -1).T
         if np.abs(steps).max(initial=0) > MAX_GRID:
             raise bad("a grid residual is beyond 2^52")
-        pred = _tree_predictors(links, tri, explicit, per, new)
+        terms = _tree_predictors(links, tri, explicit, per, new, parallelogram)
         ex = np.flatnonzero(explicit)
         residual = np.zeros((3, v), dtype=np.int64)
         residual[:, ex] = steps.T
-        chained = resolve_chains(residual.reshape(-1), (np.where(pred >= 0, pred, -1) + np.where(
-            pred >= 0, np.arange(3)[:, None] * v, 0)).reshape(-1), residual.reshape(-1))
+        # One chain per axis: axis i's entries are i * V on.
+        pointers = [np.where(j >= 0, j + np.arange(3)[:, None] * v, -1).reshape(-1) for j in terms.T]
+        flat = residual.reshape(-1)
+        chained = resolve_sums(flat, *pointers, flat)
         grid = chained.reshape(3, v).T[ex]
         if np.abs(grid).max(initial=0) > MAX_GRID:
             raise bad("a grid coordinate is beyond 2^52")

@@ -20,8 +20,8 @@ import numpy as np
 from . import records, schema, shellfields
 from .chunks import chunk_bytes, is_ancillary, valid_type
 from ..errors import PlnError
-from ..model import (Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record, Shell,
-                    UnknownChunk)
+from ..model import (TREE_KINDS, Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record,
+                    Shell, UnknownChunk)
 
 def _read_umask() -> int:
     # os.umask can only be read by setting it: done once at import, not per file (threads).
@@ -184,11 +184,11 @@ class Writer:
                 raise PlnError("a shell group needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
             if self._verify:
                 shellfields.check_shell(shell, bounding)
-        elif kind == GroupKind.SHELL_TREE and int(kind) in records.kinds_of(*self._version):
+        elif kind in TREE_KINDS and int(kind) in records.kinds_of(*self._version):
             if shell is None:
                 raise PlnError("a shell tree needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
             if self._verify:
-                shellfields.check_shell_tree(shell, bounding)
+                shellfields.check_shell_tree(shell, bounding, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
         elif shell is not None:
             raise PlnError(f"shell groups need version 3.2 (shell trees 3.3), not {self._version[0]}."
                            f"{self._version[1]}", code="UNKNOWN_GROUP_KIND")
