@@ -354,3 +354,31 @@ def test_the_smaller_predictor_is_chosen(path, kind, gain):
     chosen = kind == GroupKind.SHELL_TREE_PARALLELOGRAM
     assert sizes[not chosen] > gain * sizes[chosen]
     assert len(decoded.faces) == len(f) and header.error_bound <= 3.5e-5
+
+
+def test_convex_groups_beside_a_shell_are_verified_against_their_own_faces(monkeypatch):
+    # CesiumMilkTruck.glb at 1e-3: objects of convex groups and a shell, whose convex groups' faces are
+    # not the object's first; verified against the wrong faces, its encoding raised IndexError.
+    from planefmt.codec import choosing
+    from planefmt.geometry.hausdorff import relative_hausdorff
+    from planefmt_converters.assemble import flatten
+
+    reduced = []
+    real = choosing._convex_part
+
+    def spy(obj):
+        part = real(obj)
+        reduced.append((obj, part))
+        return part
+    monkeypatch.setattr(choosing, "_convex_part", spy)
+    scene, _ = registry.read(CORPUS / "gltf_scene/CesiumMilkTruck.glb")
+    buf = io.BytesIO()
+    header = codec.encode_scene(scene, buf, tolerance=1e-3, compress=True, compact=True)
+    mixed = [(o, p) for o, p in reduced if len(p.groups) < len(o.groups)]
+    assert mixed
+    for obj, part in mixed:
+        for g, h in zip([g for g in obj.groups if g.kind == GroupKind.CONVEX], part.groups):
+            assert np.array_equal(part.faces[h.faces], obj.faces[g.faces])
+    source, decoded = flatten(scene), flatten(codec.decode_scene(io.BytesIO(buf.getvalue())))
+    measured = relative_hausdorff((source.vertices, source.faces), (decoded.vertices, decoded.faces), tolerance=1e-7)
+    assert measured.upper <= header.error_bound * (1 + 1e-6) and header.error_bound <= 1e-3

@@ -395,6 +395,10 @@ def _convex_part(obj: _Object) -> _Object:
     """The object reduced to its convex groups and their source faces, for the paper's verification."""
     groups = tuple(g for g in obj.groups if g.kind == GroupKind.CONVEX)
     faces = obj.faces[np.concatenate([g.faces for g in groups])]
+    # Each group's faces renumbered into the reduced list: left as they were, they would index the
+    # whole object's faces (CesiumMilkTruck.glb at 1e-3: out of range; in range, the wrong body).
+    ends = np.cumsum([len(g.faces) for g in groups])
+    groups = tuple(replace(g, faces=np.arange(end - len(g.faces), end)) for g, end in zip(groups, ends))
     planes = np.unique(np.concatenate([g.refs for g in groups]))
     omega, h = from_triplets(obj.triplets[planes])
     used = np.unique(faces)
