@@ -45,6 +45,7 @@ import json
 import math
 import multiprocessing
 import os
+import statistics
 import subprocess
 import sys
 import time
@@ -89,7 +90,7 @@ def _point(scene, v, f, codec: str, param: float, conn) -> None:
                    "measure": time.perf_counter() - t2})
     except Exception as exc:  # noqa: BLE001 - a failure is a result, reported as a missing point
         conn.send({"failed": f"{type(exc).__name__}: {str(exc).splitlines()[0][:120] if str(exc) else ''}",
-                   "trace": traceback.format_exc(limit=3)})
+                   "trace": traceback.format_exc(limit=-4)})
     finally:
         conn.close()
 
@@ -246,7 +247,7 @@ def plot(rows: list[dict], path: str, caption: str) -> None:
                     ax.annotate(_label(codec, r["param"]), (e, b), textcoords="offset points",
                                 xytext=(4, 3) if codec == "draco" else (4, -9), fontsize=6.5, color=s["color"],
                                 alpha=0.65)
-            missing += [f"{_label(codec, r['param'])}: {'timeout' if 'timeout' in r['failed'] else 'failed'}"
+            missing += [f"{'Draco ' if codec == 'draco' else '.pln '}{_label(codec, r['param'])}: {_why(r)}"
                         for r in row[codec] if "failed" in r]
         if row.get("failed"):
             missing.append(row["failed"][:60])
@@ -255,13 +256,16 @@ def plot(rows: list[dict], path: str, caption: str) -> None:
                     color="0.25", va="bottom", wrap=True)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        ax.margins(x=0.12, y=0.12)
+        ax.autoscale_view()
         ax.grid(True, which="major", lw=0.5, alpha=0.5)
         ax.grid(True, which="minor", lw=0.3, alpha=0.25)
-        ax.yaxis.set_major_locator(ticker.LogLocator(base=10, subs=(1.0, 1.5, 2.0, 3.0, 5.0, 7.0)))
+        lo, hi = ax.get_ylim()
+        subs = (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0) if hi / lo < 4 else (1.0, 1.5, 2.0, 3.0, 5.0, 7.0)
+        ax.yaxis.set_major_locator(ticker.LogLocator(base=10, subs=subs))
         ax.yaxis.set_major_formatter(ticker.FuncFormatter(lambda y, _: f"{y:g}"))
         ax.yaxis.set_minor_formatter(ticker.NullFormatter())
         ax.tick_params(labelsize=8)
-        ax.margins(x=0.12, y=0.12)
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     for ax in axes[-1]:
@@ -277,8 +281,24 @@ def plot(rows: list[dict], path: str, caption: str) -> None:
                frameon=False, bbox_to_anchor=(0.5, 0.995))
     fig.text(0.5, 0.005, caption, ha="center", va="bottom", fontsize=8, color="0.3")
     fig.tight_layout(rect=(0, 0.03, 1, 0.965))
-    fig.savefig(path, dpi=100)
+    fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+def _why(r: dict) -> str:
+    """A failed point's reason, short: timeout, or the exception's type."""
+    return "timeout" if r["failed"].startswith("timeout") else r["failed"].split(":")[0]
+
+
+def _where(r: dict) -> str:
+    """The innermost frame of a failed point's traceback, ``file:line in function``, or ''."""
+    import re
+
+    frames = re.findall(r'File "([^"]+)", line (\d+), in (\S+)', r.get("trace", ""))
+    if not frames:
+        return ""
+    f, line, fn = frames[-1]
+    return f"{os.path.relpath(f, ROOT) if f.startswith(ROOT) else f}:{line} in {fn}"
 
 
 def _e(x: float) -> str:
@@ -321,6 +341,7 @@ def report(rows: list[dict], meta: dict) -> str:
     lines += ["", "Per mesh, in words (from the same interpolation):", ""]
     for row in rows:
         lines.append("- " + _sentence(row, readings[row["mesh"]]))
+    lines += [""] + overall(rows, readings)
     if meta.get("note"):
         lines += ["", meta["note"]]
     lines += ["", "## Points", "",
@@ -336,7 +357,9 @@ def report(rows: list[dict], meta: dict) -> str:
             for r in row[codec]:
                 setting = f"q={int(r['param'])}" if codec == "draco" else f"T={r['param']:g}"
                 if "failed" in r:
-                    lines.append(f"| {name} | {setting} | missing: {r['failed']} | | | {r['wall']:.0f} wall |")
+                    at = f" (at `{_where(r)}`)" if _where(r) else ""
+                    lines.append(f"| {name} | {setting} | missing: {r['failed']}{at} | | | "
+                                 f"{r['wall']:.1f} wall |")
                     continue
                 lines.append(f"| {name} | {setting} | {r['bytes']:,} | {8 * r['bytes'] / row['triangles']:.2f} | "
                              f"{r['error']:.3g}{'' if r['certified'] else ' (uncert.)'} | "
@@ -367,13 +390,42 @@ def _sentence(row: dict, rd: dict) -> str:
                      f"{_e(mx[0])})")
     dr, pr = rd["draco_range"], rd["pln_range"]
     if pr[0] < dr[0] * 0.999:
-        parts.append(f"; only .pln reaches errors below {_e(dr[0])} (down to {_e(pr[0])}), Draco at q ≤ "
-                     f"{max(int(r['param']) for r in row['draco'])} does not")
+        finest = max(int(r["param"]) for r in row["draco"] if "failed" not in r)
+        parts.append(f"; below {_e(dr[0])}, Draco's finest measured point (q{finest}), only .pln was measured "
+                     f"(down to {_e(pr[0])}): no comparison there")
     if dr[1] > pr[1] * 1.001:
         worst = max(points(row, "pln"), key=lambda x: x[0])[2]["param"]
         parts.append(f"; only Draco reaches errors above {_e(pr[1])} (up to {_e(dr[1])}): .pln's largest "
                      f"measured error is {_e(pr[1])} (tolerance {worst:g})")
+    missing = [f"{'Draco ' if c == 'draco' else '.pln '}{_label(c, r['param'])} ({_why(r)})"
+               for c in ("draco", "pln") for r in row[c] if "failed" in r]
+    if missing:
+        parts.append(f"; missing points: {', '.join(missing)}")
     return parts[0] + ", " + "".join(parts[1:]) + "."
+
+
+def overall(rows: list[dict], readings: dict) -> list[str]:
+    """A paragraph over all meshes, from the same interpolation."""
+    done = [r for r in rows if readings[r["mesh"]].get("overlap")]
+    if not done:
+        return []
+    below = [r["mesh"] for r in done if readings[r["mesh"]]["min"][1] < 1]
+    all_below = [r["mesh"] for r in done if readings[r["mesh"]]["max"][1] < 1]
+    finer = [r["mesh"] for r in done
+             if readings[r["mesh"]]["at"] and readings[r["mesh"]]["at"][-1][1] / readings[r["mesh"]]["at"][-1][2]
+             < readings[r["mesh"]]["at"][0][1] / readings[r["mesh"]]["at"][0][2]]
+    out = [f"Over the {len(done)} meshes compared: .pln lies below Draco somewhere on {len(below)} "
+           f"({', '.join(below) or 'none'}), below throughout on {len(all_below)}, and above throughout on "
+           f"{len(done) - len(below)}."]
+    for e in READ_AT:
+        ratios = sorted(p / d for r in done for ee, p, d in readings[r["mesh"]]["at"] if ee == e)
+        if len(ratios) >= 2:
+            mid = statistics.median(ratios)
+            out.append(f"At error {_e(e)}: .pln / Draco from {ratios[0]:.2f} to {ratios[-1]:.2f}, "
+                       f"median {mid:.2f} over {len(ratios)} meshes.")
+    out.append(f"On {len(finer)} of {len(done)} meshes the ratio at the finest compared error of the list above is "
+               "smaller than at the coarsest: .pln gains on Draco as the error shrinks.")
+    return [" ".join(out)]
 
 
 # --------------------------------------------------------------------------- main
