@@ -1,0 +1,272 @@
+/**
+ * The convex polytope of a set of half-spaces {x : ω·x ≤ h} (spec §9.5, and the polytopes of
+ * patches §9.8, cells §9.6 and tree leaves §9.7), as faces with vertex loops.
+ *
+ * The spec prescribes no algorithm or triangulation. This one clips a box by one half-space after
+ * another, which needs no interior point and no linear program: O(m · size) for m planes, fine for
+ * the hundreds of planes a convex group holds (a shell is the kind for large surfaces). Each
+ * vertex keeps the three planes it lies on and is recomputed from them, so clipping a huge
+ * starting box costs no accuracy. A vertex within a rounding margin of a plane counts as on it,
+ * so that k > 3 planes through one point (a cube corner) give one vertex (§9.4), and vertices
+ * closer than 1e-9 × the diagonal are merged at the end.
+ */
+import { fail } from './errors.mjs';
+
+/** A vertex counts as on a plane within this fraction of its coordinates' and h's magnitude. */
+const ON_PLANE = 1e-12;
+/** Vertices closer than this fraction of the polytope's diagonal are one (§9.4's MUST). */
+const MERGE = 1e-9;
+/** The starting box: this many times the largest |h|; a vertex on it means unbounded. */
+const BOX = 1e6;
+
+/**
+ * @typedef {object} Polytope
+ * @property {Float64Array} points 3 per vertex
+ * @property {{plane: number, loop: Int32Array}[]} faces counter-clockwise seen from outside
+ */
+
+/**
+ * Intersects the inner half-spaces of planes (nx, ny, nz, h), or fails with EMPTY_POLYTOPE
+ * (empty or no interior) or UNBOUNDED_POLYTOPE.
+ * @param {Float64Array} planes 4 per plane: ωx, ωy, ωz, h
+ * @param {number} count planes
+ * @returns {Polytope} faces name their plane by its position in `planes`
+ */
+export function intersectHalfSpaces(planes, count) {
+  let scale = 0;
+  for (let i = 0; i < count; i++) scale = Math.max(scale, Math.abs(planes[4 * i + 3]));
+  if (scale === 0) scale = 1;
+  const all = new Float64Array(4 * (count + 6));
+  all.set(planes.subarray(0, 4 * count));
+  const R = BOX * scale;
+  for (let a = 0; a < 3; a++) {
+    all[4 * (count + 2 * a) + a] = 1;
+    all[4 * (count + 2 * a) + 3] = R;
+    all[4 * (count + 2 * a + 1) + a] = -1;
+    all[4 * (count + 2 * a + 1) + 3] = R;
+  }
+  const poly = new Clipper(all, count);
+  for (let i = 0; i < count; i++) {
+    if (poly.clip(i) === 'empty') fail('EMPTY_POLYTOPE', `nothing left inside plane ${i}`);
+  }
+  for (let v = 0; v < poly.nv; v++) {
+    for (let s = 0; s < 3; s++) if (poly.vp[3 * v + s] >= count) fail('UNBOUNDED_POLYTOPE', 'a vertex on no three of its planes');
+  }
+  return poly.merged();
+}
+
+class Clipper {
+  /** @param {Float64Array} planes all planes, the box's 6 after `count` @param {number} count */
+  constructor(planes, count) {
+    this.planes = planes;
+    this.nv = 8;
+    this.vx = new Float64Array(24);
+    this.vp = new Int32Array(24);
+    /** @type {{plane: number, loop: Int32Array}[]} */
+    this.faces = [];
+    // the box: corner (i, j, k) bit-coded, each on one plane of each axis pair
+    for (let c = 0; c < 8; c++) {
+      for (let a = 0; a < 3; a++) {
+        const hi = (c >> a) & 1;
+        const p = count + 2 * a + (hi ? 0 : 1);
+        this.vx[3 * c + a] = hi ? planes[4 * p + 3] : -planes[4 * p + 3];
+        this.vp[3 * c + a] = p;
+      }
+    }
+    // faces counter-clockwise seen from outside
+    const quads = [
+      [0, [1, 3, 7, 5]], [1, [0, 4, 6, 2]],
+      [2, [2, 6, 7, 3]], [3, [0, 1, 5, 4]],
+      [4, [4, 5, 7, 6]], [5, [0, 2, 3, 1]],
+    ];
+    for (const [f, loop] of quads) this.faces.push({ plane: count + /** @type {number} */ (f), loop: Int32Array.from(/** @type {number[]} */ (loop)) });
+  }
+
+  /**
+   * Clips by plane p: 'empty' if nothing with an interior is left, 'redundant' if it cuts nothing.
+   * @param {number} p
+   */
+  clip(p) {
+    const P = this.planes;
+    const [wx, wy, wz, h] = [P[4 * p], P[4 * p + 1], P[4 * p + 2], P[4 * p + 3]];
+    const nv = this.nv;
+    const vx = this.vx;
+    const dist = new Float64Array(nv);
+    const side = new Int8Array(nv);
+    let pos = 0;
+    let neg = 0;
+    for (let v = 0; v < nv; v++) {
+      const x = vx[3 * v];
+      const y = vx[3 * v + 1];
+      const z = vx[3 * v + 2];
+      const d = wx * x + wy * y + wz * z - h;
+      const tol = ON_PLANE * (Math.abs(x) + Math.abs(y) + Math.abs(z) + Math.abs(h));
+      dist[v] = d;
+      side[v] = d > tol ? 1 : d < -tol ? -1 : 0;
+      if (side[v] > 0) pos++;
+      else if (side[v] < 0) neg++;
+    }
+    if (pos === 0) return 'redundant';
+    if (neg === 0) return 'empty';
+
+    // new vertices on cut edges, shared by the two faces of each edge
+    /** @type {Map<number, number>} */
+    const onEdge = new Map();
+    const newX = [];
+    const newP = [];
+    const makeVertex = (/** @type {number} */ a, /** @type {number} */ b, /** @type {number} */ facePlane) => {
+      const key = a < b ? a * nv + b : b * nv + a;
+      const known = onEdge.get(key);
+      if (known !== undefined) {
+        newP[3 * (known - nv) + 1] = facePlane;
+        return known;
+      }
+      const t = dist[a] / (dist[a] - dist[b]);
+      const id = nv + newX.length / 3;
+      for (let c = 0; c < 3; c++) newX.push(vx[3 * a + c] + t * (vx[3 * b + c] - vx[3 * a + c]));
+      newP.push(facePlane, -1, p);
+      onEdge.set(key, id);
+      return id;
+    };
+    /** @type {Map<number, number>} directed edges of the new face, from → to */
+    const cut = new Map();
+    const total = () => nv + newX.length / 3;
+    const addCut = (/** @type {number} */ u, /** @type {number} */ w) => {
+      // the face's edge u→w on the plane is w→u in the new face; an edge seen both ways is interior
+      if (cut.get(u) === w) cut.delete(u);
+      else cut.set(w, u);
+    };
+    const kept = [];
+    for (const face of this.faces) {
+      const loop = face.loop;
+      const k = loop.length;
+      let anyPos = false;
+      for (let i = 0; i < k; i++) if (side[loop[i]] > 0) anyPos = true;
+      let out = loop;
+      if (anyPos) {
+        const list = [];
+        for (let i = 0; i < k; i++) {
+          const a = loop[i];
+          const b = loop[(i + 1) % k];
+          if (side[a] <= 0) list.push(a);
+          if (side[a] * side[b] < 0) list.push(makeVertex(a, b, face.plane));
+        }
+        if (list.length < 3) continue;
+        out = Int32Array.from(list);
+      }
+      const n = out.length;
+      for (let i = 0; i < n; i++) {
+        const u = out[i];
+        const w = out[(i + 1) % n];
+        if ((u >= nv || side[u] === 0) && (w >= nv || side[w] === 0)) addCut(u, w);
+      }
+      kept.push({ plane: face.plane, loop: out });
+    }
+    // the new face: the cut edges chained into one loop
+    if (cut.size >= 3) {
+      const start = cut.keys().next().value;
+      const loop = [start];
+      for (let v = /** @type {number} */ (cut.get(start)); v !== start; v = /** @type {number} */ (cut.get(v))) {
+        if (v === undefined || loop.length > cut.size) return 'redundant';
+        loop.push(v);
+      }
+      if (loop.length !== cut.size) return 'redundant';
+      kept.push({ plane: p, loop: Int32Array.from(loop) });
+    }
+    this.faces = kept;
+    this.compact(newX, newP, total());
+    return 'cut';
+  }
+
+  /**
+   * Appends the new vertices (recomputed from their three planes where well conditioned), then
+   * drops the vertices no face uses and renumbers.
+   * @param {number[]} newX @param {number[]} newP @param {number} total
+   */
+  compact(newX, newP, total) {
+    const nv = this.nv;
+    const remap = new Int32Array(total).fill(-1);
+    let count = 0;
+    for (const f of this.faces) for (const v of f.loop) if (remap[v] < 0) remap[v] = count++;
+    const vx = new Float64Array(3 * count);
+    const vp = new Int32Array(3 * count);
+    for (let v = 0; v < total; v++) {
+      const r = remap[v];
+      if (r < 0) continue;
+      if (v < nv) {
+        for (let c = 0; c < 3; c++) {
+          vx[3 * r + c] = this.vx[3 * v + c];
+          vp[3 * r + c] = this.vp[3 * v + c];
+        }
+      } else {
+        const i = v - nv;
+        for (let c = 0; c < 3; c++) {
+          vx[3 * r + c] = newX[3 * i + c];
+          vp[3 * r + c] = newP[3 * i + c];
+        }
+        if (vp[3 * r + 1] < 0) vp[3 * r + 1] = vp[3 * r]; // an edge seen by one face only: keep the estimate
+        else solveInto(this.planes, vp[3 * r], vp[3 * r + 1], vp[3 * r + 2], vx, 3 * r);
+      }
+    }
+    for (const f of this.faces) for (let i = 0; i < f.loop.length; i++) f.loop[i] = remap[f.loop[i]];
+    this.vx = vx;
+    this.vp = vp;
+    this.nv = count;
+  }
+
+  /** @returns {Polytope} the faces with vertices closer than MERGE × diagonal welded */
+  merged() {
+    const { vx, nv } = this;
+    const lo = [Infinity, Infinity, Infinity];
+    const hi = [-Infinity, -Infinity, -Infinity];
+    for (let v = 0; v < nv; v++) {
+      for (let c = 0; c < 3; c++) {
+        lo[c] = Math.min(lo[c], vx[3 * v + c]);
+        hi[c] = Math.max(hi[c], vx[3 * v + c]);
+      }
+    }
+    const tol = MERGE * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    const parent = Int32Array.from({ length: nv }, (_, i) => i);
+    const root = (/** @type {number} */ v) => {
+      while (parent[v] !== v) v = parent[v] = parent[parent[v]];
+      return v;
+    };
+    for (const f of this.faces) {
+      const n = f.loop.length;
+      for (let i = 0; i < n; i++) {
+        const a = f.loop[i];
+        const b = f.loop[(i + 1) % n];
+        const d = Math.hypot(vx[3 * a] - vx[3 * b], vx[3 * a + 1] - vx[3 * b + 1], vx[3 * a + 2] - vx[3 * b + 2]);
+        if (d <= tol) parent[root(a)] = root(b);
+      }
+    }
+    const faces = [];
+    for (const f of this.faces) {
+      const loop = [];
+      for (const v of f.loop) {
+        const r = root(v);
+        if (loop[loop.length - 1] !== r) loop.push(r);
+      }
+      while (loop.length > 1 && loop[0] === loop[loop.length - 1]) loop.pop();
+      if (loop.length >= 3) faces.push({ plane: f.plane, loop: Int32Array.from(loop) });
+    }
+    return { points: vx, faces };
+  }
+}
+
+/**
+ * Where planes a, b, c meet, by Cramer's rule, written to out[at..at+2] unless the normals are
+ * nearly dependent (then out keeps its estimate).
+ * @param {Float64Array} P @param {number} a @param {number} b @param {number} c
+ * @param {Float64Array} out @param {number} at
+ */
+function solveInto(P, a, b, c, out, at) {
+  const [ax, ay, az, ah] = [P[4 * a], P[4 * a + 1], P[4 * a + 2], P[4 * a + 3]];
+  const [bx, by, bz, bh] = [P[4 * b], P[4 * b + 1], P[4 * b + 2], P[4 * b + 3]];
+  const [cx, cy, cz, ch] = [P[4 * c], P[4 * c + 1], P[4 * c + 2], P[4 * c + 3]];
+  const det = ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+  if (!(Math.abs(det) > 1e-9)) return;
+  out[at] = (ah * (by * cz - bz * cy) - ay * (bh * cz - bz * ch) + az * (bh * cy - by * ch)) / det;
+  out[at + 1] = (ax * (bh * cz - bz * ch) - ah * (bx * cz - bz * cx) + az * (bx * ch - bh * cx)) / det;
+  out[at + 2] = (ax * (by * ch - bh * cy) - ay * (bx * ch - bh * cx) + ah * (bx * cy - by * cx)) / det;
+}

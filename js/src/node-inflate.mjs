@@ -1,0 +1,16 @@
+/** The InflateFn of Node's zlib (the one module of src/ that imports Node). */
+import zlib from 'node:zlib';
+
+/** @type {import('./compression.mjs').InflateFn} */
+export function nodeInflate(stored, maxOutputLength) {
+  try {
+    // info: the engine's bytesWritten is the input the stream took, to find bytes after its end
+    const { buffer, engine } = /** @type {any} */ (zlib.inflateSync(stored, { info: true, maxOutputLength }));
+    return { output: new Uint8Array(buffer.buffer, buffer.byteOffset, buffer.length), consumed: engine.bytesWritten };
+  } catch (err) {
+    const e = /** @type {any} */ (err);
+    if (e.code === 'Z_BUF_ERROR') e.truncated = true;
+    if (e.code === 'ERR_BUFFER_TOO_LARGE') e.tooLong = true;
+    throw e;
+  }
+}
