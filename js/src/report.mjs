@@ -81,7 +81,8 @@ function facets(s) {
  */
 function geometryJson(file) {
   const { container: c, meshes } = file;
-  if (meshes.every((m) => m === null) && c.groups.some((g) => !g.skipped)) return null;
+  // a group of a kind not decoded (cells, trees) leaves the file's geometry unreported: null
+  if (meshes.some((m, i) => m === null && !c.groups[i].skipped)) return null;
   const world = worldMatrices(c.objects);
   const lo = [Infinity, Infinity, Infinity];
   const hi = [-Infinity, -Infinity, -Infinity];
