@@ -19,6 +19,13 @@ const MERGE = 1e-9;
 /** The starting box: this many times the largest |h|; a vertex on it means unbounded. */
 const BOX = 1e6;
 
+/** Vertex and loop entries one group may make the clipper visit (§12.4 lets a decoder bound its
+ * work): clipping costs m × the polytope's size, so a hostile group of 10^5 planes would
+ * otherwise take minutes; 1e8 visits take about 3 s (about 5,000 planes tangent to a sphere). */
+export const WORK_LIMIT = 1e8;
+
+/** @typedef {{left: number}} Budget work left for one group, shared by its polytopes */
+
 /**
  * @typedef {object} Polytope
  * @property {Float64Array} points 3 per vertex
@@ -30,9 +37,10 @@ const BOX = 1e6;
  * (empty or no interior) or UNBOUNDED_POLYTOPE.
  * @param {Float64Array} planes 4 per plane: ωx, ωy, ωz, h
  * @param {number} count planes
+ * @param {Budget} budget decremented by the work done; LIMIT_EXCEEDED below 0
  * @returns {Polytope} faces name their plane by its position in `planes`
  */
-export function intersectHalfSpaces(planes, count) {
+export function intersectHalfSpaces(planes, count, budget) {
   let scale = 0;
   for (let i = 0; i < count; i++) scale = Math.max(scale, Math.abs(planes[4 * i + 3]));
   if (scale === 0) scale = 1;
@@ -48,6 +56,8 @@ export function intersectHalfSpaces(planes, count) {
   const poly = new Clipper(all, count);
   for (let i = 0; i < count; i++) {
     if (poly.clip(i) === 'empty') fail('EMPTY_POLYTOPE', `nothing left inside plane ${i}`);
+    budget.left -= poly.size;
+    if (budget.left < 0) fail('LIMIT_EXCEEDED', `decoding work above ${WORK_LIMIT} vertex visits`);
   }
   for (let v = 0; v < poly.nv; v++) {
     for (let s = 0; s < 3; s++) if (poly.vp[3 * v + s] >= count) fail('UNBOUNDED_POLYTOPE', 'a vertex on no three of its planes');
@@ -59,6 +69,8 @@ class Clipper {
   /** @param {Float64Array} planes all planes, the box's 6 after `count` @param {number} count */
   constructor(planes, count) {
     this.planes = planes;
+    /** vertices plus loop entries: the work of one clip */
+    this.size = 32;
     this.nv = 8;
     this.vx = new Float64Array(24);
     this.vp = new Int32Array(24);
@@ -187,7 +199,12 @@ class Clipper {
     const nv = this.nv;
     const remap = new Int32Array(total).fill(-1);
     let count = 0;
-    for (const f of this.faces) for (const v of f.loop) if (remap[v] < 0) remap[v] = count++;
+    let entries = 0;
+    for (const f of this.faces) {
+      entries += f.loop.length;
+      for (const v of f.loop) if (remap[v] < 0) remap[v] = count++;
+    }
+    this.size = count + entries;
     const vx = new Float64Array(3 * count);
     const vp = new Int32Array(3 * count);
     for (let v = 0; v < total; v++) {

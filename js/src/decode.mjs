@@ -1,6 +1,6 @@
 /** Geometry of part groups (spec §9.4-§9.11): each group to an indexed triangle mesh. */
 import { fail, PlnError } from './errors.mjs';
-import { intersectHalfSpaces } from './convex.mjs';
+import { intersectHalfSpaces, WORK_LIMIT } from './convex.mjs';
 import { IN_LEAF } from './solids.mjs';
 
 /**
@@ -42,15 +42,17 @@ export function decodeGroup(group, table) {
   if (group.skipped) return null;
   const planes = planesOf(group, table);
   const m = group.refs.length;
+  /** @type {import('./convex.mjs').Budget} */
+  const budget = { left: WORK_LIMIT };
   const base = { kind: group.kind, freeRef: m - 1 };
   switch (group.kind) {
     case 0:
-      return { ...base, ...polytopeFaces(group, planes, null) };
+      return { ...base, ...polytopeFaces(group, planes, null, budget) };
     case 3:
     case 4: {
       const faceRefs = [];
       for (let i = 0; i < m; i++) if (!group.roles[i]) faceRefs.push(i);
-      const mesh = polytopeFaces(group, planes, faceRefs);
+      const mesh = polytopeFaces(group, planes, faceRefs, budget);
       if (mesh.indices.length === 0) fail('EMPTY_POLYTOPE', 'no face on a face plane');
       if (group.kind === 4) {
         const ix = mesh.indices;
@@ -62,11 +64,11 @@ export function decodeGroup(group, table) {
       for (const cell of group.data.cells) {
         const hs = new Float64Array(4 * cell.length);
         cell.forEach((/** @type {number} */ e, /** @type {number} */ k) => halfSpace(planes, e >> 1, e & 1, hs, k));
-        intersectHalfSpaces(hs, cell.length);
+        intersectHalfSpaces(hs, cell.length, budget);
       }
       return null;
     case 2:
-      checkTreeLeaves(group.data.tree, planes);
+      checkTreeLeaves(group.data.tree, planes, budget);
       return null;
     default:
       return { ...base, ...decodeShell(group.data, planes) };
@@ -85,8 +87,9 @@ function halfSpace(planes, j, s, out, k) {
 /**
  * Every IN leaf of a tree (§9.7) must be bounded; empty leaves are allowed.
  * @param {number[]} tree tokens in version 1 numbering @param {Float64Array} planes
+ * @param {import('./convex.mjs').Budget} budget
  */
-function checkTreeLeaves(tree, planes) {
+function checkTreeLeaves(tree, planes, budget) {
   /** @type {number[]} */
   const path = []; // entries 2j + s of the splits above the current token
   /** @type {number[]} */
@@ -101,7 +104,7 @@ function checkTreeLeaves(tree, planes) {
       const hs = new Float64Array(4 * path.length);
       path.forEach((e, k) => halfSpace(planes, e >> 1, e & 1, hs, k));
       try {
-        intersectHalfSpaces(hs, path.length);
+        intersectHalfSpaces(hs, path.length, budget);
       } catch (err) {
         if (!(err instanceof PlnError && err.code === 'EMPTY_POLYTOPE')) throw err;
       }
@@ -124,8 +127,9 @@ function checkTreeLeaves(tree, planes) {
  * @param {Float64Array} planes of the references
  * @param {number[] | null} emit null: every face (kind 0); else the face references whose faces
  *   are emitted, in order, once per reference (patches, §9.8)
+ * @param {import('./convex.mjs').Budget} budget
  */
-function polytopeFaces(group, planes, emit) {
+function polytopeFaces(group, planes, emit, budget) {
   const m = group.refs.length;
   // a repeated reference adds no plane: the polytope is built from each plane's first reference
   const firstRef = new Map();
@@ -138,7 +142,7 @@ function polytopeFaces(group, planes, emit) {
   }
   const hs = new Float64Array(4 * unique.length);
   unique.forEach((i, k) => halfSpace(planes, i, 0, hs, k));
-  const poly = intersectHalfSpaces(hs, unique.length);
+  const poly = intersectHalfSpaces(hs, unique.length, budget);
   /** @type {Map<number, Int32Array>} local reference → its face's loop */
   const loops = new Map();
   for (const f of poly.faces) loops.set(unique[f.plane], f.loop);
