@@ -7,8 +7,9 @@
  * the hundreds of planes a convex group holds (a shell is the kind for large surfaces). Each
  * vertex keeps the three planes it lies on and is recomputed from them, so clipping a huge
  * starting box costs no accuracy. A vertex within a rounding margin of a plane counts as on it,
- * so that k > 3 planes through one point (a cube corner) give one vertex (§9.4), and vertices
- * closer than 1e-9 × the diagonal are merged at the end.
+ * so that k > 3 planes through one point (a cube corner) give one vertex (§9.4), and at the end
+ * vertices are merged within §9.4's distance: at least 1e-9 × the diagonal, and up to what the
+ * coding may have moved the planes (coded planes through one corner no longer meet in a point).
  */
 import { fail } from './errors.mjs';
 
@@ -16,6 +17,15 @@ import { fail } from './errors.mjs';
 const ON_PLANE = 1e-12;
 /** Vertices closer than this fraction of the polytope's diagonal are one (§9.4's MUST). */
 const MERGE = 1e-9;
+
+/**
+ * How far the coding may have moved a plane (§9.4's E = angle × radius + h, h + hRel × the
+ * largest |h| of the group) and half the header's tolerance in model units (L); the merge
+ * distance is max(1e-9 × diagonal, min(1e-2 × diagonal, L, 1000 × E)), as planefmt's.
+ * @typedef {{angle: number, h: number, hRel: number, half: number}} Coding
+ */
+/** @type {Coding} */
+export const EXACT = { angle: 0, h: 0, hRel: 0, half: Infinity };
 /** The starting box: this many times the largest |h|; a vertex on it means unbounded. */
 const BOX = 1e6;
 
@@ -38,9 +48,10 @@ export const WORK_LIMIT = 1e8;
  * @param {Float64Array} planes 4 per plane: ωx, ωy, ωz, h
  * @param {number} count planes
  * @param {Budget} budget decremented by the work done; LIMIT_EXCEEDED below 0
+ * @param {Coding} coding for the merge distance
  * @returns {Polytope} faces name their plane by its position in `planes`
  */
-export function intersectHalfSpaces(planes, count, budget) {
+export function intersectHalfSpaces(planes, count, budget, coding = EXACT) {
   let scale = 0;
   for (let i = 0; i < count; i++) scale = Math.max(scale, Math.abs(planes[4 * i + 3]));
   if (scale === 0) scale = 1;
@@ -62,7 +73,7 @@ export function intersectHalfSpaces(planes, count, budget) {
   for (let v = 0; v < poly.nv; v++) {
     for (let s = 0; s < 3; s++) if (poly.vp[3 * v + s] >= count) fail('UNBOUNDED_POLYTOPE', 'a vertex on no three of its planes');
   }
-  return poly.merged();
+  return poly.merged(coding, scale);
 }
 
 class Clipper {
@@ -231,8 +242,13 @@ class Clipper {
     this.nv = count;
   }
 
-  /** @returns {Polytope} the faces with vertices closer than MERGE × diagonal welded */
-  merged() {
+  /**
+   * The faces, with the vertices of edges shorter than the merge distance welded into one.
+   * @param {Coding} coding
+   * @param {number} scale the largest |h|
+   * @returns {Polytope}
+   */
+  merged(coding, scale) {
     const { vx, nv } = this;
     const lo = [Infinity, Infinity, Infinity];
     const hi = [-Infinity, -Infinity, -Infinity];
@@ -242,7 +258,9 @@ class Clipper {
         hi[c] = Math.max(hi[c], vx[3 * v + c]);
       }
     }
-    const tol = MERGE * Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    const D = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    const E = coding.angle * (D / 2) + coding.h + coding.hRel * scale;
+    const tol = Math.max(MERGE * D, Math.min(1e-2 * D, coding.half, 1000 * E));
     const parent = Int32Array.from({ length: nv }, (_, i) => i);
     const root = (/** @type {number} */ v) => {
       while (parent[v] !== v) v = parent[v] = parent[parent[v]];
@@ -257,6 +275,19 @@ class Clipper {
         if (d <= tol) parent[root(a)] = root(b);
       }
     }
+    // a welded vertex is the least-squares point of the planes its members lie on (planefmt's
+    // choice too: the corpus test matches it to 1e-16), or their mean where those are degenerate
+    /** @type {Map<number, number[]>} */
+    const clusters = new Map();
+    for (let v = 0; v < nv; v++) {
+      const r = root(v);
+      if (!clusters.has(r)) clusters.set(r, []);
+      /** @type {number[]} */ (clusters.get(r)).push(v);
+    }
+    const points = vx.slice();
+    for (const [r, members] of clusters) {
+      if (members.length > 1) weld(this.planes, this.vp, members, vx, points, 3 * r);
+    }
     const faces = [];
     for (const f of this.faces) {
       const loop = [];
@@ -267,7 +298,42 @@ class Clipper {
       while (loop.length > 1 && loop[0] === loop[loop.length - 1]) loop.pop();
       if (loop.length >= 3) faces.push({ plane: f.plane, loop: Int32Array.from(loop) });
     }
-    return { points: vx, faces };
+    return { points, faces };
+  }
+}
+
+/**
+ * The least-squares point of the distinct planes of members' triples, into out[at..at+2]; their
+ * mean where the normal equations are singular.
+ * @param {Float64Array} P planes @param {Int32Array} vp triples @param {number[]} members
+ * @param {Float64Array} vx points @param {Float64Array} out @param {number} at
+ */
+function weld(P, vp, members, vx, out, at) {
+  const planes = new Set();
+  for (const v of members) for (let s = 0; s < 3; s++) planes.add(vp[3 * v + s]);
+  const A = new Float64Array(9);
+  const b = new Float64Array(3);
+  for (const p of planes) {
+    for (let i = 0; i < 3; i++) {
+      b[i] += P[4 * p + i] * P[4 * p + 3];
+      for (let j = 0; j < 3; j++) A[3 * i + j] += P[4 * p + i] * P[4 * p + j];
+    }
+  }
+  const det3 = (/** @type {Float64Array} */ m) => m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6])
+    + m[2] * (m[3] * m[7] - m[4] * m[6]);
+  const det = det3(A);
+  if (Math.abs(det) > 1e-9) {
+    for (let k = 0; k < 3; k++) {
+      const Ak = A.slice();
+      for (let i = 0; i < 3; i++) Ak[3 * i + k] = b[i];
+      out[at + k] = det3(Ak) / det;
+    }
+    return;
+  }
+  for (let k = 0; k < 3; k++) {
+    let s = 0;
+    for (const v of members) s += vx[3 * v + k];
+    out[at + k] = s / members.length;
   }
 }
 

@@ -1,6 +1,6 @@
 /** Geometry of part groups (spec §9.4-§9.11): each group to an indexed triangle mesh. */
 import { fail, PlnError } from './errors.mjs';
-import { intersectHalfSpaces, WORK_LIMIT } from './convex.mjs';
+import { intersectHalfSpaces, WORK_LIMIT, EXACT } from './convex.mjs';
 import { IN_LEAF } from './solids.mjs';
 
 /**
@@ -36,23 +36,25 @@ function planesOf(group, table) {
  * (cells and trees, kinds 1 and 2, whose polytopes it still checks) or a skipped kind.
  * @param {import('./groups.mjs').Group} group
  * @param {Float64Array} table the plane table
+ * @param {import('./header.mjs').Header} header for the merge distance of polytopes (§9.4)
  * @returns {GroupMesh | null}
  */
-export function decodeGroup(group, table) {
+export function decodeGroup(group, table, header) {
   if (group.skipped) return null;
   const planes = planesOf(group, table);
   const m = group.refs.length;
   /** @type {import('./convex.mjs').Budget} */
   const budget = { left: WORK_LIMIT };
+  const coding = codingError(header);
   const base = { kind: group.kind, freeRef: m - 1 };
   switch (group.kind) {
     case 0:
-      return { ...base, ...polytopeFaces(group, planes, null, budget) };
+      return { ...base, ...polytopeFaces(group, planes, null, budget, coding) };
     case 3:
     case 4: {
       const faceRefs = [];
       for (let i = 0; i < m; i++) if (!group.roles[i]) faceRefs.push(i);
-      const mesh = polytopeFaces(group, planes, faceRefs, budget);
+      const mesh = polytopeFaces(group, planes, faceRefs, budget, coding);
       if (mesh.indices.length === 0) fail('EMPTY_POLYTOPE', 'no face on a face plane');
       if (group.kind === 4) {
         const ix = mesh.indices;
@@ -73,6 +75,24 @@ export function decodeGroup(group, table) {
     default:
       return { ...base, ...decodeShell(group.data, planes) };
   }
+}
+
+/**
+ * §9.4's E and L from the header: half a quantization step (codings 2, 3), half an f32 unit in
+ * the last place (coding 0), nothing (coding 1); half the tolerance times the bbox diagonal.
+ * @param {import('./header.mjs').Header} header
+ * @returns {import('./convex.mjs').Coding}
+ */
+function codingError(header) {
+  const { coding, bits, h_range: [h0, h1], bbox, tolerance } = header;
+  const half = bbox && Number.isFinite(tolerance)
+    ? (tolerance / 2) * Math.hypot(bbox[1][0] - bbox[0][0], bbox[1][1] - bbox[0][1], bbox[1][2] - bbox[0][2]) : Infinity;
+  if (coding >= 2) {
+    const angle = Math.hypot(Math.PI / 2 ** bits[0], Math.PI / 2 ** bits[1]);
+    return { angle, h: (h1 - h0) / (2 * (2 ** bits[2] - 1)), hRel: 0, half };
+  }
+  if (coding === 0) return { angle: 2 ** -24, h: 0, hRel: 2 ** -24, half };
+  return { ...EXACT, half };
 }
 
 /**
@@ -128,8 +148,9 @@ function checkTreeLeaves(tree, planes, budget) {
  * @param {number[] | null} emit null: every face (kind 0); else the face references whose faces
  *   are emitted, in order, once per reference (patches, §9.8)
  * @param {import('./convex.mjs').Budget} budget
+ * @param {import('./convex.mjs').Coding} coding
  */
-function polytopeFaces(group, planes, emit, budget) {
+function polytopeFaces(group, planes, emit, budget, coding) {
   const m = group.refs.length;
   // a repeated reference adds no plane: the polytope is built from each plane's first reference
   const firstRef = new Map();
@@ -142,7 +163,7 @@ function polytopeFaces(group, planes, emit, budget) {
   }
   const hs = new Float64Array(4 * unique.length);
   unique.forEach((i, k) => halfSpace(planes, i, 0, hs, k));
-  const poly = intersectHalfSpaces(hs, unique.length, budget);
+  const poly = intersectHalfSpaces(hs, unique.length, budget, coding);
   /** @type {Map<number, Int32Array>} local reference → its face's loop */
   const loops = new Map();
   for (const f of poly.faces) loops.set(unique[f.plane], f.loop);

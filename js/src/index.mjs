@@ -41,7 +41,7 @@ export function readPln(input, options = {}) {
   /** @type {(MeshGroup | null)[]} per group in file order; null: not decoded */
   const meshes = c.groups.map((g) => {
     if (!decode) return null;
-    const mesh = decodeGroup(g, c.planes);
+    const mesh = decodeGroup(g, c.planes, c.header);
     if (!mesh) {
       if (!g.skipped) c.findings.add('GEOMETRY_NOT_CHECKED');
       return null;

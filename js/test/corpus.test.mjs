@@ -6,46 +6,19 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import os from 'node:os';
 import path from 'node:path';
-import crypto from 'node:crypto';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
 import { readPln } from '../src/node.mjs';
+import { PYTHON, available, allFiles, encoded } from '../bench/corpus.mjs';
 
 const HERE = path.dirname(fileURLToPath(import.meta.url));
-const ROOT = path.resolve(HERE, '../..');
-const PYTHON = path.join(ROOT, '.venv/bin/python');
-const CORPUS = process.env.PLN_CORPUS ?? '/work/shared/corpus';
 const SUBSET = [
   'cad/angle_block.STL', 'convex/test_sphere.stl', 'convex/tet.ply', 'gltf_scene/simple_pole.glb',
   'gltf_scene/boolean.glb', 'nonconvex_watertight/round.stl', 'open/soup.stl', 'smooth_dense/npm_bunny.ply',
   'usd/bolt.usda',
 ];
 const REL = 1e-9;
-
-const ready = fs.existsSync(PYTHON) && fs.existsSync(CORPUS);
-
-/** Every mesh file of the corpus, relative to it (a glTF's .bin goes with its .gltf). */
-function allFiles() {
-  return fs.readdirSync(CORPUS, { withFileTypes: true }).filter((d) => d.isDirectory())
-    .flatMap((d) => fs.readdirSync(path.join(CORPUS, d.name)).map((f) => `${d.name}/${f}`))
-    .filter((f) => !f.endsWith('.bin') && !f.endsWith('.md')).sort();
-}
-
-/** The .pln of a corpus file, encoded by `pln convert` once per source and encoder version. */
-function encoded(/** @type {string} */ rel, /** @type {string} */ encoder) {
-  const src = path.join(CORPUS, rel);
-  const stat = fs.statSync(src);
-  const key = crypto.createHash('sha1').update(`${rel}\0${stat.size}\0${stat.mtimeMs}\0${encoder}`).digest('hex').slice(0, 16);
-  const dir = path.join(os.tmpdir(), 'planefmt-js-corpus');
-  fs.mkdirSync(dir, { recursive: true });
-  const out = path.join(dir, `${path.basename(rel).replace(/\W/g, '_')}-${key}.pln`);
-  if (!fs.existsSync(out)) {
-    execFileSync(path.join(ROOT, '.venv/bin/pln'), ['convert', src, out], { stdio: ['ignore', 'ignore', 'pipe'] });
-  }
-  return out;
-}
 
 /** planefmt's decoding: world-frame vertices and triangles. @param {string} file */
 function reference(file) {
@@ -111,10 +84,10 @@ function diagonal(p) {
 }
 
 /**
- * Compares this reader's decoding of a .pln file with planefmt's; the numbers, for reports.
+ * Compares this reader's decoding of a .pln file with planefmt's.
  * @param {string} file
  */
-export function compare(file) {
+function compare(file) {
   const mine = readPln(fs.readFileSync(file)).mesh();
   const ref = reference(file);
   const D = diagonal(ref.positions);
@@ -128,12 +101,11 @@ export function compare(file) {
   };
 }
 
-const files = process.env.PLN_JS_CORPUS === 'all' ? (ready ? allFiles() : []) : SUBSET;
-const encoder = ready ? execFileSync(path.join(ROOT, '.venv/bin/pln'), ['--version']).toString().trim() : '';
+const files = process.env.PLN_JS_CORPUS === 'all' ? (available ? allFiles() : []) : SUBSET;
 
 for (const rel of files) {
-  test(`corpus ${rel}: this decoder and planefmt's agree within ${REL} of the diagonal`, { skip: !ready && 'no .venv or corpus' }, () => {
-    const r = compare(encoded(rel, encoder));
+  test(`corpus ${rel}: this decoder and planefmt's agree within ${REL} of the diagonal`, { skip: !available && 'no .venv or corpus' }, () => {
+    const r = compare(encoded(rel));
     assert.ok(r.distance <= r.tol, `vertex sets ${r.distance / r.D} of the diagonal apart`);
     assert.equal(r.triangles[0], r.triangles[1], 'triangles');
     assert.ok(Math.abs(r.area[0] - r.area[1]) <= REL * r.area[1], `areas ${r.area}`);

@@ -1,0 +1,41 @@
+/** The real corpus as .pln files made by planefmt's default encoder, for the tests and benchmarks. */
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import crypto from 'node:crypto';
+import { execFileSync } from 'node:child_process';
+import { fileURLToPath } from 'node:url';
+
+export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+export const PYTHON = path.join(ROOT, '.venv/bin/python');
+const PLN = path.join(ROOT, '.venv/bin/pln');
+export const CORPUS = process.env.PLN_CORPUS ?? '/work/shared/corpus';
+
+/** Whether planefmt (the repository's .venv) and the corpus are here. */
+export const available = fs.existsSync(PLN) && fs.existsSync(CORPUS);
+
+/** Every mesh file of the corpus, relative to it (a glTF's .bin goes with its .gltf). */
+export function allFiles() {
+  return fs.readdirSync(CORPUS, { withFileTypes: true }).filter((d) => d.isDirectory())
+    .flatMap((d) => fs.readdirSync(path.join(CORPUS, d.name)).map((f) => `${d.name}/${f}`))
+    .filter((f) => !f.endsWith('.bin') && !f.endsWith('.md')).sort();
+}
+
+let version = '';
+
+/**
+ * The .pln of a corpus file, encoded by `pln convert` once per source and encoder version and
+ * kept in the temporary directory.
+ * @param {string} rel a path relative to the corpus
+ */
+export function encoded(rel) {
+  version ||= execFileSync(PLN, ['--version']).toString().trim();
+  const src = path.join(CORPUS, rel);
+  const stat = fs.statSync(src);
+  const key = crypto.createHash('sha1').update(`${rel}\0${stat.size}\0${stat.mtimeMs}\0${version}`).digest('hex').slice(0, 16);
+  const dir = path.join(os.tmpdir(), 'planefmt-js-corpus');
+  fs.mkdirSync(dir, { recursive: true });
+  const out = path.join(dir, `${path.basename(rel).replace(/\W/g, '_')}-${key}.pln`);
+  if (!fs.existsSync(out)) execFileSync(PLN, ['convert', src, out], { stdio: ['ignore', 'ignore', 'pipe'] });
+  return out;
+}
