@@ -31,7 +31,7 @@ const BOX = 1e6;
 
 /** Vertex and loop entries one group may make the clipper visit (§12.4 lets a decoder bound its
  * work): clipping costs m × the polytope's size, so a hostile group of 10^5 planes would
- * otherwise take minutes; 1e8 visits take about 3 s (about 5,000 planes tangent to a sphere). */
+ * otherwise take minutes; 1e8 visits take about a second (some 6,000 planes tangent to a sphere). */
 export const WORK_LIMIT = 1e8;
 
 /** @typedef {{left: number}} Budget work left for one group, shared by its polytopes */
@@ -70,6 +70,7 @@ export function intersectHalfSpaces(planes, count, budget, coding = EXACT) {
     budget.left -= poly.size;
     if (budget.left < 0) fail('LIMIT_EXCEEDED', `decoding work above ${WORK_LIMIT} vertex visits`);
   }
+  poly.compact();
   for (let v = 0; v < poly.nv; v++) {
     for (let s = 0; s < 3; s++) if (poly.vp[3 * v + s] >= count) fail('UNBOUNDED_POLYTOPE', 'a vertex on no three of its planes');
   }
@@ -83,8 +84,11 @@ class Clipper {
     /** vertices plus loop entries: the work of one clip */
     this.size = 32;
     this.nv = 8;
-    this.vx = new Float64Array(24);
-    this.vp = new Int32Array(24);
+    this.vx = new Float64Array(48);
+    this.vp = new Int32Array(48);
+    this.alive = new Uint8Array(16).fill(1, 0, 8);
+    this.dist = new Float64Array(16);
+    this.side = new Int8Array(16);
     /** @type {{plane: number, loop: Int32Array}[]} */
     this.faces = [];
     // the box: corner (i, j, k) bit-coded, each on one plane of each axis pair
@@ -107,27 +111,36 @@ class Clipper {
 
   /**
    * Clips by plane p: 'empty' if nothing with an interior is left, 'redundant' if it cuts nothing.
+   * New vertices are appended; vertices cut away stay in the arrays, dead, until compact().
    * @param {number} p
    */
   clip(p) {
     const P = this.planes;
-    const [wx, wy, wz, h] = [P[4 * p], P[4 * p + 1], P[4 * p + 2], P[4 * p + 3]];
+    const wx = P[4 * p];
+    const wy = P[4 * p + 1];
+    const wz = P[4 * p + 2];
+    const h = P[4 * p + 3];
     const nv = this.nv;
-    const vx = this.vx;
-    const dist = new Float64Array(nv);
-    const side = new Int8Array(nv);
+    const { vx, alive } = this;
+    if (this.dist.length < nv) {
+      this.dist = new Float64Array(2 * nv);
+      this.side = new Int8Array(2 * nv);
+    }
+    const { dist, side } = this;
     let pos = 0;
     let neg = 0;
     for (let v = 0; v < nv; v++) {
+      if (!alive[v]) continue;
       const x = vx[3 * v];
       const y = vx[3 * v + 1];
       const z = vx[3 * v + 2];
       const d = wx * x + wy * y + wz * z - h;
       const tol = ON_PLANE * (Math.abs(x) + Math.abs(y) + Math.abs(z) + Math.abs(h));
       dist[v] = d;
-      side[v] = d > tol ? 1 : d < -tol ? -1 : 0;
-      if (side[v] > 0) pos++;
-      else if (side[v] < 0) neg++;
+      const s = d > tol ? 1 : d < -tol ? -1 : 0;
+      side[v] = s;
+      if (s > 0) pos++;
+      else if (s < 0) neg++;
     }
     if (pos === 0) return 'redundant';
     if (neg === 0) return 'empty';
@@ -135,111 +148,136 @@ class Clipper {
     // new vertices on cut edges, shared by the two faces of each edge
     /** @type {Map<number, number>} */
     const onEdge = new Map();
-    const newX = [];
-    const newP = [];
     const makeVertex = (/** @type {number} */ a, /** @type {number} */ b, /** @type {number} */ facePlane) => {
       const key = a < b ? a * nv + b : b * nv + a;
       const known = onEdge.get(key);
       if (known !== undefined) {
-        newP[3 * (known - nv) + 1] = facePlane;
+        this.vp[3 * known + 1] = facePlane;
         return known;
       }
       const t = dist[a] / (dist[a] - dist[b]);
-      const id = nv + newX.length / 3;
-      for (let c = 0; c < 3; c++) newX.push(vx[3 * a + c] + t * (vx[3 * b + c] - vx[3 * a + c]));
-      newP.push(facePlane, -1, p);
+      const id = this.addVertex();
+      const X = this.vx;
+      for (let c = 0; c < 3; c++) X[3 * id + c] = X[3 * a + c] + t * (X[3 * b + c] - X[3 * a + c]);
+      this.vp[3 * id] = facePlane;
+      this.vp[3 * id + 1] = -1;
+      this.vp[3 * id + 2] = p;
       onEdge.set(key, id);
       return id;
     };
     /** @type {Map<number, number>} directed edges of the new face, from → to */
     const cut = new Map();
-    const total = () => nv + newX.length / 3;
-    const addCut = (/** @type {number} */ u, /** @type {number} */ w) => {
-      // the face's edge u→w on the plane is w→u in the new face; an edge seen both ways is interior
-      if (cut.get(u) === w) cut.delete(u);
-      else cut.set(w, u);
-    };
+    const onPlane = (/** @type {number} */ v) => v >= nv || side[v] === 0;
     const kept = [];
+    let entries = 0;
     for (const face of this.faces) {
       const loop = face.loop;
       const k = loop.length;
       let anyPos = false;
-      for (let i = 0; i < k; i++) if (side[loop[i]] > 0) anyPos = true;
+      let anyOn = false;
+      for (let i = 0; i < k; i++) {
+        const s = side[loop[i]];
+        if (s > 0) anyPos = true;
+        else if (s === 0) anyOn = true;
+      }
       let out = loop;
       if (anyPos) {
         const list = [];
         for (let i = 0; i < k; i++) {
           const a = loop[i];
-          const b = loop[(i + 1) % k];
+          const b = loop[i + 1 === k ? 0 : i + 1];
           if (side[a] <= 0) list.push(a);
           if (side[a] * side[b] < 0) list.push(makeVertex(a, b, face.plane));
         }
         if (list.length < 3) continue;
         out = Int32Array.from(list);
       }
-      const n = out.length;
-      for (let i = 0; i < n; i++) {
-        const u = out[i];
-        const w = out[(i + 1) % n];
-        if ((u >= nv || side[u] === 0) && (w >= nv || side[w] === 0)) addCut(u, w);
+      if (anyPos || anyOn) {
+        const n = out.length;
+        for (let i = 0; i < n; i++) {
+          const u = out[i];
+          const w = out[i + 1 === n ? 0 : i + 1];
+          if (!onPlane(u) || !onPlane(w)) continue;
+          // the face's edge u→w on the plane is w→u in the new face; one seen both ways is interior
+          if (cut.get(u) === w) cut.delete(u);
+          else cut.set(w, u);
+        }
       }
-      kept.push({ plane: face.plane, loop: out });
+      face.loop = out;
+      kept.push(face);
+      entries += out.length;
     }
     // the new face: the cut edges chained into one loop
     if (cut.size >= 3) {
-      const start = cut.keys().next().value;
+      const start = /** @type {number} */ (cut.keys().next().value);
       const loop = [start];
-      for (let v = /** @type {number} */ (cut.get(start)); v !== start; v = /** @type {number} */ (cut.get(v))) {
-        if (v === undefined || loop.length > cut.size) return 'redundant';
+      for (let v = cut.get(start); v !== start; v = cut.get(v)) {
+        if (v === undefined || loop.length > cut.size) return this.undo(nv);
         loop.push(v);
       }
-      if (loop.length !== cut.size) return 'redundant';
+      if (loop.length !== cut.size) return this.undo(nv);
       kept.push({ plane: p, loop: Int32Array.from(loop) });
+      entries += loop.length;
     }
     this.faces = kept;
-    this.compact(newX, newP, total());
+    let live = 0;
+    for (let v = 0; v < nv; v++) {
+      if (alive[v] && side[v] > 0) alive[v] = 0;
+      live += alive[v];
+    }
+    // new vertices from their three planes where the two faces of their edge are known
+    for (let v = nv; v < this.nv; v++) {
+      const vp = this.vp;
+      if (vp[3 * v + 1] < 0) vp[3 * v + 1] = vp[3 * v]; // an edge seen by one face only: keep the estimate
+      else solveInto(P, vp[3 * v], vp[3 * v + 1], vp[3 * v + 2], this.vx, 3 * v);
+      live++;
+    }
+    this.size = live + entries;
+    if (this.nv > 2 * live + 64) this.compact();
     return 'cut';
   }
 
-  /**
-   * Appends the new vertices (recomputed from their three planes where well conditioned), then
-   * drops the vertices no face uses and renumbers.
-   * @param {number[]} newX @param {number[]} newP @param {number} total
-   */
-  compact(newX, newP, total) {
-    const nv = this.nv;
-    const remap = new Int32Array(total).fill(-1);
-    let count = 0;
-    let entries = 0;
-    for (const f of this.faces) {
-      entries += f.loop.length;
-      for (const v of f.loop) if (remap[v] < 0) remap[v] = count++;
+  /** Drops the vertices a clip added, for a clip given up. @param {number} nv @returns {'redundant'} */
+  undo(nv) {
+    this.nv = nv;
+    return 'redundant';
+  }
+
+  /** @returns {number} a new vertex's index, the arrays grown as needed */
+  addVertex() {
+    if (3 * (this.nv + 1) > this.vx.length) {
+      const cap = 2 * this.vx.length;
+      const vx = new Float64Array(cap);
+      vx.set(this.vx);
+      const vp = new Int32Array(cap);
+      vp.set(this.vp);
+      const alive = new Uint8Array(cap / 3);
+      alive.set(this.alive);
+      [this.vx, this.vp, this.alive] = [vx, vp, alive];
     }
-    this.size = count + entries;
-    const vx = new Float64Array(3 * count);
-    const vp = new Int32Array(3 * count);
-    for (let v = 0; v < total; v++) {
+    this.alive[this.nv] = 1;
+    return this.nv++;
+  }
+
+  /** Renumbers the vertices the faces use, dropping the others. */
+  compact() {
+    const remap = new Int32Array(this.nv).fill(-1);
+    let count = 0;
+    for (const f of this.faces) for (const v of f.loop) if (remap[v] < 0) remap[v] = count++;
+    const cap = Math.max(24, 6 * count);
+    const vx = new Float64Array(cap);
+    const vp = new Int32Array(cap);
+    for (let v = 0; v < this.nv; v++) {
       const r = remap[v];
       if (r < 0) continue;
-      if (v < nv) {
-        for (let c = 0; c < 3; c++) {
-          vx[3 * r + c] = this.vx[3 * v + c];
-          vp[3 * r + c] = this.vp[3 * v + c];
-        }
-      } else {
-        const i = v - nv;
-        for (let c = 0; c < 3; c++) {
-          vx[3 * r + c] = newX[3 * i + c];
-          vp[3 * r + c] = newP[3 * i + c];
-        }
-        if (vp[3 * r + 1] < 0) vp[3 * r + 1] = vp[3 * r]; // an edge seen by one face only: keep the estimate
-        else solveInto(this.planes, vp[3 * r], vp[3 * r + 1], vp[3 * r + 2], vx, 3 * r);
+      for (let c = 0; c < 3; c++) {
+        vx[3 * r + c] = this.vx[3 * v + c];
+        vp[3 * r + c] = this.vp[3 * v + c];
       }
     }
     for (const f of this.faces) for (let i = 0; i < f.loop.length; i++) f.loop[i] = remap[f.loop[i]];
-    this.vx = vx;
-    this.vp = vp;
-    this.nv = count;
+    this.alive = new Uint8Array(cap / 3).fill(1, 0, count);
+    [this.vx, this.vp, this.nv] = [vx, vp, count];
   }
 
   /**
@@ -271,23 +309,26 @@ class Clipper {
       for (let i = 0; i < n; i++) {
         const a = f.loop[i];
         const b = f.loop[(i + 1) % n];
-        const d = Math.hypot(vx[3 * a] - vx[3 * b], vx[3 * a + 1] - vx[3 * b + 1], vx[3 * a + 2] - vx[3 * b + 2]);
-        if (d <= tol) parent[root(a)] = root(b);
+        const dx = vx[3 * a] - vx[3 * b];
+        const dy = vx[3 * a + 1] - vx[3 * b + 1];
+        const dz = vx[3 * a + 2] - vx[3 * b + 2];
+        if (dx * dx + dy * dy + dz * dz <= tol * tol) parent[root(a)] = root(b);
       }
     }
     // a welded vertex is the least-squares point of the planes its members lie on (planefmt's
     // choice too: the corpus test matches it to 1e-16), or their mean where those are degenerate
-    /** @type {Map<number, number[]>} */
+    const size = new Int32Array(nv);
+    for (let v = 0; v < nv; v++) size[root(v)]++;
+    /** @type {Map<number, number[]>} welded groups of vertices, by root */
     const clusters = new Map();
     for (let v = 0; v < nv; v++) {
       const r = root(v);
+      if (size[r] < 2) continue;
       if (!clusters.has(r)) clusters.set(r, []);
       /** @type {number[]} */ (clusters.get(r)).push(v);
     }
     const points = vx.slice();
-    for (const [r, members] of clusters) {
-      if (members.length > 1) weld(this.planes, this.vp, members, vx, points, 3 * r);
-    }
+    for (const [r, members] of clusters) weld(this.planes, this.vp, members, vx, points, 3 * r);
     const faces = [];
     for (const f of this.faces) {
       const loop = [];

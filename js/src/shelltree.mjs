@@ -44,14 +44,16 @@ export function readShellTree(b, roles) {
     let i1;
     let i2;
     if (link === 0) {
-      const c = [0, 0, 0];
-      for (let s = 0; s < 3; s++) {
-        const k = codes[ci++];
-        if (k === 0) c[s] = fresh(-1);
-        else if (k > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
-        else c[s] = n - k;
-      }
-      [i0, i1, i2] = c;
+      const k0 = codes[ci];
+      const k1 = codes[ci + 1];
+      const k2 = codes[ci + 2];
+      ci += 3;
+      if (k0 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
+      i0 = k0 === 0 ? fresh(-1) : n - k0;
+      if (k1 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
+      i1 = k1 === 0 ? fresh(-1) : n - k1;
+      if (k2 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
+      i2 = k2 === 0 ? fresh(-1) : n - k2;
     } else {
       const d = Math.floor((link - 1) / 3) + 1;
       const e = (link - 1) % 3;
@@ -107,10 +109,20 @@ export function readShellTree(b, roles) {
   let W = 0;
   for (let k = 0; k < V; k++) {
     if (explicit[k]) continue;
-    const list = planesOf.subarray(start[k], start[k + 1]);
-    list.sort();
+    // insertion sort of a few entries in place, then the distinct ones to the front
+    const lo = start[k];
+    const hi = start[k + 1];
+    for (let i = lo + 1; i < hi; i++) {
+      const x = planesOf[i];
+      let q = i - 1;
+      while (q >= lo && planesOf[q] > x) {
+        planesOf[q + 1] = planesOf[q];
+        q--;
+      }
+      planesOf[q + 1] = x;
+    }
     let u = 0;
-    for (let i = 0; i < list.length; i++) if (i === 0 || list[i] !== list[i - 1]) list[u++] = list[i];
+    for (let i = lo; i < hi; i++) if (i === lo || planesOf[i] !== planesOf[i - 1]) planesOf[lo + u++] = planesOf[i];
     distinct[k] = u;
     if (u > 3) W++;
   }
