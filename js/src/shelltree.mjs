@@ -3,8 +3,8 @@
  *
  * The spec lets a reader decode the triangles in order (a parent precedes its children) or by
  * pointer jumping; planefmt jumps pointers because numpy has no fast loop. Here one pass in
- * triangle order does the same work in linear time with no extra arrays, which is what a loop
- * in JavaScript is good at.
+ * triangle order does the same work in linear time, which is what a loop in JavaScript is good
+ * at (the corners each triangle takes from its parent are known when the loop reaches it).
  */
 import { fail } from './errors.mjs';
 import { unzigzag, readBits } from './varint.mjs';
@@ -31,41 +31,49 @@ export function readShellTree(b, roles) {
   // links and corner codes: the triangles, in order
   const tri = new Uint32Array(3 * T);
   const namer = new Int32Array(V); // the triangle whose code names each corner anew, -1 for a root
+  const parent = new Int32Array(T);
   let n = 0;
   let ci = 0;
-  const fresh = (/** @type {number} */ j) => {
-    if (n >= V) fail('BAD_GROUP_STRUCTURE', `more than ${V} corners named`);
-    namer[n] = j;
-    return n++;
-  };
+  // every bound below is checked before the integer arithmetic it makes safe
   for (let j = 0; j < T; j++) {
     const link = links[j];
     let i0;
     let i1;
     let i2;
     if (link === 0) {
-      const k0 = codes[ci];
-      const k1 = codes[ci + 1];
-      const k2 = codes[ci + 2];
+      parent[j] = -1;
+      const c0 = codes[ci];
+      const c1 = codes[ci + 1];
+      const c2 = codes[ci + 2];
       ci += 3;
-      if (k0 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
-      i0 = k0 === 0 ? fresh(-1) : n - k0;
-      if (k1 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
-      i1 = k1 === 0 ? fresh(-1) : n - k1;
-      if (k2 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
-      i2 = k2 === 0 ? fresh(-1) : n - k2;
+      if (c0 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
+      if (c0 === 0) namer[(i0 = n++)] = -1;
+      else i0 = n - c0;
+      if (c1 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
+      if (c1 === 0) namer[(i1 = n++)] = -1;
+      else i1 = n - c1;
+      if (c2 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
+      if (c2 === 0) namer[(i2 = n++)] = -1;
+      else i2 = n - c2;
+      if (n > V) fail('BAD_GROUP_STRUCTURE', `more than ${V} corners named`);
     } else {
-      const d = Math.floor((link - 1) / 3) + 1;
-      const e = (link - 1) % 3;
+      if (link > 3 * j) fail('BAD_GROUP_STRUCTURE', `triangle ${j} links past the first triangle`);
+      const d = (((link - 1) / 3) | 0) + 1;
+      const e = link - 1 - 3 * (d - 1);
       const p = j - d;
-      if (p < 0) fail('BAD_GROUP_STRUCTURE', `triangle ${j} links past the first triangle`);
-      i0 = tri[3 * p + ((e + 1) % 3)];
+      parent[j] = p;
+      i0 = tri[3 * p + (e === 2 ? 0 : e + 1)];
       i1 = tri[3 * p + e];
       const k = codes[ci++];
-      if (k === 0) i2 = fresh(j);
-      else {
-        i2 = i1 + unzigzag(k - 1);
-        if (!(i2 >= 0 && i2 < n)) fail('BAD_GROUP_STRUCTURE', `triangle ${j} names a corner not named before`);
+      if (k === 0) {
+        if (n >= V) fail('BAD_GROUP_STRUCTURE', `more than ${V} corners named`);
+        namer[(i2 = n++)] = j;
+      } else {
+        // |z(k - 1)| < n for any corner named before, so k ≤ 2n keeps to small integers
+        if (k > 2 * n) fail('BAD_GROUP_STRUCTURE', `triangle ${j} names a corner not named before`);
+        const z = k - 1;
+        i2 = i1 + (z & 1 ? -(z + 1) / 2 : z / 2); // z < 2^32: its low bit survives & 1
+        if (i2 < 0 || i2 >= n) fail('BAD_GROUP_STRUCTURE', `triangle ${j} names a corner not named before`);
       }
     }
     if (i0 === i1 || i1 === i2 || i0 === i2) fail('BAD_GROUP_STRUCTURE', `triangle ${j} names one corner twice`);
@@ -79,10 +87,8 @@ export function readShellTree(b, roles) {
   const face = new Int32Array(T);
   for (let j = 0; j < T; j++) {
     const fc = faceCodes[j];
-    if (fc === 0) {
-      const link = links[j];
-      face[j] = link !== 0 ? face[j - (Math.floor((link - 1) / 3) + 1)] : j > 0 ? face[j - 1] : -1;
-    } else if (fc === 1) face[j] = -1;
+    if (fc === 0) face[j] = parent[j] >= 0 ? face[parent[j]] : j > 0 ? face[j - 1] : -1;
+    else if (fc === 1) face[j] = -1;
     else {
       if (fc > m + 1 || roles[fc - 2]) fail('BAD_GROUP_STRUCTURE', `face code ${fc}`);
       face[j] = fc - 2;
@@ -160,9 +166,11 @@ export function readShellTree(b, roles) {
     const t = namer[k];
     const pred = t >= 0 && explicit[tri[3 * t]] ? tri[3 * t] : previous;
     for (let a = 0; a < 3; a++) {
-      const r = unzigzag(residuals[a * E + e]);
+      const zz = residuals[a * E + e];
+      // zigzag in integer arithmetic where it fits (nearly always), else in floating point
+      const r = zz < 0x7fffffff ? (zz & 1 ? -((zz + 1) >>> 1) : zz >>> 1) : unzigzag(zz);
       const v = (pred >= 0 ? coords[3 * pred + a] : 0) + r;
-      if (Math.abs(r) > MAX_COORD || Math.abs(v) > MAX_COORD) fail('BAD_GROUP_STRUCTURE', 'coordinate beyond 2^52');
+      if (r > MAX_COORD || r < -MAX_COORD || v > MAX_COORD || v < -MAX_COORD) fail('BAD_GROUP_STRUCTURE', 'coordinate beyond 2^52');
       coords[3 * k + a] = v;
     }
     previous = k;
