@@ -2,7 +2,7 @@
 import { fail } from './errors.mjs';
 import { crc32 } from './crc32.mjs';
 
-export const SIGNATURE = Uint8Array.of(0x89, 0x50, 0x4c, 0x4e, 0x0d, 0x0a, 0x1a, 0x0a);
+const SIGNATURE = Uint8Array.of(0x89, 0x50, 0x4c, 0x4e, 0x0d, 0x0a, 0x1a, 0x0a);
 
 /** @param {Uint8Array} bytes */
 export function checkSignature(bytes) {

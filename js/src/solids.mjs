@@ -3,7 +3,7 @@ import { fail } from './errors.mjs';
 
 /** Version 1 token values (A.1), also the runner's numbering of any version's tokens. */
 export const IN_LEAF = 0xfffffffe;
-export const OUT_LEAF = 0xffffffff;
+const OUT_LEAF = 0xffffffff;
 
 /**
  * @param {import('./varint.mjs').Cursor} b

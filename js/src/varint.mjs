@@ -7,7 +7,7 @@ import { fail } from './errors.mjs';
 
 /** Values at or above 2^53 are not exact in a Number; every varint above 2^53 reads as this,
  * which is above every bound the format sets (2^52 grid coordinates, 2^33 predicted codes). */
-export const VARINT_SATURATED = 2 ** 53 + 2;
+const VARINT_SATURATED = 2 ** 53 + 2;
 
 const TWO49 = 2 ** 49;
 

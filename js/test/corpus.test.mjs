@@ -104,8 +104,9 @@ function compare(file) {
 const files = process.env.PLN_JS_CORPUS === 'all' ? (available ? allFiles() : []) : SUBSET;
 
 for (const rel of files) {
-  test(`corpus ${rel}: this decoder and planefmt's agree within ${REL} of the diagonal`, { skip: !available && 'no .venv or corpus' }, () => {
+  test(`corpus ${rel}: this decoder and planefmt's agree within ${REL} of the diagonal`, { skip: !available && 'no .venv or corpus' }, (t) => {
     const r = compare(encoded(rel));
+    t.diagnostic(`vertex sets ${(r.distance / r.D).toExponential(1)} of the diagonal apart, ${r.triangles[0]} triangles`);
     assert.ok(r.distance <= r.tol, `vertex sets ${r.distance / r.D} of the diagonal apart`);
     assert.equal(r.triangles[0], r.triangles[1], 'triangles');
     assert.ok(Math.abs(r.area[0] - r.area[1]) <= REL * r.area[1], `areas ${r.area}`);
