@@ -190,7 +190,7 @@ class Clipper {
           if (side[a] * side[b] < 0) list.push(makeVertex(a, b, face.plane));
         }
         if (list.length < 3) continue;
-        out = Int32Array.from(list);
+        out = new Int32Array(list);
       }
       if (anyPos || anyOn) {
         const n = out.length;
@@ -216,7 +216,7 @@ class Clipper {
         loop.push(v);
       }
       if (loop.length !== cut.size) return this.undo(nv);
-      kept.push({ plane: p, loop: Int32Array.from(loop) });
+      kept.push({ plane: p, loop: new Int32Array(loop) });
       entries += loop.length;
     }
     this.faces = kept;
@@ -299,7 +299,8 @@ class Clipper {
     const D = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
     const E = coding.angle * (D / 2) + coding.h + coding.hRel * scale;
     const tol = Math.max(MERGE * D, Math.min(1e-2 * D, coding.half, 1000 * E));
-    const parent = Int32Array.from({ length: nv }, (_, i) => i);
+    const parent = new Int32Array(nv);
+    for (let v = 0; v < nv; v++) parent[v] = v;
     const root = (/** @type {number} */ v) => {
       while (parent[v] !== v) v = parent[v] = parent[parent[v]];
       return v;
@@ -337,7 +338,7 @@ class Clipper {
         if (loop[loop.length - 1] !== r) loop.push(r);
       }
       while (loop.length > 1 && loop[0] === loop[loop.length - 1]) loop.pop();
-      if (loop.length >= 3) faces.push({ plane: f.plane, loop: Int32Array.from(loop) });
+      if (loop.length >= 3) faces.push({ plane: f.plane, loop: new Int32Array(loop) });
     }
     return { points, faces };
   }

@@ -183,7 +183,7 @@ function polytopeFaces(group, planes, emit, budget, coding) {
   });
   const positions64 = new Float64Array(3 * remap.size);
   for (const [v, r] of remap) positions64.set(poly.points.subarray(3 * v, 3 * v + 3), 3 * r);
-  return { positions64, indices: Uint32Array.from(idx), faceRefs: Int32Array.from(refs) };
+  return { positions64, indices: new Uint32Array(idx), faceRefs: new Int32Array(refs) };
 }
 
 /**

@@ -33,7 +33,23 @@ export { PlnError };
  * @param {ReadOptions} [options]
  */
 export function readPln(input, options = {}) {
-  const bytes = input instanceof Uint8Array ? input : new Uint8Array(input);
+  try {
+    return read(input instanceof Uint8Array ? input : new Uint8Array(input), options);
+  } catch (err) {
+    // every allocation is bounded by the bytes present, but a large file can still need more
+    // memory than the engine gives: that is a limit of this reader (§12.4), not a crash
+    if (err instanceof RangeError && /allocation failed|Invalid (typed )?array length/i.test(err.message)) {
+      throw new PlnError('LIMIT_EXCEEDED', `out of memory: ${err.message}`);
+    }
+    throw err;
+  }
+}
+
+/**
+ * @param {Uint8Array} bytes
+ * @param {ReadOptions} options
+ */
+function read(bytes, options) {
   const c = readContainer(bytes, options);
   const decode = options.decode ?? true;
   /** @type {Map<number, Uint8Array>} the last cOLR of each group applies (§10.1) */
@@ -49,7 +65,7 @@ export function readPln(input, options = {}) {
     return {
       kind: g.kind,
       index: g.index,
-      positions: Float32Array.from(mesh.positions64),
+      positions: new Float32Array(mesh.positions64),
       positions64: mesh.positions64,
       indices: mesh.indices,
       faceColors: colourOf.has(g.index) ? triangleColours(mesh, /** @type {Uint8Array} */ (colourOf.get(g.index))) : null,
@@ -148,5 +164,5 @@ function mergedMesh(objects) {
       t0 += g.indices.length / 3;
     }
   });
-  return { positions: Float32Array.from(positions), positions64: positions, indices, groupOfTriangle };
+  return { positions: new Float32Array(positions), positions64: positions, indices, groupOfTriangle };
 }

@@ -82,6 +82,8 @@ export function readShell(b, roles) {
   const faceDiffs = readVarints(b, T - U);
   const codes = readVarints(b, 3 * T);
   if (b.left > 0) fail('BAD_GROUP_STRUCTURE', `${b.left} bytes after the corner codes`);
+  // 3T codes name at most 3T corners (a final n other than V): refused before V-sized arrays
+  if (V > 3 * T) fail('BAD_GROUP_STRUCTURE', `${V} corners, at most ${3 * T} named`);
 
   const cornerPlanes = new Int32Array(3 * V).fill(-1);
   const coords = new Float64Array(3 * V);

@@ -29,6 +29,9 @@ export function readShellTree(b, roles) {
   const explicit = readBits(b, V);
 
   // links and corner codes: the triangles, in order
+  // the codes name at most T + 2R corners, so a larger V fails below (n ≠ V) whatever the rest
+  // holds: refused here, before anything of V's size is allocated beyond the flags
+  if (V > T + 2 * roots) fail('BAD_GROUP_STRUCTURE', `${V} corners, at most ${T + 2 * roots} named`);
   const tri = new Uint32Array(3 * T);
   const namer = new Int32Array(V); // the triangle whose code names each corner anew, -1 for a root
   const parent = new Int32Array(T);
