@@ -31,7 +31,7 @@ test: $(STAMP)
 	$(BIN)/python -m conformance --level geometry
 	if command -v node >/dev/null; then \
 	  (cd js && npm ci --silent --no-audit --no-fund) && node --test js/test/ && \
-	  $(BIN)/python -m conformance --impl "node js/cli.mjs" --level geometry --skip-kinds 1,2; fi
+	  $(BIN)/python -m conformance --impl "node js/cli.mjs" --level geometry; fi
 
 # the tests marked slow: every corpus file's recorded error bound against an independent measure,
 # at 1e-6 and 1e-4 (each encoding may take PLN_ENCODE_BUDGET seconds, default 600, before its case is skipped)

@@ -1,7 +1,7 @@
 /** Geometry of part groups (spec §9.4-§9.11): each group to an indexed triangle mesh. */
-import { fail, PlnError } from './errors.mjs';
+import { fail } from './errors.mjs';
 import { intersectHalfSpaces, WORK_LIMIT, EXACT } from './convex.mjs';
-import { IN_LEAF } from './solids.mjs';
+import { cellsSurface, treeSurface, halfSpace } from './union.mjs';
 
 /**
  * @typedef {object} GroupMesh
@@ -32,8 +32,7 @@ function planesOf(group, table) {
 }
 
 /**
- * The decoded surface of a group, or null for a kind this decoder does not triangulate
- * (cells and trees, kinds 1 and 2, whose polytopes it still checks) or a skipped kind.
+ * The decoded surface of a group, or null for a skipped kind.
  * @param {import('./groups.mjs').Group} group
  * @param {Float64Array} table the plane table
  * @param {import('./header.mjs').Header} header for the merge distance of polytopes (§9.4)
@@ -63,15 +62,9 @@ export function decodeGroup(group, table, header) {
       return { ...base, ...mesh };
     }
     case 1:
-      for (const cell of group.data.cells) {
-        const hs = new Float64Array(4 * cell.length);
-        cell.forEach((/** @type {number} */ e, /** @type {number} */ k) => halfSpace(planes, e >> 1, e & 1, hs, k));
-        intersectHalfSpaces(hs, cell.length, budget);
-      }
-      return null;
+      return { ...base, ...cellsSurface(group.data.cells, planes) };
     case 2:
-      checkTreeLeaves(group.data.tree, planes, budget);
-      return null;
+      return { ...base, ...treeSurface(group.data.tree, planes) };
     default:
       return { ...base, ...decodeShell(group.data, planes) };
   }
@@ -93,52 +86,6 @@ function codingError(header) {
   }
   if (coding === 0) return { angle: 2 ** -24, h: 0, hRel: 2 ** -24, half };
   return { ...EXACT, half };
-}
-
-/**
- * Half-space j (s = 0 inner, 1 complement) into out at position k.
- * @param {Float64Array} planes @param {number} j @param {number} s @param {Float64Array} out @param {number} k
- */
-function halfSpace(planes, j, s, out, k) {
-  const sign = s ? -1 : 1;
-  for (let c = 0; c < 4; c++) out[4 * k + c] = sign * planes[4 * j + c];
-}
-
-/**
- * Every IN leaf of a tree (§9.7) must be bounded; empty leaves are allowed.
- * @param {number[]} tree tokens in version 1 numbering @param {Float64Array} planes
- * @param {import('./convex.mjs').Budget} budget
- */
-function checkTreeLeaves(tree, planes, budget) {
-  /** @type {number[]} */
-  const path = []; // entries 2j + s of the splits above the current token
-  /** @type {number[]} */
-  const pending = []; // for each open split: its entry index in path, whose outer side is next
-  for (const token of tree) {
-    if (token < IN_LEAF) {
-      path.push(2 * token);
-      pending.push(path.length - 1);
-      continue;
-    }
-    if (token === IN_LEAF) {
-      const hs = new Float64Array(4 * path.length);
-      path.forEach((e, k) => halfSpace(planes, e >> 1, e & 1, hs, k));
-      try {
-        intersectHalfSpaces(hs, path.length, budget);
-      } catch (err) {
-        if (!(err instanceof PlnError && err.code === 'EMPTY_POLYTOPE')) throw err;
-      }
-    }
-    // close finished splits, then turn to the outer side of the innermost open one
-    while (pending.length && path[pending[pending.length - 1]] % 2 === 1) {
-      path.length = pending.pop();
-    }
-    if (pending.length) {
-      const at = pending[pending.length - 1];
-      path.length = at + 1;
-      path[at] += 1;
-    }
-  }
 }
 
 /**

@@ -58,10 +58,7 @@ function read(bytes, options) {
   const meshes = c.groups.map((g) => {
     if (!decode) return null;
     const mesh = decodeGroup(g, c.planes, c.header);
-    if (!mesh) {
-      if (!g.skipped) c.findings.add('GEOMETRY_NOT_CHECKED');
-      return null;
-    }
+    if (!mesh) return null;
     return {
       kind: g.kind,
       index: g.index,

@@ -81,7 +81,7 @@ function facets(s) {
  */
 function geometryJson(file) {
   const { container: c, meshes } = file;
-  // a group of a kind not decoded (cells, trees) leaves the file's geometry unreported: null
+  // read with decode: false, the file's geometry is unreported: null
   if (meshes.some((m, i) => m === null && !c.groups[i].skipped)) return null;
   const world = worldMatrices(c.objects);
   const lo = [Infinity, Infinity, Infinity];
@@ -136,7 +136,7 @@ function summary(p, ix, kind) {
     triangles: ix.length / 3,
     area,
     area_vector: av,
-    volume: kind === 0 || kind === 5 ? volume : null,
+    volume: kind <= 2 || kind === 5 ? volume : null, // solids and sealed groups (conformance/README.md)
     bbox: [lo, hi],
   };
 }

@@ -1,5 +1,5 @@
 // Every case of conformance/manifest.tsv in process, compared as conformance/runner.py compares
-// at --level geometry, with cells and trees (kinds 1, 2) declined as its --skip-kinds 1,2 does.
+// at --level geometry.
 // And the browser entry (fflate) reads every valid file as the Node entry does.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -11,7 +11,6 @@ import { readPln as readPlnBrowser } from '../src/browser.mjs';
 import { conformanceJson } from '../src/report.mjs';
 
 const SUITE = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../conformance');
-const DECLINED = new Set([1, 2]);
 
 const cases = fs.readFileSync(path.join(SUITE, 'manifest.tsv'), 'utf8').split('\n').slice(1).filter(Boolean)
   .map((line) => {
@@ -49,10 +48,9 @@ function compareValid(want, got) {
   });
   for (const key of ['objects', 'groups', 'colours']) assert.deepEqual(got[key], want[key], key);
   if ('metadata' in want) assert.deepEqual(got.metadata, want.metadata);
-  const allowed = new Set([...want.findings, ...want.findings_optional, 'GEOMETRY_NOT_CHECKED']);
+  const allowed = new Set([...want.findings, ...want.findings_optional]);
   for (const f of want.findings) assert.ok(got.findings.includes(f), `finding ${f}`);
   for (const f of got.findings) assert.ok(allowed.has(f), `finding ${f}`);
-  if (want.groups.some((/** @type {any} */ g) => DECLINED.has(g.kind))) return;
   const w = want.geometry;
   const g = got.geometry;
   assert.ok(g, 'geometry');
@@ -74,7 +72,6 @@ for (const c of cases) {
     const want = JSON.parse(fs.readFileSync(path.join(SUITE, c.file.replace(/\.pln$/, '.json')), 'utf8'));
     const got = outcome(c.file);
     if ('error' in want) {
-      if (!got.error && c.level === 'geometry' && got.findings.includes('GEOMETRY_NOT_CHECKED')) return;
       assert.ok([want.error, ...want.also].includes(got.error), `got ${got.error ?? 'a valid file'}, expected ${want.error}`);
     } else {
       assert.equal(got.error, undefined, `rejected: ${got.error}`);
