@@ -11,6 +11,10 @@ import { IN_LEAF } from './solids.mjs';
 /** A polygon vertex counts as on a plane within this fraction of the group's scale. */
 const ON_PLANE = 1e-10;
 
+/** What a polygon split costs beyond its vertices, in the work budget's units (vertex visits of
+ * convex clipping): its allocations take about as long as fifty such visits. */
+const SPLIT_COST = 50;
+
 /** Collects convex polygons (flat point lists) with their references; fans them at the end. */
 class Surface {
   constructor() {
@@ -49,7 +53,7 @@ class Surface {
  */
 function split(poly, w, h, tol, budget) {
   const n = poly.length / 3;
-  budget.left -= n;
+  budget.left -= n + SPLIT_COST;
   if (budget.left < 0) fail('LIMIT_EXCEEDED', `decoding work above ${WORK_LIMIT}`);
   const d = new Float64Array(n);
   let pos = false;
@@ -214,20 +218,22 @@ export function treeSurface(tree, planes) {
     }
     if (tree[i] < IN_LEAF) open.push(i);
   }
-  const surface = new Surface();
-  // depth first, the path's entries 2j + s beside each node
-  /** @type {[number, number[]][]} */
-  const stack = [[0, []]];
-  while (stack.length) {
-    const [node, path] = /** @type {[number, number[]]} */ (stack.pop());
-    budget.left -= path.length; // the path copied for each child: a deep chain costs its square
-    if (budget.left < 0) fail('LIMIT_EXCEEDED', `decoding work above ${WORK_LIMIT}`);
-    const token = tree[node];
-    if (token < IN_LEAF) {
-      stack.push([outer[node], [...path, 2 * token + 1]], [inner[node], [...path, 2 * token]]);
-      continue;
+  // each node's parent and the side of its split it lies on, for the paths of the IN leaves
+  const up = new Int32Array(t).fill(-1);
+  for (let i = 0; i < t; i++) {
+    if (tree[i] < IN_LEAF) {
+      up[inner[i]] = 2 * i;
+      up[outer[i]] = 2 * i + 1;
     }
-    if (token !== IN_LEAF) continue;
+  }
+  const surface = new Surface();
+  for (let leaf = 0; leaf < t; leaf++) {
+    if (tree[leaf] !== IN_LEAF) continue;
+    /** @type {number[]} the entries 2j + s of the splits above the leaf */
+    const path = [];
+    for (let at = up[leaf]; at >= 0; at = up[at >> 1]) path.push(2 * tree[at >> 1] + (at & 1));
+    budget.left -= path.length;
+    if (budget.left < 0) fail('LIMIT_EXCEEDED', `decoding work above ${WORK_LIMIT}`);
     const hs = new Float64Array(4 * path.length);
     path.forEach((e, k) => halfSpace(planes, e >> 1, e & 1, hs, k));
     let faces;
