@@ -24,18 +24,20 @@ export function allFiles() {
 let version = '';
 
 /**
- * The .pln of a corpus file, encoded by `pln convert` once per source and encoder version and
- * kept in the temporary directory.
+ * The .pln of a corpus file, encoded by `pln convert` once per source, options and encoder
+ * version and kept in the temporary directory.
  * @param {string} rel a path relative to the corpus
+ * @param {string[]} [options] of `pln convert`, e.g. ['--scheme', 'paper']
  */
-export function encoded(rel) {
+export function encoded(rel, options = []) {
   version ||= execFileSync(PLN, ['--version']).toString().trim();
   const src = path.join(CORPUS, rel);
   const stat = fs.statSync(src);
-  const key = crypto.createHash('sha1').update(`${rel}\0${stat.size}\0${stat.mtimeMs}\0${version}`).digest('hex').slice(0, 16);
+  const key = crypto.createHash('sha1').update(`${rel}\0${stat.size}\0${stat.mtimeMs}\0${version}\0${options.join(' ')}`)
+    .digest('hex').slice(0, 16);
   const dir = path.join(os.tmpdir(), 'planefmt-js-corpus');
   fs.mkdirSync(dir, { recursive: true });
   const out = path.join(dir, `${path.basename(rel).replace(/\W/g, '_')}-${key}.pln`);
-  if (!fs.existsSync(out)) execFileSync(PLN, ['convert', src, out], { stdio: ['ignore', 'ignore', 'pipe'] });
+  if (!fs.existsSync(out)) execFileSync(PLN, ['convert', ...options, src, out], { stdio: ['ignore', 'ignore', 'pipe'] });
   return out;
 }
