@@ -12,6 +12,7 @@ import { readPln, PlnError } from './src/node.mjs';
 import { conformanceJson } from './src/report.mjs';
 import { toObj } from './src/obj.mjs';
 
+/** @param {string[]} argv */
 function main(argv) {
   const args = argv.slice(2);
   const objAt = args.indexOf('--obj');

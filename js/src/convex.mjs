@@ -332,6 +332,7 @@ class Clipper {
     for (const [r, members] of clusters) weld(this.planes, this.vp, members, vx, points, 3 * r);
     const faces = [];
     for (const f of this.faces) {
+      /** @type {number[]} */
       const loop = [];
       for (const v of f.loop) {
         const r = root(v);

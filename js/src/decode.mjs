@@ -117,7 +117,9 @@ function polytopeFaces(group, planes, emit, budget, coding) {
   const order = emit ? emit.map((i) => firstRef.get(group.refs[i])) : [...loops.keys()].sort((a, b) => a - b);
   const refOf = emit ?? order;
   const remap = new Map();
+  /** @type {number[]} */
   const idx = [];
+  /** @type {number[]} */
   const refs = [];
   order.forEach((owner, n) => {
     const loop = loops.get(owner);

@@ -20,7 +20,7 @@ test('a valid file: JSON on stdout, exit 0; --obj writes its triangles in world 
   const r = run(path.join(SUITE, 'valid/scene_hierarchy.pln'), '--obj', out);
   assert.equal(r.status, 0);
   const json = JSON.parse(r.stdout);
-  const triangles = json.geometry.groups.reduce((s, /** @type {any} */ g) => s + g.triangles, 0);
+  const triangles = json.geometry.groups.reduce((/** @type {number} */ s, /** @type {any} */ g) => s + g.triangles, 0);
   const obj = fs.readFileSync(out, 'utf8');
   assert.equal(obj.split('\n').filter((l) => l.startsWith('f ')).length, triangles);
   assert.deepEqual(fs.readdirSync(dir), ['scene.obj']);

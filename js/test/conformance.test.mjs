@@ -28,7 +28,7 @@ function outcome(file) {
   }
 }
 
-/** @param {any} a @param {any} b @param {number} tol */
+/** @param {any} a @param {any} b @param {number} tol @returns {boolean} */
 function close(a, b, tol) {
   if (Array.isArray(b)) return Array.isArray(a) && a.length === b.length && a.every((x, i) => close(x, b[i], tol));
   return typeof a === 'number' && Math.abs(a - b) <= tol;
