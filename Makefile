@@ -13,6 +13,8 @@ $(STAMP): pyproject.toml planefmt/container/_chains.c
 	$(BIN)/python -m pip install -q -e '.[test]'
 	# Khronos glTF-Validator (npm, pinned by tools/validators/package-lock.json) for the converter tests
 	if command -v npm >/dev/null; then tools/install_validators.sh; fi
+	# the JavaScript reader's packages (js/package-lock.json: fflate, and draco3d for its benchmark)
+	if command -v npm >/dev/null; then (cd js && npm ci --silent --no-audit --no-fund); fi
 	touch $(STAMP)
 
 setup: $(STAMP)
@@ -22,9 +24,14 @@ demo: $(STAMP)
 	$(BIN)/python -m planefmt_converters.demo $(OUT)
 
 # -n auto: pytest-xdist, one worker per core (the suite takes about 12 minutes on one core)
+# js/: the JavaScript reader's tests (conformance cases, damaged files, corpus against planefmt),
+# where node is installed
 test: $(STAMP)
 	$(BIN)/python -m pytest -n auto --dist worksteal
 	$(BIN)/python -m conformance --level geometry
+	if command -v node >/dev/null; then \
+	  (cd js && npm ci --silent --no-audit --no-fund) && node --test js/test/ && \
+	  $(BIN)/python -m conformance --impl "node js/cli.mjs" --level geometry; fi
 
 # the tests marked slow: every corpus file's recorded error bound against an independent measure,
 # at 1e-6 and 1e-4 (each encoding may take PLN_ENCODE_BUDGET seconds, default 600, before its case is skipped)

@@ -76,6 +76,27 @@ def test_geometry_is_compared_where_reported():
     assert runner.compare_valid(expected, got, "geometry") == "no geometry"
 
 
+
+def test_skip_kinds_counts_declined_cases_as_skipped():
+    # A decoder without cells and trees (js/cli.mjs): no geometry for a cells file, and a
+    # geometry defect of cells accepted with GEOMETRY_NOT_CHECKED, are skipped, not failed, and
+    # only for the kinds named.
+    valid = next(c for c in CASES if c.path == "valid/cells_l.pln")
+    expected = json.loads((SUITE / "valid/cells_l.json").read_text())
+    got = in_process(SUITE / valid.path)
+    got.result["geometry"] = None
+    got.result["findings"] = ["GEOMETRY_NOT_CHECKED"]
+    assert runner.check(valid, expected, got, "geometry") == "no geometry"
+    assert runner.check(valid, expected, got, "geometry", frozenset({1, 2})) == runner.SKIPPED
+    assert runner.check(valid, expected, got, "geometry", frozenset({0})) == "no geometry"
+    assert runner.check(valid, expected, got, "container") is None
+    broken = next(c for c in CASES if c.path == "invalid/xgeom_cells_overlap.pln")
+    accepted = Outcome(0, got.result, "")
+    wanted = json.loads((SUITE / "invalid/xgeom_cells_overlap.json").read_text())
+    assert runner.check(broken, wanted, accepted, "geometry", frozenset({1, 2})) == runner.SKIPPED
+    silent = Outcome(0, dict(got.result, findings=[]), "")
+    assert "accepted" in runner.check(broken, wanted, silent, "geometry", frozenset({1, 2}))
+
 #: A wrong value in every field the runner compares: (case, what, change to the result in place).
 WRONG = [
     ("cube_float32", "a plane 0.5 off", lambda r: r["planes"][0].__setitem__(2, r["planes"][0][2] + 0.5)),

@@ -1,0 +1,43 @@
+/** The real corpus as .pln files made by planefmt's default encoder, for the tests and benchmarks. */
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import crypto from 'node:crypto';
+import { execFileSync } from 'node:child_process';
+import { fileURLToPath } from 'node:url';
+
+export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+export const PYTHON = path.join(ROOT, '.venv/bin/python');
+const PLN = path.join(ROOT, '.venv/bin/pln');
+export const CORPUS = process.env.PLN_CORPUS ?? '/work/shared/corpus';
+
+/** Whether planefmt (the repository's .venv) and the corpus are here. */
+export const available = fs.existsSync(PLN) && fs.existsSync(CORPUS);
+
+/** Every mesh file of the corpus, relative to it (a glTF's .bin goes with its .gltf). */
+export function allFiles() {
+  return fs.readdirSync(CORPUS, { withFileTypes: true }).filter((d) => d.isDirectory())
+    .flatMap((d) => fs.readdirSync(path.join(CORPUS, d.name)).map((f) => `${d.name}/${f}`))
+    .filter((f) => !f.endsWith('.bin') && !f.endsWith('.md')).sort();
+}
+
+let version = '';
+
+/**
+ * The .pln of a corpus file, encoded by `pln convert` once per source, options and encoder
+ * version and kept in the temporary directory.
+ * @param {string} rel a path relative to the corpus
+ * @param {string[]} [options] of `pln convert`, e.g. ['--scheme', 'paper']
+ */
+export function encoded(rel, options = []) {
+  version ||= execFileSync(PLN, ['--version']).toString().trim();
+  const src = path.join(CORPUS, rel);
+  const stat = fs.statSync(src);
+  const key = crypto.createHash('sha1').update(`${rel}\0${stat.size}\0${stat.mtimeMs}\0${version}\0${options.join(' ')}`)
+    .digest('hex').slice(0, 16);
+  const dir = path.join(os.tmpdir(), 'planefmt-js-corpus');
+  fs.mkdirSync(dir, { recursive: true });
+  const out = path.join(dir, `${path.basename(rel).replace(/\W/g, '_')}-${key}.pln`);
+  if (!fs.existsSync(out)) execFileSync(PLN, ['convert', ...options, src, out], { stdio: ['ignore', 'ignore', 'pipe'] });
+  return out;
+}

@@ -1,0 +1,70 @@
+/** Ancillary chunks: colours cOLR (spec §10.1), index iNDX (§10.2), metadata mETA (§10.3). */
+import { fail } from './errors.mjs';
+import { Cursor } from './varint.mjs';
+
+const utf8 = new TextDecoder('utf-8', { fatal: true, ignoreBOM: true });
+
+/** Values of the keywords §10.3 defines. @type {Record<string, string[]>} */
+const KEYWORDS = { up_axis: ['Y', 'Z'] };
+
+/**
+ * @param {Uint8Array} payload
+ * @param {import('./groups.mjs').Group[]} groups read so far
+ * @returns {{group: number, rgba: Uint8Array}} 4 bytes per reference
+ */
+export function readColours(payload, groups) {
+  const c = new Cursor(payload);
+  const group = c.u32();
+  const count = c.u32();
+  const rgba = c.take(4 * count).slice();
+  if (c.left > 0) fail('BAD_COLOURS', `${c.left} bytes after the colours`);
+  if (group >= groups.length) fail('BAD_COLOURS', `group ${group} not read yet`);
+  if (count !== groups[group].refs.length) fail('BAD_COLOURS', `${count} colours for ${groups[group].refs.length} references`);
+  return { group, rgba };
+}
+
+/**
+ * Checks an iNDX payload against the chunks read before it.
+ * @param {Uint8Array} payload
+ * @param {number} offset of the iNDX chunk
+ * @param {number} firstAfterHeader offset of the chunk after PHDR
+ * @param {{offset: number, type: string, ordinal: number}[]} listed the OBJT, PLNS and GRUP chunks read
+ */
+export function checkIndex(payload, offset, firstAfterHeader, listed) {
+  const c = new Cursor(payload);
+  const count = c.u32();
+  c.need(16 * count);
+  if (c.left > 16 * count) fail('BAD_INDEX', `${c.left - 16 * count} bytes after the entries`);
+  if (count !== listed.length) fail('BAD_INDEX', `${count} entries for ${listed.length} chunks`);
+  let last = -1;
+  for (let i = 0; i < count; i++) {
+    const at = c.u64();
+    const type = String.fromCharCode(...c.take(4));
+    const ordinal = c.u32();
+    if (at < firstAfterHeader || at >= offset || at <= last) fail('BAD_INDEX', `entry ${i}: offset ${at}`);
+    last = at;
+    const want = listed[i];
+    if (at !== want.offset || type !== want.type || ordinal !== want.ordinal) fail('BAD_INDEX', `entry ${i} does not match the file`);
+  }
+}
+
+/**
+ * @param {Uint8Array} payload
+ * @param {Record<string, string>} metadata read so far; the new keyword is added
+ */
+export function readMetadata(payload, metadata) {
+  const zero = payload.indexOf(0);
+  if (zero < 0) fail('BAD_METADATA', 'no 0x00 separator');
+  if (zero < 1 || zero > 79) fail('BAD_METADATA', `keyword of ${zero} bytes`);
+  for (let i = 0; i < zero; i++) if (payload[i] < 0x21 || payload[i] > 0x7e) fail('BAD_METADATA', 'keyword not printable ASCII');
+  const keyword = String.fromCharCode(...payload.subarray(0, zero));
+  let value;
+  try {
+    value = utf8.decode(payload.subarray(zero + 1));
+  } catch {
+    fail('BAD_METADATA', 'value not UTF-8');
+  }
+  if (Object.hasOwn(metadata, keyword)) fail('BAD_METADATA', `keyword ${keyword} twice`);
+  if (Object.hasOwn(KEYWORDS, keyword) && !KEYWORDS[keyword].includes(value)) fail('BAD_METADATA', `${keyword} = ${value}`);
+  metadata[keyword] = value;
+}

@@ -1,0 +1,398 @@
+/**
+ * The convex polytope of a set of half-spaces {x : ω·x ≤ h} (spec §9.5, and the polytopes of
+ * patches §9.8, cells §9.6 and tree leaves §9.7), as faces with vertex loops.
+ *
+ * The spec prescribes no algorithm or triangulation. This one clips a box by one half-space after
+ * another, which needs no interior point and no linear program: O(m · size) for m planes, fine for
+ * the hundreds of planes a convex group holds (a shell is the kind for large surfaces). Each
+ * vertex keeps the three planes it lies on and is recomputed from them, so clipping a huge
+ * starting box costs no accuracy. A vertex within a rounding margin of a plane counts as on it,
+ * so that k > 3 planes through one point (a cube corner) give one vertex (§9.4), and at the end
+ * vertices are merged within §9.4's distance: at least 1e-9 × the diagonal, and up to what the
+ * coding may have moved the planes (coded planes through one corner no longer meet in a point).
+ */
+import { fail } from './errors.mjs';
+
+/** A vertex counts as on a plane within this fraction of its coordinates' and h's magnitude. */
+const ON_PLANE = 1e-12;
+/** Vertices closer than this fraction of the polytope's diagonal are one (§9.4's MUST). */
+const MERGE = 1e-9;
+
+/**
+ * How far the coding may have moved a plane (§9.4's E = angle × radius + h, h + hRel × the
+ * largest |h| of the group) and half the header's tolerance in model units (L); the merge
+ * distance is max(1e-9 × diagonal, min(1e-2 × diagonal, L, 1000 × E)), as planefmt's.
+ * @typedef {{angle: number, h: number, hRel: number, half: number}} Coding
+ */
+/** @type {Coding} */
+export const EXACT = { angle: 0, h: 0, hRel: 0, half: Infinity };
+/** The starting box: this many times the largest |h|; a vertex on it means unbounded. */
+const BOX = 1e6;
+
+/** Vertex and loop entries one group may make the clipper visit (§12.4 lets a decoder bound its
+ * work): clipping costs m × the polytope's size, so a hostile group of 10^5 planes would
+ * otherwise take minutes; 1e8 visits take about a second (some 6,000 planes tangent to a sphere). */
+export const WORK_LIMIT = 1e8;
+
+/** @typedef {{left: number}} Budget work left for one group, shared by its polytopes */
+
+/**
+ * @typedef {object} Polytope
+ * @property {Float64Array} points 3 per vertex
+ * @property {{plane: number, loop: Int32Array}[]} faces counter-clockwise seen from outside
+ */
+
+/**
+ * Intersects the inner half-spaces of planes (nx, ny, nz, h), or fails with EMPTY_POLYTOPE
+ * (empty or no interior) or UNBOUNDED_POLYTOPE.
+ * @param {Float64Array} planes 4 per plane: ωx, ωy, ωz, h
+ * @param {number} count planes
+ * @param {Budget} budget decremented by the work done; LIMIT_EXCEEDED below 0
+ * @param {Coding} coding for the merge distance
+ * @returns {Polytope} faces name their plane by its position in `planes`
+ */
+export function intersectHalfSpaces(planes, count, budget, coding = EXACT) {
+  let scale = 0;
+  for (let i = 0; i < count; i++) scale = Math.max(scale, Math.abs(planes[4 * i + 3]));
+  if (scale === 0) scale = 1;
+  const all = new Float64Array(4 * (count + 6));
+  all.set(planes.subarray(0, 4 * count));
+  const R = BOX * scale;
+  for (let a = 0; a < 3; a++) {
+    all[4 * (count + 2 * a) + a] = 1;
+    all[4 * (count + 2 * a) + 3] = R;
+    all[4 * (count + 2 * a + 1) + a] = -1;
+    all[4 * (count + 2 * a + 1) + 3] = R;
+  }
+  const poly = new Clipper(all, count);
+  for (let i = 0; i < count; i++) {
+    if (poly.clip(i) === 'empty') fail('EMPTY_POLYTOPE', `nothing left inside plane ${i}`);
+    budget.left -= poly.size;
+    if (budget.left < 0) fail('LIMIT_EXCEEDED', `decoding work above ${WORK_LIMIT} vertex visits`);
+  }
+  poly.compact();
+  for (let v = 0; v < poly.nv; v++) {
+    for (let s = 0; s < 3; s++) if (poly.vp[3 * v + s] >= count) fail('UNBOUNDED_POLYTOPE', 'a vertex on no three of its planes');
+  }
+  return poly.merged(coding, scale);
+}
+
+class Clipper {
+  /** @param {Float64Array} planes all planes, the box's 6 after `count` @param {number} count */
+  constructor(planes, count) {
+    this.planes = planes;
+    /** vertices plus loop entries: the work of one clip */
+    this.size = 32;
+    this.nv = 8;
+    this.vx = new Float64Array(48);
+    this.vp = new Int32Array(48);
+    this.alive = new Uint8Array(16).fill(1, 0, 8);
+    this.dist = new Float64Array(16);
+    this.side = new Int8Array(16);
+    /** @type {{plane: number, loop: Int32Array}[]} */
+    this.faces = [];
+    // the box: corner (i, j, k) bit-coded, each on one plane of each axis pair
+    for (let c = 0; c < 8; c++) {
+      for (let a = 0; a < 3; a++) {
+        const hi = (c >> a) & 1;
+        const p = count + 2 * a + (hi ? 0 : 1);
+        this.vx[3 * c + a] = hi ? planes[4 * p + 3] : -planes[4 * p + 3];
+        this.vp[3 * c + a] = p;
+      }
+    }
+    // faces counter-clockwise seen from outside
+    const quads = [
+      [0, [1, 3, 7, 5]], [1, [0, 4, 6, 2]],
+      [2, [2, 6, 7, 3]], [3, [0, 1, 5, 4]],
+      [4, [4, 5, 7, 6]], [5, [0, 2, 3, 1]],
+    ];
+    for (const [f, loop] of quads) this.faces.push({ plane: count + /** @type {number} */ (f), loop: Int32Array.from(/** @type {number[]} */ (loop)) });
+  }
+
+  /**
+   * Clips by plane p: 'empty' if nothing with an interior is left, 'redundant' if it cuts nothing.
+   * New vertices are appended; vertices cut away stay in the arrays, dead, until compact().
+   * @param {number} p
+   */
+  clip(p) {
+    const P = this.planes;
+    const wx = P[4 * p];
+    const wy = P[4 * p + 1];
+    const wz = P[4 * p + 2];
+    const h = P[4 * p + 3];
+    const nv = this.nv;
+    const { vx, alive } = this;
+    if (this.dist.length < nv) {
+      this.dist = new Float64Array(2 * nv);
+      this.side = new Int8Array(2 * nv);
+    }
+    const { dist, side } = this;
+    let pos = 0;
+    let neg = 0;
+    for (let v = 0; v < nv; v++) {
+      if (!alive[v]) continue;
+      const x = vx[3 * v];
+      const y = vx[3 * v + 1];
+      const z = vx[3 * v + 2];
+      const d = wx * x + wy * y + wz * z - h;
+      const tol = ON_PLANE * (Math.abs(x) + Math.abs(y) + Math.abs(z) + Math.abs(h));
+      dist[v] = d;
+      const s = d > tol ? 1 : d < -tol ? -1 : 0;
+      side[v] = s;
+      if (s > 0) pos++;
+      else if (s < 0) neg++;
+    }
+    if (pos === 0) return 'redundant';
+    if (neg === 0) return 'empty';
+
+    // new vertices on cut edges, shared by the two faces of each edge
+    /** @type {Map<number, number>} */
+    const onEdge = new Map();
+    const makeVertex = (/** @type {number} */ a, /** @type {number} */ b, /** @type {number} */ facePlane) => {
+      const key = a < b ? a * nv + b : b * nv + a;
+      const known = onEdge.get(key);
+      if (known !== undefined) {
+        this.vp[3 * known + 1] = facePlane;
+        return known;
+      }
+      const t = dist[a] / (dist[a] - dist[b]);
+      const id = this.addVertex();
+      const X = this.vx;
+      for (let c = 0; c < 3; c++) X[3 * id + c] = X[3 * a + c] + t * (X[3 * b + c] - X[3 * a + c]);
+      this.vp[3 * id] = facePlane;
+      this.vp[3 * id + 1] = -1;
+      this.vp[3 * id + 2] = p;
+      onEdge.set(key, id);
+      return id;
+    };
+    /** @type {Map<number, number>} directed edges of the new face, from → to */
+    const cut = new Map();
+    const onPlane = (/** @type {number} */ v) => v >= nv || side[v] === 0;
+    const kept = [];
+    let entries = 0;
+    for (const face of this.faces) {
+      const loop = face.loop;
+      const k = loop.length;
+      let anyPos = false;
+      let anyOn = false;
+      for (let i = 0; i < k; i++) {
+        const s = side[loop[i]];
+        if (s > 0) anyPos = true;
+        else if (s === 0) anyOn = true;
+      }
+      let out = loop;
+      if (anyPos) {
+        const list = [];
+        for (let i = 0; i < k; i++) {
+          const a = loop[i];
+          const b = loop[i + 1 === k ? 0 : i + 1];
+          if (side[a] <= 0) list.push(a);
+          if (side[a] * side[b] < 0) list.push(makeVertex(a, b, face.plane));
+        }
+        if (list.length < 3) continue;
+        out = new Int32Array(list);
+      }
+      if (anyPos || anyOn) {
+        const n = out.length;
+        for (let i = 0; i < n; i++) {
+          const u = out[i];
+          const w = out[i + 1 === n ? 0 : i + 1];
+          if (!onPlane(u) || !onPlane(w)) continue;
+          // the face's edge u→w on the plane is w→u in the new face; one seen both ways is interior
+          if (cut.get(u) === w) cut.delete(u);
+          else cut.set(w, u);
+        }
+      }
+      face.loop = out;
+      kept.push(face);
+      entries += out.length;
+    }
+    // the new face: the cut edges chained into one loop
+    if (cut.size >= 3) {
+      const start = /** @type {number} */ (cut.keys().next().value);
+      const loop = [start];
+      for (let v = cut.get(start); v !== start; v = cut.get(v)) {
+        if (v === undefined || loop.length > cut.size) return this.undo(nv);
+        loop.push(v);
+      }
+      if (loop.length !== cut.size) return this.undo(nv);
+      kept.push({ plane: p, loop: new Int32Array(loop) });
+      entries += loop.length;
+    }
+    this.faces = kept;
+    let live = 0;
+    for (let v = 0; v < nv; v++) {
+      if (alive[v] && side[v] > 0) alive[v] = 0;
+      live += alive[v];
+    }
+    // new vertices from their three planes where the two faces of their edge are known
+    for (let v = nv; v < this.nv; v++) {
+      const vp = this.vp;
+      if (vp[3 * v + 1] < 0) vp[3 * v + 1] = vp[3 * v]; // an edge seen by one face only: keep the estimate
+      else solveInto(P, vp[3 * v], vp[3 * v + 1], vp[3 * v + 2], this.vx, 3 * v);
+      live++;
+    }
+    this.size = live + entries;
+    if (this.nv > 2 * live + 64) this.compact();
+    return 'cut';
+  }
+
+  /** Drops the vertices a clip added, for a clip given up. @param {number} nv @returns {'redundant'} */
+  undo(nv) {
+    this.nv = nv;
+    return 'redundant';
+  }
+
+  /** @returns {number} a new vertex's index, the arrays grown as needed */
+  addVertex() {
+    if (3 * (this.nv + 1) > this.vx.length) {
+      const cap = 2 * this.vx.length;
+      const vx = new Float64Array(cap);
+      vx.set(this.vx);
+      const vp = new Int32Array(cap);
+      vp.set(this.vp);
+      const alive = new Uint8Array(cap / 3);
+      alive.set(this.alive);
+      [this.vx, this.vp, this.alive] = [vx, vp, alive];
+    }
+    this.alive[this.nv] = 1;
+    return this.nv++;
+  }
+
+  /** Renumbers the vertices the faces use, dropping the others. */
+  compact() {
+    const remap = new Int32Array(this.nv).fill(-1);
+    let count = 0;
+    for (const f of this.faces) for (const v of f.loop) if (remap[v] < 0) remap[v] = count++;
+    const cap = Math.max(24, 6 * count);
+    const vx = new Float64Array(cap);
+    const vp = new Int32Array(cap);
+    for (let v = 0; v < this.nv; v++) {
+      const r = remap[v];
+      if (r < 0) continue;
+      for (let c = 0; c < 3; c++) {
+        vx[3 * r + c] = this.vx[3 * v + c];
+        vp[3 * r + c] = this.vp[3 * v + c];
+      }
+    }
+    for (const f of this.faces) for (let i = 0; i < f.loop.length; i++) f.loop[i] = remap[f.loop[i]];
+    this.alive = new Uint8Array(cap / 3).fill(1, 0, count);
+    [this.vx, this.vp, this.nv] = [vx, vp, count];
+  }
+
+  /**
+   * The faces, with the vertices of edges shorter than the merge distance welded into one.
+   * @param {Coding} coding
+   * @param {number} scale the largest |h|
+   * @returns {Polytope}
+   */
+  merged(coding, scale) {
+    const { vx, nv } = this;
+    const lo = [Infinity, Infinity, Infinity];
+    const hi = [-Infinity, -Infinity, -Infinity];
+    for (let v = 0; v < nv; v++) {
+      for (let c = 0; c < 3; c++) {
+        lo[c] = Math.min(lo[c], vx[3 * v + c]);
+        hi[c] = Math.max(hi[c], vx[3 * v + c]);
+      }
+    }
+    const D = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+    const E = coding.angle * (D / 2) + coding.h + coding.hRel * scale;
+    const tol = Math.max(MERGE * D, Math.min(1e-2 * D, coding.half, 1000 * E));
+    const parent = new Int32Array(nv);
+    for (let v = 0; v < nv; v++) parent[v] = v;
+    const root = (/** @type {number} */ v) => {
+      while (parent[v] !== v) v = parent[v] = parent[parent[v]];
+      return v;
+    };
+    for (const f of this.faces) {
+      const n = f.loop.length;
+      for (let i = 0; i < n; i++) {
+        const a = f.loop[i];
+        const b = f.loop[(i + 1) % n];
+        const dx = vx[3 * a] - vx[3 * b];
+        const dy = vx[3 * a + 1] - vx[3 * b + 1];
+        const dz = vx[3 * a + 2] - vx[3 * b + 2];
+        if (dx * dx + dy * dy + dz * dz <= tol * tol) parent[root(a)] = root(b);
+      }
+    }
+    // a welded vertex is the least-squares point of the planes its members lie on (planefmt's
+    // choice too: the corpus test matches it to 1e-16), or their mean where those are degenerate
+    const size = new Int32Array(nv);
+    for (let v = 0; v < nv; v++) size[root(v)]++;
+    /** @type {Map<number, number[]>} welded groups of vertices, by root */
+    const clusters = new Map();
+    for (let v = 0; v < nv; v++) {
+      const r = root(v);
+      if (size[r] < 2) continue;
+      if (!clusters.has(r)) clusters.set(r, []);
+      /** @type {number[]} */ (clusters.get(r)).push(v);
+    }
+    const points = vx.slice();
+    for (const [r, members] of clusters) weld(this.planes, this.vp, members, vx, points, 3 * r);
+    const faces = [];
+    for (const f of this.faces) {
+      /** @type {number[]} */
+      const loop = [];
+      for (const v of f.loop) {
+        const r = root(v);
+        if (loop[loop.length - 1] !== r) loop.push(r);
+      }
+      while (loop.length > 1 && loop[0] === loop[loop.length - 1]) loop.pop();
+      if (loop.length >= 3) faces.push({ plane: f.plane, loop: new Int32Array(loop) });
+    }
+    return { points, faces };
+  }
+}
+
+/**
+ * The least-squares point of the distinct planes of members' triples, into out[at..at+2]; their
+ * mean where the normal equations are singular.
+ * @param {Float64Array} P planes @param {Int32Array} vp triples @param {number[]} members
+ * @param {Float64Array} vx points @param {Float64Array} out @param {number} at
+ */
+function weld(P, vp, members, vx, out, at) {
+  const planes = new Set();
+  for (const v of members) for (let s = 0; s < 3; s++) planes.add(vp[3 * v + s]);
+  const A = new Float64Array(9);
+  const b = new Float64Array(3);
+  for (const p of planes) {
+    for (let i = 0; i < 3; i++) {
+      b[i] += P[4 * p + i] * P[4 * p + 3];
+      for (let j = 0; j < 3; j++) A[3 * i + j] += P[4 * p + i] * P[4 * p + j];
+    }
+  }
+  const det3 = (/** @type {Float64Array} */ m) => m[0] * (m[4] * m[8] - m[5] * m[7]) - m[1] * (m[3] * m[8] - m[5] * m[6])
+    + m[2] * (m[3] * m[7] - m[4] * m[6]);
+  const det = det3(A);
+  if (Math.abs(det) > 1e-9) {
+    for (let k = 0; k < 3; k++) {
+      const Ak = A.slice();
+      for (let i = 0; i < 3; i++) Ak[3 * i + k] = b[i];
+      out[at + k] = det3(Ak) / det;
+    }
+    return;
+  }
+  for (let k = 0; k < 3; k++) {
+    let s = 0;
+    for (const v of members) s += vx[3 * v + k];
+    out[at + k] = s / members.length;
+  }
+}
+
+/**
+ * Where planes a, b, c meet, by Cramer's rule, written to out[at..at+2] unless the normals are
+ * nearly dependent (then out keeps its estimate).
+ * @param {Float64Array} P @param {number} a @param {number} b @param {number} c
+ * @param {Float64Array} out @param {number} at
+ */
+function solveInto(P, a, b, c, out, at) {
+  const [ax, ay, az, ah] = [P[4 * a], P[4 * a + 1], P[4 * a + 2], P[4 * a + 3]];
+  const [bx, by, bz, bh] = [P[4 * b], P[4 * b + 1], P[4 * b + 2], P[4 * b + 3]];
+  const [cx, cy, cz, ch] = [P[4 * c], P[4 * c + 1], P[4 * c + 2], P[4 * c + 3]];
+  const det = ax * (by * cz - bz * cy) - ay * (bx * cz - bz * cx) + az * (bx * cy - by * cx);
+  if (!(Math.abs(det) > 1e-9)) return;
+  out[at] = (ah * (by * cz - bz * cy) - ay * (bh * cz - bz * ch) + az * (bh * cy - by * ch)) / det;
+  out[at + 1] = (ax * (bh * cz - bz * ch) - ah * (bx * cz - bz * cx) + az * (bx * ch - bh * cx)) / det;
+  out[at + 2] = (ax * (by * ch - bh * cy) - ay * (bx * ch - bh * cx) + ah * (bx * cy - by * cx)) / det;
+}

@@ -1,0 +1,132 @@
+/** Part groups GRUP: head (spec §9.1), common body (§9.2), kinds (§9.3) and their kind data. */
+import { fail } from './errors.mjs';
+import { Cursor, readBits } from './varint.mjs';
+import { decompress } from './compression.mjs';
+import { readCells, readTree } from './solids.mjs';
+import { readSealed } from './sealed.mjs';
+import { readShell } from './shells.mjs';
+import { readShellTree } from './shelltree.mjs';
+
+/**
+ * @typedef {object} Group
+ * @property {number} index
+ * @property {number} object
+ * @property {number} kind
+ * @property {Uint32Array} refs plane-table indices
+ * @property {Uint8Array} roles 1 where the reference's role bit is set, one byte per reference
+ * @property {boolean} skipped a kind of a newer minor version (§9.3): no kind data read
+ * @property {any} data the kind data: cells, tree, or a Shell (kinds 5-7)
+ */
+
+/** The newest minor version this reader knows, per major (§9.3). */
+const NEWEST_MINOR = { 1: 0, 2: 0, 3: 3 };
+
+/**
+ * Whether `kind` is a kind of the file's version (§9.3).
+ * @param {number} kind @param {[number, number]} version
+ */
+function kindOfVersion(kind, [major, minor]) {
+  if (kind <= 4) return true;
+  return major === 3 && kind <= 7 && minor >= kind - 4;
+}
+
+/**
+ * Reads one GRUP payload.
+ * @param {Uint8Array} payload
+ * @param {object} ctx
+ * @param {[number, number]} ctx.version
+ * @param {number} ctx.groups groups read before
+ * @param {number} ctx.objects objects read before
+ * @param {number} ctx.planes planes defined before this chunk
+ * @param {import('./compression.mjs').Limits} ctx.limits
+ * @param {import('./compression.mjs').InflateFn | null} ctx.inflate
+ * @returns {Group}
+ */
+export function readGroup(payload, ctx) {
+  const c = new Cursor(payload);
+  const major = ctx.version[0];
+  let index;
+  let object;
+  let kind;
+  let method;
+  let rawSize;
+  if (major < 3) {
+    if (payload.length < 16) fail('BAD_PAYLOAD', 'GRUP head under 16 bytes');
+    index = c.u32();
+    object = c.u32();
+    kind = c.u8();
+    method = c.u8();
+    c.pos += 2;
+    rawSize = c.u32();
+  } else {
+    index = c.varint32();
+    object = c.varint32();
+    kind = c.u8();
+    method = c.u8();
+    rawSize = c.varint32();
+  }
+  if (index !== ctx.groups) fail('GROUP_INDEX_MISMATCH', `index ${index}, expected ${ctx.groups}`);
+  if (object >= ctx.objects) fail('BAD_OBJECT_REFERENCE', `object ${object} not defined`);
+  let skipped = false;
+  if (!kindOfVersion(kind, ctx.version)) {
+    if (ctx.version[1] <= NEWEST_MINOR[/** @type {1|2|3} */ (major)]) {
+      fail('UNKNOWN_GROUP_KIND', `kind ${kind} in a ${ctx.version.join('.')} file`);
+    }
+    skipped = true;
+  }
+  const body = decompress(method, rawSize, payload.subarray(c.pos), ctx.limits, ctx.inflate);
+  const b = new Cursor(body);
+  const { refs, roles } = major === 1 ? readBodyV1(b, ctx) : readBody(b, ctx);
+  const m = refs.length;
+  let data = null;
+  if (!skipped) {
+    if (kind === 0 || kind === 3 || kind === 4) {
+      if (b.left > 0) fail('BAD_PAYLOAD', `${b.left} bytes after the roles of a kind ${kind} group`);
+    } else if (kind === 1) data = readCells(b, m, major, ctx.limits);
+    else if (kind === 2) data = readTree(b, m, major);
+    else if (kind === 5) data = readSealed(b, roles);
+    else if (kind === 6) data = readShell(b, roles);
+    else data = readShellTree(b, roles);
+  }
+  return { index, object, kind, refs, roles, skipped, data };
+}
+
+/**
+ * §9.2: varint references as differences, then role bits (versions 2 and 3).
+ * @param {Cursor} b @param {{planes: number, limits: import('./compression.mjs').Limits}} ctx
+ */
+function readBody(b, ctx) {
+  const m = b.varint();
+  if (m > ctx.limits.refs) fail('LIMIT_EXCEEDED', `${m} references`);
+  if (m === 0) fail('BAD_GROUP_STRUCTURE', 'no reference');
+  // each reference takes a byte at least: more than the bytes left is a body that ends inside them
+  if (m > b.left) fail('BAD_PAYLOAD', `${m} references in ${b.left} bytes`);
+  const d = new Float64Array(m);
+  for (let i = 0; i < m; i++) d[i] = b.varint();
+  const refs = new Uint32Array(m);
+  let sum = 0;
+  for (let i = 0; i < m; i++) {
+    if (d[i] >= ctx.planes) fail('BAD_PLANE_REFERENCE', `difference ${d[i]}, ${ctx.planes} planes defined`);
+    sum += d[i];
+    if (sum >= ctx.planes) fail('BAD_PLANE_REFERENCE', `reference ${sum}, ${ctx.planes} planes defined`);
+    refs[i] = sum;
+  }
+  return { refs, roles: readBits(b, m) };
+}
+
+/**
+ * A.1: u32 references in any order.
+ * @param {Cursor} b @param {{planes: number, limits: import('./compression.mjs').Limits}} ctx
+ */
+function readBodyV1(b, ctx) {
+  const m = b.u32();
+  if (m > ctx.limits.refs) fail('LIMIT_EXCEEDED', `${m} references`);
+  if (b.left < 4 * m + Math.ceil(m / 8)) fail('BAD_PAYLOAD', 'body ends inside the references or roles');
+  if (m === 0) fail('BAD_GROUP_STRUCTURE', 'no reference');
+  const refs = new Uint32Array(m);
+  for (let i = 0; i < m; i++) {
+    refs[i] = b.u32();
+    if (refs[i] >= ctx.planes) fail('BAD_PLANE_REFERENCE', `reference ${refs[i]}, ${ctx.planes} planes defined`);
+  }
+  return { refs, roles: readBits(b, m) };
+}

@@ -1,0 +1,93 @@
+/** The header chunk PHDR: spec §5 (version 3) and Appendix A.1 (versions 1 and 2). */
+import { fail } from './errors.mjs';
+import { Cursor } from './varint.mjs';
+
+/**
+ * @typedef {object} Header
+ * @property {[number, number]} version
+ * @property {boolean} lossy
+ * @property {number} coding 0 float32, 1 float64, 2 quantized, 3 predicted
+ * @property {[number, number, number]} bits widths as stored for codings 2 and 3, else [0, 0, 0]
+ * @property {[number, number]} h_range [h_min, h_max] for codings 2 and 3, else [0, 0]
+ * @property {number} units
+ * @property {[[number, number, number], [number, number, number]] | null} bbox
+ * @property {number} tolerance NaN if none
+ * @property {number} error_bound NaN if not measured
+ * @property {{planes: number, objects: number, groups: number} | null} counts
+ */
+
+/**
+ * @param {Uint8Array} payload
+ * @returns {Header}
+ */
+export function parseHeader(payload) {
+  const c = new Cursor(payload);
+  if (payload.length < 2) fail('BAD_PAYLOAD', 'PHDR under 2 bytes');
+  const major = payload[0];
+  const minor = payload[1];
+  if (major !== 1 && major !== 2 && major !== 3) fail('UNSUPPORTED_VERSION', `major version ${major}`);
+  const old = major < 3;
+  if (payload.length < (old ? 108 : 9)) fail('BAD_PAYLOAD', 'PHDR too short');
+  c.pos = 2;
+  const flags = c.u16();
+  const coding = c.u8();
+  // version 1 has no predicted coding (A.1); 2 and 3 have it
+  if (coding > (major === 1 ? 2 : 3)) fail('UNSUPPORTED_CODING', `coding ${coding}`);
+  const quantized = coding >= 2;
+  const bits = /** @type {[number, number, number]} */ ([c.u8(), c.u8(), c.u8()]);
+  const units = c.u8();
+  let hMin = 0;
+  let hMax = 0;
+  let bbox = null;
+  let tolerance;
+  let errorBound;
+  let counts = null;
+  const bboxKnown = (flags & 4) !== 0;
+  const countsKnown = (flags & 2) !== 0;
+  if (old) {
+    c.pos = 12;
+    const h0 = c.f64();
+    const h1 = c.f64();
+    if (quantized) [hMin, hMax] = [h0, h1];
+    const box = [c.f64(), c.f64(), c.f64(), c.f64(), c.f64(), c.f64()];
+    if (bboxKnown) bbox = box;
+    tolerance = c.f64();
+    errorBound = c.f64();
+    const planes = c.u64();
+    const objects = c.u32();
+    const groups = c.u32();
+    if (countsKnown) counts = { planes, objects, groups };
+  } else {
+    if (quantized) {
+      hMin = c.f64();
+      hMax = c.f64();
+    }
+    if (bboxKnown) bbox = [c.f32(), c.f32(), c.f32(), c.f32(), c.f32(), c.f32()];
+    tolerance = c.f32();
+    errorBound = c.f32();
+    if (countsKnown) counts = { planes: c.varint(), objects: c.varint32(), groups: c.varint32() };
+  }
+  if (quantized) {
+    if (bits.some((b) => b < 1 || b > 32)) fail('UNSUPPORTED_CODING', `widths ${bits}`);
+    if (!Number.isFinite(hMin) || !Number.isFinite(hMax) || hMin > hMax) fail('BAD_HEADER_VALUE', 'h range');
+  }
+  if (units > 7) fail('BAD_HEADER_VALUE', `units ${units}`);
+  if (bbox && (bbox.some((v) => !Number.isFinite(v)) || bbox[0] > bbox[3] || bbox[1] > bbox[4] || bbox[2] > bbox[5])) {
+    fail('BAD_HEADER_VALUE', 'bounding box');
+  }
+  for (const v of [tolerance, errorBound]) {
+    if (!Number.isNaN(v) && !(Number.isFinite(v) && v >= 0)) fail('BAD_HEADER_VALUE', 'tolerance or error bound');
+  }
+  return {
+    version: [major, minor],
+    lossy: (flags & 1) !== 0,
+    coding,
+    bits: quantized ? bits : [0, 0, 0],
+    h_range: [hMin, hMax],
+    units,
+    bbox: bbox && [[bbox[0], bbox[1], bbox[2]], [bbox[3], bbox[4], bbox[5]]],
+    tolerance,
+    error_bound: errorBound,
+    counts,
+  };
+}

@@ -1,0 +1,142 @@
+/** The container reader: every chunk in file order, with the checks of spec §12.1 in their order. */
+import { fail, PlnError } from './errors.mjs';
+import { checkSignature, readChunk } from './chunks.mjs';
+import { parseHeader } from './header.mjs';
+import { PlaneTable, readPlanes } from './planes.mjs';
+import { readObject } from './objects.mjs';
+import { readGroup } from './groups.mjs';
+import { readColours, checkIndex, readMetadata } from './ancillary.mjs';
+import { DEFAULT_LIMITS } from './compression.mjs';
+
+const KNOWN = new Set(['PHDR', 'OBJT', 'PLNS', 'GRUP', 'cOLR', 'iNDX', 'mETA', 'PEND']);
+const NEWEST_MINOR = { 1: 0, 2: 0, 3: 3 };
+
+/**
+ * @typedef {object} Container
+ * @property {import('./header.mjs').Header} header
+ * @property {{type: string, offset: number, length: number}[]} chunks
+ * @property {Float64Array} planes (ν, φ, h) triplets
+ * @property {import('./objects.mjs').PlnObject[]} objects
+ * @property {import('./groups.mjs').Group[]} groups in file order
+ * @property {{group: number, rgba: Uint8Array}[]} colours every cOLR in file order
+ * @property {Record<string, string>} metadata
+ * @property {Set<string>} findings §12.3 codes
+ */
+
+/**
+ * @param {Uint8Array} bytes a whole file
+ * @param {{limits?: Partial<import('./compression.mjs').Limits>, inflate?: import('./compression.mjs').InflateFn | null}} [options]
+ * @returns {Container}
+ */
+export function readContainer(bytes, options = {}) {
+  const limits = { ...DEFAULT_LIMITS, ...options.limits };
+  const inflate = options.inflate ?? null;
+  checkSignature(bytes);
+  /** @type {import('./header.mjs').Header | null} */
+  let header = null;
+  const table = new PlaneTable();
+  /** @type {Container['chunks']} */
+  const chunks = [];
+  /** @type {import('./objects.mjs').PlnObject[]} */
+  const objects = [];
+  /** @type {import('./groups.mjs').Group[]} */
+  const groups = [];
+  /** @type {Container['colours']} */
+  const colours = [];
+  /** @type {Record<string, string>} */
+  const metadata = Object.create(null);
+  const findings = new Set();
+  /** @type {{offset: number, type: string, ordinal: number}[]} */
+  const listed = [];
+  let indexOffset = -1;
+  let pos = 8;
+  for (;;) {
+    let chunk;
+    try {
+      chunk = readChunk(bytes, pos, limits.chunkLength);
+    } catch (err) {
+      if (err instanceof PlnError) err.offset = pos;
+      throw err;
+    }
+    const { type, offset, payload } = chunk;
+    try {
+      if (!header && type !== 'PHDR') fail('MISSING_HEADER', `first chunk ${type}`);
+      if (indexOffset >= 0 && type !== 'PEND') fail('CHUNK_ORDER', `${type} after iNDX`);
+      if (header && type === 'PHDR') fail('DUPLICATE_HEADER', 'a second PHDR');
+      const critical = (chunk.type.charCodeAt(0) & 0x20) === 0;
+      if (critical && !KNOWN.has(type)) fail('UNKNOWN_CRITICAL_CHUNK', type);
+      chunks.push({ type, offset, length: chunk.length });
+      pos = offset + 12 + chunk.length;
+      if (type === 'PHDR') {
+        header = parseHeader(payload);
+        const [major, minor] = header.version;
+        if (minor > NEWEST_MINOR[/** @type {1|2|3} */ (major)]) findings.add('NEWER_MINOR_VERSION');
+        continue;
+      }
+      const h = /** @type {import('./header.mjs').Header} */ (header);
+      if (type === 'PLNS') {
+        listed.push({ offset, type, ordinal: table.count });
+        readPlanes(payload, h, table, limits, inflate);
+      } else if (type === 'OBJT') {
+        listed.push({ offset, type, ordinal: objects.length });
+        objects.push(readObject(payload, h.version[0], objects.length, limits));
+      } else if (type === 'GRUP') {
+        listed.push({ offset, type, ordinal: groups.length });
+        const g = readGroup(payload, {
+          version: h.version, groups: groups.length, objects: objects.length, planes: table.count, limits, inflate,
+        });
+        if (g.skipped) findings.add('SKIPPED_GROUP_KIND');
+        groups.push(g);
+        objects[g.object].groups.push(g);
+      } else if (type === 'cOLR') {
+        colours.push(readColours(payload, groups));
+      } else if (type === 'mETA') {
+        if (listed.length > 0) fail('BAD_METADATA', 'mETA after an OBJT, PLNS or GRUP');
+        readMetadata(payload, metadata);
+      } else if (type === 'iNDX') {
+        checkIndex(payload, offset, chunks[1].offset, listed);
+        indexOffset = offset;
+      } else if (type === 'PEND') {
+        checkEnd(payload, h, indexOffset, { planes: table.count, objects: objects.length, groups: groups.length });
+        if (pos !== bytes.length) fail('TRAILING_DATA', `${bytes.length - pos} bytes after PEND`);
+        break;
+      } else {
+        findings.add('UNKNOWN_ANCILLARY_CHUNK');
+      }
+    } catch (err) {
+      if (err instanceof PlnError && err.offset === null) {
+        err.chunk = type;
+        err.offset = offset;
+      }
+      throw err;
+    }
+  }
+  return {
+    header: /** @type {import('./header.mjs').Header} */ (header),
+    chunks, planes: table.view(), objects, groups, colours, metadata, findings,
+  };
+}
+
+/**
+ * PEND (§4.4, A.1): payload length, index offset, counts; trailing bytes are the caller's.
+ * @param {Uint8Array} payload
+ * @param {import('./header.mjs').Header} header
+ * @param {number} indexOffset -1 without an iNDX
+ * @param {{planes: number, objects: number, groups: number}} read
+ */
+function checkEnd(payload, header, indexOffset, read) {
+  const old = header.version[0] < 3;
+  if (old ? payload.length !== 8 : payload.length !== 0 && payload.length !== 8) {
+    fail('BAD_PAYLOAD', `PEND of ${payload.length} bytes`);
+  }
+  if (payload.length === 8) {
+    const view = new DataView(payload.buffer, payload.byteOffset, 8);
+    const at = view.getUint32(4, true) * 4294967296 + view.getUint32(0, true);
+    // versions 1 and 2 write 0 for "no index"; version 3 writes an empty PEND instead
+    if (!(old && at === 0) && (at === 0 || at !== indexOffset)) fail('BAD_INDEX', `PEND index offset ${at}`);
+  }
+  const counts = header.counts;
+  if (counts && (counts.planes !== read.planes || counts.objects !== read.objects || counts.groups !== read.groups)) {
+    fail('COUNT_MISMATCH', `header counts ${JSON.stringify(counts)}, read ${JSON.stringify(read)}`);
+  }
+}

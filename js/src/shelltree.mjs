@@ -1,0 +1,183 @@
+/**
+ * Shell trees (kind 7, spec §9.11), read into the Shell structure of shells.mjs.
+ *
+ * The spec lets a reader decode the triangles in order (a parent precedes its children) or by
+ * pointer jumping; planefmt jumps pointers because numpy has no fast loop. Here one pass in
+ * triangle order does the same work in linear time, which is what a loop in JavaScript is good
+ * at (the corners each triangle takes from its parent are known when the loop reaches it).
+ */
+import { fail } from './errors.mjs';
+import { unzigzag, readBits } from './varint.mjs';
+import { readVarints, readGrid, checkGrid, MAX_COORD } from './shells.mjs';
+
+/**
+ * @param {import('./varint.mjs').Cursor} b
+ * @param {Uint8Array} roles
+ * @returns {import('./shells.mjs').Shell}
+ */
+export function readShellTree(b, roles) {
+  const m = roles.length;
+  const V = b.varint();
+  const T = b.varint();
+  const left = b.left;
+  if (V < 3 || V > 8 * left || T < 1 || 3 * T > left) fail('BAD_GROUP_STRUCTURE', `counts V=${V} T=${T} for ${left} bytes`);
+  const links = readVarints(b, T);
+  let roots = 0;
+  for (let j = 0; j < T; j++) if (links[j] === 0) roots++;
+  const codes = readVarints(b, T + 2 * roots);
+  const faceCodes = readVarints(b, T);
+  const explicit = readBits(b, V);
+
+  // links and corner codes: the triangles, in order
+  // the codes name at most T + 2R corners, so a larger V fails below (n ≠ V) whatever the rest
+  // holds: refused here, before anything of V's size is allocated beyond the flags
+  if (V > T + 2 * roots) fail('BAD_GROUP_STRUCTURE', `${V} corners, at most ${T + 2 * roots} named`);
+  const tri = new Uint32Array(3 * T);
+  const namer = new Int32Array(V); // the triangle whose code names each corner anew, -1 for a root
+  const parent = new Int32Array(T);
+  let n = 0;
+  let ci = 0;
+  // every bound below is checked before the integer arithmetic it makes safe
+  for (let j = 0; j < T; j++) {
+    const link = links[j];
+    let i0;
+    let i1;
+    let i2;
+    if (link === 0) {
+      parent[j] = -1;
+      const c0 = codes[ci];
+      const c1 = codes[ci + 1];
+      const c2 = codes[ci + 2];
+      ci += 3;
+      if (c0 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
+      if (c0 === 0) namer[(i0 = n++)] = -1;
+      else i0 = n - c0;
+      if (c1 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
+      if (c1 === 0) namer[(i1 = n++)] = -1;
+      else i1 = n - c1;
+      if (c2 > n) fail('BAD_GROUP_STRUCTURE', `root ${j} names a corner below 0`);
+      if (c2 === 0) namer[(i2 = n++)] = -1;
+      else i2 = n - c2;
+      if (n > V) fail('BAD_GROUP_STRUCTURE', `more than ${V} corners named`);
+    } else {
+      if (link > 3 * j) fail('BAD_GROUP_STRUCTURE', `triangle ${j} links past the first triangle`);
+      const d = (((link - 1) / 3) | 0) + 1;
+      const e = link - 1 - 3 * (d - 1);
+      const p = j - d;
+      parent[j] = p;
+      i0 = tri[3 * p + (e === 2 ? 0 : e + 1)];
+      i1 = tri[3 * p + e];
+      const k = codes[ci++];
+      if (k === 0) {
+        if (n >= V) fail('BAD_GROUP_STRUCTURE', `more than ${V} corners named`);
+        namer[(i2 = n++)] = j;
+      } else {
+        // |z(k - 1)| < n for any corner named before, so k ≤ 2n keeps to small integers
+        if (k > 2 * n) fail('BAD_GROUP_STRUCTURE', `triangle ${j} names a corner not named before`);
+        const z = k - 1;
+        i2 = i1 + (z & 1 ? -(z + 1) / 2 : z / 2); // z < 2^32: its low bit survives & 1
+        if (i2 < 0 || i2 >= n) fail('BAD_GROUP_STRUCTURE', `triangle ${j} names a corner not named before`);
+      }
+    }
+    if (i0 === i1 || i1 === i2 || i0 === i2) fail('BAD_GROUP_STRUCTURE', `triangle ${j} names one corner twice`);
+    tri[3 * j] = i0;
+    tri[3 * j + 1] = i1;
+    tri[3 * j + 2] = i2;
+  }
+  if (n !== V) fail('BAD_GROUP_STRUCTURE', `${n} corners named, ${V} declared`);
+
+  // faces: 0 the parent's (the previous triangle's for a root), 1 free, r + 2 reference r
+  const face = new Int32Array(T);
+  for (let j = 0; j < T; j++) {
+    const fc = faceCodes[j];
+    if (fc === 0) face[j] = parent[j] >= 0 ? face[parent[j]] : j > 0 ? face[j - 1] : -1;
+    else if (fc === 1) face[j] = -1;
+    else {
+      if (fc > m + 1 || roles[fc - 2]) fail('BAD_GROUP_STRUCTURE', `face code ${fc}`);
+      face[j] = fc - 2;
+    }
+  }
+
+  // the face planes of each named corner, ascending and distinct, in CSR form
+  const start = new Int32Array(V + 1);
+  for (let j = 0; j < T; j++) {
+    if (face[j] < 0) continue;
+    for (let s = 0; s < 3; s++) if (!explicit[tri[3 * j + s]]) start[tri[3 * j + s] + 1]++;
+  }
+  for (let k = 0; k < V; k++) start[k + 1] += start[k];
+  const fill = start.slice(0, V);
+  const planesOf = new Int32Array(start[V]);
+  for (let j = 0; j < T; j++) {
+    if (face[j] < 0) continue;
+    for (let s = 0; s < 3; s++) {
+      const k = tri[3 * j + s];
+      if (!explicit[k]) planesOf[fill[k]++] = face[j];
+    }
+  }
+  const distinct = new Int32Array(V);
+  let W = 0;
+  for (let k = 0; k < V; k++) {
+    if (explicit[k]) continue;
+    // insertion sort of a few entries in place, then the distinct ones to the front
+    const lo = start[k];
+    const hi = start[k + 1];
+    for (let i = lo + 1; i < hi; i++) {
+      const x = planesOf[i];
+      let q = i - 1;
+      while (q >= lo && planesOf[q] > x) {
+        planesOf[q + 1] = planesOf[q];
+        q--;
+      }
+      planesOf[q + 1] = x;
+    }
+    let u = 0;
+    for (let i = lo; i < hi; i++) if (i === lo || planesOf[i] !== planesOf[i - 1]) planesOf[lo + u++] = planesOf[i];
+    distinct[k] = u;
+    if (u > 3) W++;
+  }
+
+  const picks = readVarints(b, 3 * W);
+  let E = 0;
+  for (let k = 0; k < V; k++) E += explicit[k];
+  const grid = E > 0 ? readGrid(b) : null;
+  const residuals = readVarints(b, 3 * E);
+  if (b.left > 0) fail('BAD_GROUP_STRUCTURE', `${b.left} bytes after the last field`);
+
+  const cornerPlanes = new Int32Array(3 * V).fill(-1);
+  for (let k = 0, w = 0; k < V; k++) {
+    if (explicit[k]) continue;
+    const u = distinct[k];
+    if (u < 3) fail('BAD_GROUP_STRUCTURE', `named corner ${k} on ${u} face planes`);
+    let [i, j, l] = [0, 1, 2];
+    if (u > 3) {
+      [i, j, l] = [picks[3 * w], picks[3 * w + 1], picks[3 * w + 2]];
+      w++;
+      if (!(i < j && j < l && l < u)) fail('BAD_GROUP_STRUCTURE', `picks ${i} ${j} ${l} of corner ${k} on ${u} planes`);
+    }
+    const at = start[k];
+    cornerPlanes[3 * k] = planesOf[at + i];
+    cornerPlanes[3 * k + 1] = planesOf[at + j];
+    cornerPlanes[3 * k + 2] = planesOf[at + l];
+  }
+  if (grid) checkGrid(grid);
+
+  // explicit corners: predicted from the naming triangle's first corner, else the previous explicit one
+  const coords = new Float64Array(3 * V);
+  let previous = -1;
+  for (let k = 0, e = 0; k < V; k++) {
+    if (!explicit[k]) continue;
+    const t = namer[k];
+    const pred = t >= 0 && explicit[tri[3 * t]] ? tri[3 * t] : previous;
+    for (let a = 0; a < 3; a++) {
+      const zz = residuals[a * E + e];
+      // zigzag in integer arithmetic where it fits (nearly always), else in floating point
+      const r = zz < 0x7fffffff ? (zz & 1 ? -((zz + 1) >>> 1) : zz >>> 1) : unzigzag(zz);
+      const v = (pred >= 0 ? coords[3 * pred + a] : 0) + r;
+      if (r > MAX_COORD || r < -MAX_COORD || v > MAX_COORD || v < -MAX_COORD) fail('BAD_GROUP_STRUCTURE', 'coordinate beyond 2^52');
+      coords[3 * k + a] = v;
+    }
+    previous = k;
+    e++;
+  }
+  return { V, T, explicit, cornerPlanes, grid: coords, origin: grid && grid.origin, step: grid && grid.step, face, tri };
+}
