@@ -15,11 +15,11 @@ import { readShellTree } from './shelltree.mjs';
  * @property {Uint32Array} refs plane-table indices
  * @property {Uint8Array} roles 1 where the reference's role bit is set, one byte per reference
  * @property {boolean} skipped a kind of a newer minor version (§9.3): no kind data read
- * @property {any} data the kind data: cells, tree, or a Shell (kinds 5-7)
+ * @property {any} data the kind data: cells, tree, or a Shell (kinds 5-8)
  */
 
 /** The newest minor version this reader knows, per major (§9.3). */
-const NEWEST_MINOR = { 1: 0, 2: 0, 3: 3 };
+const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4 };
 
 /**
  * Whether `kind` is a kind of the file's version (§9.3).
@@ -27,7 +27,7 @@ const NEWEST_MINOR = { 1: 0, 2: 0, 3: 3 };
  */
 function kindOfVersion(kind, [major, minor]) {
   if (kind <= 4) return true;
-  return major === 3 && kind <= 7 && minor >= kind - 4;
+  return major === 3 && kind <= 8 && minor >= kind - 4;
 }
 
 /**
@@ -86,7 +86,7 @@ export function readGroup(payload, ctx) {
     else if (kind === 2) data = readTree(b, m, major);
     else if (kind === 5) data = readSealed(b, roles);
     else if (kind === 6) data = readShell(b, roles);
-    else data = readShellTree(b, roles);
+    else data = readShellTree(b, roles, kind === 8);
   }
   return { index, object, kind, refs, roles, skipped, data };
 }

@@ -9,7 +9,7 @@ import { readColours, checkIndex, readMetadata } from './ancillary.mjs';
 import { DEFAULT_LIMITS } from './compression.mjs';
 
 const KNOWN = new Set(['PHDR', 'OBJT', 'PLNS', 'GRUP', 'cOLR', 'iNDX', 'mETA', 'PEND']);
-const NEWEST_MINOR = { 1: 0, 2: 0, 3: 3 };
+const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4 };
 
 /**
  * @typedef {object} Container

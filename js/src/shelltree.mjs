@@ -1,5 +1,6 @@
 /**
- * Shell trees (kind 7, spec §9.11), read into the Shell structure of shells.mjs.
+ * Shell trees (kind 7, spec §9.11, and kind 8, §9.12, whose explicit corners parallelograms predict),
+ * read into the Shell structure of shells.mjs.
  *
  * The spec lets a reader decode the triangles in order (a parent precedes its children) or by
  * pointer jumping; planefmt jumps pointers because numpy has no fast loop. Here one pass in
@@ -13,9 +14,10 @@ import { readVarints, readGrid, checkGrid, MAX_COORD } from './shells.mjs';
 /**
  * @param {import('./varint.mjs').Cursor} b
  * @param {Uint8Array} roles
+ * @param {boolean} [parallelogram] kind 8 (§9.12)
  * @returns {import('./shells.mjs').Shell}
  */
-export function readShellTree(b, roles) {
+export function readShellTree(b, roles, parallelogram = false) {
   const m = roles.length;
   const V = b.varint();
   const T = b.varint();
@@ -35,6 +37,7 @@ export function readShellTree(b, roles) {
   const tri = new Uint32Array(3 * T);
   const namer = new Int32Array(V); // the triangle whose code names each corner anew, -1 for a root
   const parent = new Int32Array(T);
+  const opposite = new Int32Array(T); // the parent's corner off the shared edge, -1 for a root
   let n = 0;
   let ci = 0;
   // every bound below is checked before the integer arithmetic it makes safe
@@ -45,6 +48,7 @@ export function readShellTree(b, roles) {
     let i2;
     if (link === 0) {
       parent[j] = -1;
+      opposite[j] = -1;
       const c0 = codes[ci];
       const c1 = codes[ci + 1];
       const c2 = codes[ci + 2];
@@ -67,6 +71,7 @@ export function readShellTree(b, roles) {
       parent[j] = p;
       i0 = tri[3 * p + (e === 2 ? 0 : e + 1)];
       i1 = tri[3 * p + e];
+      opposite[j] = tri[3 * p + (e === 0 ? 2 : e - 1)];
       const k = codes[ci++];
       if (k === 0) {
         if (n >= V) fail('BAD_GROUP_STRUCTURE', `more than ${V} corners named`);
@@ -161,18 +166,31 @@ export function readShellTree(b, roles) {
   }
   if (grid) checkGrid(grid);
 
-  // explicit corners: predicted from the naming triangle's first corner, else the previous explicit one
+  // explicit corners: predicted from the naming triangle's first corner, else the previous explicit
+  // one; kind 8: by the parallelogram i0 + i1 - opposite where all three are explicit. Every term is
+  // within 2^52 (checked as made), so each sum is exact in binary64.
   const coords = new Float64Array(3 * V);
   let previous = -1;
   for (let k = 0, e = 0; k < V; k++) {
     if (!explicit[k]) continue;
     const t = namer[k];
     const pred = t >= 0 && explicit[tri[3 * t]] ? tri[3 * t] : previous;
+    const gram = parallelogram && t >= 0 && explicit[tri[3 * t]] && explicit[tri[3 * t + 1]] && explicit[opposite[t]];
     for (let a = 0; a < 3; a++) {
       const zz = residuals[a * E + e];
       // zigzag in integer arithmetic where it fits (nearly always), else in floating point
       const r = zz < 0x7fffffff ? (zz & 1 ? -((zz + 1) >>> 1) : zz >>> 1) : unzigzag(zz);
-      const v = (pred >= 0 ? coords[3 * pred + a] : 0) + r;
+      const base = gram
+        ? coords[3 * tri[3 * t] + a] + coords[3 * tri[3 * t + 1] + a] - coords[3 * opposite[t] + a]
+        : pred >= 0 ? coords[3 * pred + a] : 0;
+      let v = base + r;
+      if (gram && (base > MAX_COORD || base < -MAX_COORD)) {
+        // a parallelogram past 2^52 may have been rounded: the sum again in exact integers
+        const exact = BigInt(coords[3 * tri[3 * t] + a]) + BigInt(coords[3 * tri[3 * t + 1] + a])
+          - BigInt(coords[3 * opposite[t] + a]) + BigInt(r);
+        const limit = BigInt(MAX_COORD);
+        v = exact > limit || exact < -limit ? Infinity : Number(exact);
+      }
       if (r > MAX_COORD || r < -MAX_COORD || v > MAX_COORD || v < -MAX_COORD) fail('BAD_GROUP_STRUCTURE', 'coordinate beyond 2^52');
       coords[3 * k + a] = v;
     }
