@@ -3,6 +3,8 @@
  * each part group in its own colour unless the file colours it (cOLR); orbit; read the file's
  * header, counts, groups and bytes per chunk type in the side panel.
  *
+ * ?up=Y or ?up=Z overrides the file's up axis (the panel's selector).
+ *
  * For tests: window.plnViewer = {ready, stats, load(source), renderer, scene, camera, controls}.
  * `ready` is a promise settled by the first load (the ?file= one; with no ?file= it resolves at
  * once with null): resolved with the stats once the model is drawn, rejected with the error.
@@ -284,5 +286,7 @@ const api = {
 };
 /** @type {any} */ (window).plnViewer = api;
 resize();
-const fileParam = new URLSearchParams(window.location.search).get('file');
+const params = new URLSearchParams(window.location.search);
+if (params.get('up') === 'Y' || params.get('up') === 'Z') upSelect.value = /** @type {string} */ (params.get('up'));
+const fileParam = params.get('file');
 if (fileParam) api.ready = load(fileParam);
