@@ -13,6 +13,7 @@ import { fileURLToPath } from 'node:url';
 
 export const JS_ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '..');
 
+/** @type {Record<string, string>} */
 const TYPES = {
   '.html': 'text/html; charset=utf-8', '.mjs': 'text/javascript', '.js': 'text/javascript',
   '.json': 'application/json', '.css': 'text/css', '.png': 'image/png', '.wasm': 'application/wasm',
@@ -39,7 +40,7 @@ export function serve({ root = JS_ROOT, port = 0, extra = {} } = {}) {
     fs.readFile(file, (err, data) => {
       if (err) { res.writeHead(404, { 'content-type': 'text/plain' }).end('not found'); return; }
       res.writeHead(200, {
-        'content-type': TYPES[/** @type {keyof TYPES} */ (path.extname(file).toLowerCase())] ?? 'application/octet-stream',
+        'content-type': TYPES[path.extname(file).toLowerCase()] ?? 'application/octet-stream',
         'cache-control': 'no-store',
       }).end(data);
     });
