@@ -7,6 +7,7 @@
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
+import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { readPln } from '../src/node.mjs';
@@ -32,14 +33,16 @@ let server;
 let chrome;
 /** @type {Record<string, string>} served under /extra/ */
 const extra = {};
+let tmp = '';
 
 before(async () => {
   if (why) return;
   extra['box.pln'] = part('cad/box.STL', 'shell_tree_box_v3_4.pln');
-  extra['truck.pln'] = part('gltf_scene/CesiumMilkTruck.glb', 'scene_hierarchy.pln');
+  extra['truck.pln'] = part('gltf_scene/CesiumMilkTruck.glb', 'scene_v3_stream.pln');
   extra['up_z.pln'] = path.join(ROOT, 'conformance/valid/cube_meta_up_z.pln');
   const bad = fs.readFileSync(extra['box.pln']).subarray(0, 100);
-  extra['truncated.pln'] = path.join(fs.mkdtempSync(path.join((await import('node:os')).tmpdir(), 'pln-viewer-')), 'truncated.pln');
+  tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'pln-viewer-'));
+  extra['truncated.pln'] = path.join(tmp, 'truncated.pln');
   fs.writeFileSync(extra['truncated.pln'], bad);
   server = await serve({ extra });
   chrome = await launch({ width: 1000, height: 700 });
@@ -48,6 +51,7 @@ before(async () => {
 after(async () => {
   await chrome?.browser.close();
   await server?.close();
+  if (tmp) fs.rmSync(tmp, { recursive: true, force: true });
 });
 
 /** What the panel must show: readPln in Node. @param {string} file */
@@ -158,4 +162,16 @@ test('viewer: an invalid file is refused with its error code', { skip: why ?? fa
   const px = await canvasPixels(); // nothing drawn but the drop hint: the pixel check tells a blank canvas
   assert.ok(px.off < 0.03, `${(100 * px.off).toFixed(1)} % of a blank canvas off the background`);
   chrome.consoleErrors.length = 0;
+});
+
+test('viewer: a file opened with the file input', { skip: why ?? false, timeout: 60000 }, async () => {
+  const { page } = chrome;
+  await page.goto(`${server.url}viewer/`);
+  await page.waitForFunction(() => /** @type {any} */ (window).plnViewer !== undefined);
+  const golden = path.join(ROOT, 'conformance/valid/scene_hierarchy.pln');
+  await page.setInputFiles('#open', golden);
+  await page.waitForFunction(() => /** @type {any} */ (window).plnViewer.stats?.name === 'scene_hierarchy.pln', null, { timeout: 20000 });
+  extra['scene_hierarchy.pln'] = golden;
+  await checkPanel('scene_hierarchy.pln');
+  assert.deepEqual(chrome.consoleErrors, []);
 });
