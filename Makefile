@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    := out
 
-.PHONY: setup demo test test-slow mutate bench benchmarks roundtrip clean
+.PHONY: setup browser demo test test-slow mutate bench benchmarks roundtrip clean
 
 $(STAMP): pyproject.toml planefmt/container/_chains.c
 	$(PYTHON) -m venv $(VENV)
@@ -17,16 +17,26 @@ $(STAMP): pyproject.toml planefmt/container/_chains.c
 	if command -v npm >/dev/null; then (cd js && npm ci --silent --no-audit --no-fund); fi
 	touch $(STAMP)
 
-setup: $(STAMP)
+setup: $(STAMP) browser
+
+# Debian's chromium for the viewer's headless test (js/test/viewer.test.mjs skips without it), where
+# node is here and root can apt-get; idempotent and quiet
+browser:
+	@if command -v node >/dev/null && ! command -v chromium >/dev/null && [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+	  echo "installing chromium (apt-get) for the viewer's test"; \
+	  export DEBIAN_FRONTEND=noninteractive; \
+	  apt-get install -y -qq --no-install-recommends chromium >/dev/null 2>&1 || \
+	  { apt-get update -qq >/dev/null 2>&1 && apt-get install -y -qq --no-install-recommends chromium >/dev/null 2>&1; } || \
+	  echo "chromium could not be installed: the viewer's test will skip"; fi
 
 demo: $(STAMP)
 	mkdir -p $(OUT)
 	$(BIN)/python -m planefmt_converters.demo $(OUT)
 
 # -n auto: pytest-xdist, one worker per core (the suite takes about 12 minutes on one core)
-# js/: the JavaScript reader's tests (conformance cases, damaged files, corpus against planefmt),
-# where node is installed
-test: $(STAMP)
+# js/: the JavaScript reader's tests (conformance cases, damaged files, corpus against planefmt,
+# the three.js loader, the viewer in headless Chromium), where node is installed
+test: $(STAMP) browser
 	$(BIN)/python -m pytest -n auto --dist worksteal
 	$(BIN)/python -m conformance --level geometry
 	if command -v node >/dev/null; then \

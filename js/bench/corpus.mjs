@@ -9,7 +9,8 @@ import { fileURLToPath } from 'node:url';
 export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 export const PYTHON = path.join(ROOT, '.venv/bin/python');
 const PLN = path.join(ROOT, '.venv/bin/pln');
-export const CORPUS = process.env.PLN_CORPUS ?? '/work/shared/corpus';
+// as tests/corpus.py: PLN_CORPUS, or ../shared/corpus beside the repository
+export const CORPUS = process.env.PLN_CORPUS ?? path.join(ROOT, '..', 'shared', 'corpus');
 
 /** Whether planefmt (the repository's .venv) and the corpus are here. */
 export const available = fs.existsSync(PLN) && fs.existsSync(CORPUS);
