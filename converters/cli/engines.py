@@ -31,6 +31,8 @@ from .worker import failed_entry, receive, scratch_for, send
 
 #: Seconds past --timeout after which a conversion that did not stop itself is killed.
 GRACE = 5.0
+#: The variables that set how many threads numpy's BLAS and OpenMP start.
+THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 #: Seconds a new worker process may take to import what it needs (a loaded machine: several).
 STARTUP = 120.0
 
@@ -49,6 +51,7 @@ class Worker:
         try:
             if self.proc is None or self.proc.poll() is not None:
                 self._start()
+                start = time.monotonic()  # the job's time starts once its process is ready
             send(self.proc.stdin, job)
             deadline = start + job["timeout"] + GRACE if job.get("timeout") else None
             entry = receive(lambda n: self._read(n, deadline))
@@ -89,8 +92,11 @@ class Worker:
             shutil.rmtree(scratch_for(job), ignore_errors=True)
 
     def _start(self) -> None:
+        # One conversion per process, as many processes as cores asked for: threads inside one would
+        # only oversubscribe the cores (and each reserves address space, which --max-memory counts).
+        env = {**os.environ, **{name: "1" for name in THREAD_VARIABLES}}
         self.proc = subprocess.Popen([sys.executable, "-m", "planefmt_converters.cli.worker"], stdin=subprocess.PIPE,
-                                     stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, bufsize=0)
+                                     stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, bufsize=0, env=env)
         # It answers the first job only once imported: give that time, outside the job's own limit.
         if receive(lambda n: self._read(n, time.monotonic() + STARTUP)) != "ready":
             raise BrokenPipeError

@@ -82,23 +82,24 @@ def convert(job: dict) -> dict:
     scratch = scratch_for(job)
     _reset_peak()
     try:
-        with _limits(job.get("timeout"), job.get("max_memory_mb")):
-            try:
+        try:
+            with _limits(job.get("timeout"), job.get("max_memory_mb")):
                 entry = _convert(job, scratch)
-            except JobTimeout:
-                entry = failed_entry(job, "TIMEOUT", f"{job['source']}: took longer than the "
-                                     f"{job['timeout']:g} s allowed per input (--timeout)")
-            except Exception as exc:  # noqa: BLE001 - a failed input is one ledger line, never a traceback
-                if _out_of_memory(exc):
-                    entry = failed_entry(job, "MEMORY_LIMIT", f"{job['source']}: needed more than the "
-                                         f"{job['max_memory_mb']:g} MB allowed per input (--max-memory)")
-                elif isinstance(exc, PlnError):
-                    entry = failed_entry(job, exc.code, str(exc))
-                elif isinstance(exc, OSError):
-                    entry = failed_entry(job, "CONVERSION_FAILED",
-                                         f"{exc.filename or job['source']}: {exc.strerror or describe(exc)}")
-                else:
-                    entry = failed_entry(job, "CONVERSION_FAILED", f"{job['source']}: {describe(exc)}")
+        # Outside the limits' block: an alarm due just as the conversion returned lands here too.
+        except JobTimeout:
+            entry = failed_entry(job, "TIMEOUT", f"{job['source']}: took longer than the "
+                                 f"{job['timeout']:g} s allowed per input (--timeout)")
+        except Exception as exc:  # noqa: BLE001 - a failed input is one ledger line, never a traceback
+            if _out_of_memory(exc):
+                entry = failed_entry(job, "MEMORY_LIMIT", f"{job['source']}: needed more than the "
+                                     f"{job['max_memory_mb']:g} MB allowed per input (--max-memory)")
+            elif isinstance(exc, PlnError):
+                entry = failed_entry(job, exc.code, str(exc))
+            elif isinstance(exc, OSError):
+                entry = failed_entry(job, "CONVERSION_FAILED",
+                                     f"{exc.filename or job['source']}: {exc.strerror or describe(exc)}")
+            else:
+                entry = failed_entry(job, "CONVERSION_FAILED", f"{job['source']}: {describe(exc)}")
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
     entry["seconds"] = round(time.monotonic() - start, 3)
@@ -237,6 +238,24 @@ def _die_with_parent() -> None:
             os._exit(1)
 
 
+def _warm_up() -> None:
+    """Convert a tetrahedron: what a conversion imports on first use (the codec, scipy's Qhull, the
+    OBJ reader) is then imported before the first job's clock and memory limit start, and OpenBLAS
+    has allocated its buffers, which it does on first use and, failing under a memory limit, aborts
+    the process for. (A format's own reader, USD's above all, is still imported by its first input.)"""
+    import numpy as np
+
+    from .convert import convert_one
+
+    square = np.eye(64) + 0.5
+    np.linalg.svd(square @ square)
+    with tempfile.TemporaryDirectory(prefix="pln-worker-") as folder:
+        source = os.path.join(folder, "tetrahedron.obj")
+        with open(source, "w") as f:
+            f.write("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n")
+        convert_one(source, os.path.join(folder, "tetrahedron.pln"), "pln", None, {"tolerance": 1e-6})
+
+
 def main() -> None:
     from planefmt_converters import interrupts
     from planefmt_converters.cli import quiet_library_warnings
@@ -247,11 +266,7 @@ def main() -> None:
     os.dup2(2, 1)
     inp = sys.stdin.buffer
     quiet_library_warnings()
-    # Import what a conversion needs now, before the first job's clock and memory limit start.
-    from planefmt import codec  # noqa: F401
-    from planefmt_converters import registry  # noqa: F401
-
-    from . import convert as _  # noqa: F401
+    _warm_up()
 
     send(out, "ready")
     with interrupts.handled():
