@@ -21,6 +21,7 @@ import os
 import secrets
 import shutil
 import sys
+import time
 
 from planefmt.errors import PlnError
 
@@ -66,6 +67,7 @@ def run(args: argparse.Namespace, opts: dict) -> int:
     bar = RunBar(sys.stderr, len(missing) + len(pairs), enabled=sys.stderr.isatty())
     with ledger.Ledger(report, resume=args.resume) as book:
         def record(entry: dict) -> None:
+            entry["finished"] = round(time.time(), 3)
             book.append(entry)
             tally[entry["status"]] += 1
             tally["lost"] += bool(entry.get("lost"))

@@ -11,7 +11,8 @@ that appends to such a ledger cuts that line off first. A line holds:
     triangles            the source's triangles
     bytes_in, bytes_out  the source's and the output's bytes (a .gltf's .bin included)
     error_bound          the error bound the .pln side records, a fraction of the bbox diagonal
-    seconds, peak_mb     wall time and peak resident memory of the conversion
+    seconds, peak_mb     wall time and peak resident memory (MB) of the conversion
+    finished             when the line was written (UNIX time)
 """
 
 from __future__ import annotations
