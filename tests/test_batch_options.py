@@ -7,6 +7,7 @@ from __future__ import annotations
 import io
 import json
 import os
+import signal
 import shutil
 import subprocess
 import sys
@@ -180,3 +181,27 @@ def test_run_bar_draws_only_on_a_terminal() -> None:
         bar.close()
     assert hidden.getvalue() == ""
     assert "2/2 files, 1 failed, 3.0 kB in, 10 B out, ETA 0:00" in shown.getvalue()
+
+
+def test_ctrl_c_stops_the_run_and_resume_finishes_it(tmp_path: Path) -> None:
+    data = tmp_path / "data"
+    data.mkdir()
+    for i in range(30):
+        shutil.copy(CUBE, data / f"cube{i:02d}.obj")
+    out = tmp_path / "out"
+    args = [*PLN, "convert", str(data), "-d", str(out), "--jobs", "2"]
+    proc = subprocess.Popen(args, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    report = out / "pln-report.jsonl"
+    end = time.monotonic() + 120
+    while not (report.exists() and report.read_text().count("\n") >= 3):
+        assert proc.poll() is None and time.monotonic() < end
+        time.sleep(0.05)
+    os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C on a terminal sends: to the whole process group
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130 and err == "pln: interrupted\n", err
+    stopped = list(ledger.read(report))
+    assert all(e["status"] == "ok" for e in stopped) and len(stopped) < 30
+    assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []
+    assert main(["convert", str(data), "-d", str(out), "--jobs", "2", "--resume"]) == 0
+    assert len({e["source"] for e in ledger.read(report)}) == 30
+    assert sorted(p.name for p in out.iterdir()) == sorted([f"cube{i:02d}.pln" for i in range(30)] + ["pln-report.jsonl"])

@@ -180,6 +180,7 @@ def dask(jobs: list[dict], scheduler: str | None, processes: int) -> Iterator[di
     """Run ``jobs`` on the Dask cluster at ``scheduler``, or on a LocalCluster of ``processes`` workers
     started for the run (one thread each, no dashboard)."""
     try:
+        from dask import config as dask_config
         from distributed import Client, LocalCluster, as_completed
     except ImportError as exc:
         raise PlnError("--engine dask needs Dask distributed: pip install 'planefmt[dask]'",
@@ -197,6 +198,8 @@ def dask(jobs: list[dict], scheduler: str | None, processes: int) -> Iterator[di
                 raise PlnError(f"cannot reach the Dask scheduler: {describe(exc)}", code="CONVERSION_FAILED",
                                file=scheduler) from exc
         else:
+            # No statistical profiler in the workers: it samples every 10 ms, for a dashboard the run has not.
+            stack.enter_context(dask_config.set({"distributed.worker.profile.enabled": False}))
             cluster = stack.enter_context(LocalCluster(n_workers=processes, processes=True, threads_per_worker=1,
                                                        dashboard_address=None, silence_logs=logging.CRITICAL))
             client = stack.enter_context(Client(cluster))

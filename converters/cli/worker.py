@@ -270,6 +270,9 @@ def main() -> None:
 
     send(out, "ready")
     with interrupts.handled():
+        # Ctrl-C on a terminal reaches the whole process group: the parent decides what stops (it sends
+        # SIGTERM, which interrupts the conversion and removes its scratch folder).
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
             while (job := receive(inp.read)) is not None:
                 send(out, convert(job))
