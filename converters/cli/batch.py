@@ -6,7 +6,7 @@
 Inputs are files, folders (their mesh files, the layout kept under OUTDIR: :mod:`.sources`) and the
 paths of a list file. Each input's outcome is a line of the ledger (:mod:`.ledger`) as it finishes;
 ``--resume`` skips inputs an earlier run converted (output present, ledger says ok for a source of the
-same size and mtime) and removes the scratch folders a killed run left. A failed input is one line on
+same size and mtime, converted with the same options) and removes the scratch folders a killed run left. A failed input is one line on
 stderr and in the ledger, and the run goes on.
 
 Exit status: 0 when every input was converted or skipped, 1 when any failed (its reason is in the
@@ -52,11 +52,14 @@ def run(args: argparse.Namespace, opts: dict) -> int:
     done = ledger.completed(report) if args.resume else {}
     if not remote.is_url(outdir):
         os.makedirs(outdir, exist_ok=True)
+    # What the outputs depend on besides the source: an output made with other options is not skipped.
+    settings = ",".join(f"{key}={value}" for key, value in sorted({**opts, "to": to, "from": args.from_}.items()))
     run_id = secrets.token_hex(4)
     jobs, skipped = [], []
     for i, (src, dst) in enumerate(pairs):
         earlier = done.get(src)
-        if earlier is not None and earlier.get("output") == dst and _unchanged(src, earlier) and remote.exists(dst):
+        if earlier is not None and earlier.get("output") == dst and earlier.get("settings") == settings and \
+                _unchanged(src, earlier) and remote.exists(dst):
             skipped.append({**earlier, "status": "skipped", "seconds": 0.0, "peak_mb": None, "warnings": []})
         else:
             jobs.append({"source": src, "output": dst, "to": to, "from_": args.from_, "opts": opts,
@@ -67,7 +70,7 @@ def run(args: argparse.Namespace, opts: dict) -> int:
     bar = RunBar(sys.stderr, len(missing) + len(pairs), enabled=sys.stderr.isatty())
     with ledger.Ledger(report, resume=args.resume) as book:
         def record(entry: dict) -> None:
-            entry["finished"] = round(time.time(), 3)
+            entry["settings"], entry["finished"] = settings, round(time.time(), 3)
             book.append(entry)
             tally[entry["status"]] += 1
             tally["lost"] += bool(entry.get("lost"))

@@ -12,6 +12,8 @@ that appends to such a ledger cuts that line off first. A line holds:
     bytes_in, bytes_out  the source's and the output's bytes (a .gltf's .bin included)
     error_bound          the error bound the .pln side records, a fraction of the bbox diagonal
     seconds, peak_mb     wall time and peak resident memory (MB) of the conversion
+    settings             the options the output depends on (--to, --tolerance...): --resume skips only
+                         for the same
     finished             when the line was written (UNIX time)
 """
 
