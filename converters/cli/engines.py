@@ -98,7 +98,11 @@ class Worker:
         self.proc = subprocess.Popen([sys.executable, "-m", "planefmt_converters.cli.worker"], stdin=subprocess.PIPE,
                                      stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, bufsize=0, env=env)
         # It answers the first job only once imported: give that time, outside the job's own limit.
-        if receive(lambda n: self._read(n, time.monotonic() + STARTUP)) != "ready":
+        try:
+            ready = receive(lambda n: self._read(n, time.monotonic() + STARTUP))
+        except _Overdue:
+            ready = None
+        if ready != "ready":
             raise BrokenPipeError
 
     def _read(self, n: int, deadline: float | None) -> bytes:

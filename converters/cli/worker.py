@@ -21,6 +21,7 @@ parent a little later.
 from __future__ import annotations
 
 import contextlib
+import math
 import os
 import pickle
 import shutil
@@ -156,7 +157,7 @@ def _convert(job: dict, scratch: str) -> dict:
     return {"source": source, "output": output, "status": "ok", "code": None, "message": None,
             "warnings": warnings + [f"lost {line}" for line in lost], "lost": bool(lost),
             "size": size, "mtime_ns": mtime_ns, "triangles": facts.get("triangles"), "bytes_in": size,
-            "bytes_out": bytes_out, "error_bound": None if error_bound is None or error_bound != error_bound
+            "bytes_out": bytes_out, "error_bound": None if error_bound is None or math.isnan(error_bound)
             else error_bound}
 
 
