@@ -143,7 +143,7 @@ def test_fsspec_urls_on_an_existing_dask_cluster(tmp_path: Path) -> None:
     shutil.copy(TET, data / "sub")
     shutil.copy(CUBE, data)
     with distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1,
-                                  dashboard_address=None) as cluster:
+                                  dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"}) as cluster:
         run = subprocess.run([*PLN, "convert", f"file://{data}", "-d", f"file://{tmp_path / 'out'}", "--report",
                               str(tmp_path / "run.jsonl"), "--engine", "dask", "--scheduler", cluster.scheduler_address],
                              capture_output=True, text=True, timeout=300)
