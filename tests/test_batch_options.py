@@ -144,9 +144,9 @@ def test_fsspec_urls_on_an_existing_dask_cluster(tmp_path: Path) -> None:
     shutil.copy(CUBE, data)
     with distributed.LocalCluster(n_workers=1, processes=True, threads_per_worker=1,
                                   dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"}) as cluster:
-        run = subprocess.run([*PLN, "convert", f"file://{data}", "-d", f"file://{tmp_path / 'out'}", "--report",
-                              str(tmp_path / "run.jsonl"), "--engine", "dask", "--scheduler", cluster.scheduler_address],
-                             capture_output=True, text=True, timeout=300)
+        run = subprocess.run([*PLN, "convert", f"file://{data}", "-d", f"file://{tmp_path / 'out'}",
+                              "--report", str(tmp_path / "run.jsonl"), "--engine", "dask",
+                              "--scheduler", cluster.scheduler_address], capture_output=True, text=True, timeout=300)
     assert run.returncode == 0, run.stderr
     assert sorted(str(p.relative_to(tmp_path / "out")) for p in (tmp_path / "out").rglob("*")) == \
         ["cube_subd.pln", "sub", "sub/tet.pln"]
@@ -207,4 +207,4 @@ def test_ctrl_c_stops_the_run_and_resume_finishes_it(tmp_path: Path) -> None:
     assert [p.name for p in out.iterdir() if p.name.startswith(".")] == []
     assert main(["convert", str(data), "-d", str(out), "--jobs", "2", "--resume"]) == 0
     assert len({e["source"] for e in ledger.read(report)}) == 12
-    assert sorted(p.name for p in out.iterdir()) == sorted([f"cube{i:02d}.pln" for i in range(12)] + ["pln-report.jsonl"])
+    assert sorted(p.name for p in out.iterdir()) == [f"cube{i:02d}.pln" for i in range(12)] + ["pln-report.jsonl"]

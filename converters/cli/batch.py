@@ -6,8 +6,8 @@
 Inputs are files, folders (their mesh files, the layout kept under OUTDIR: :mod:`.sources`) and the
 paths of a list file. Each input's outcome is a line of the ledger (:mod:`.ledger`) as it finishes;
 ``--resume`` skips inputs an earlier run converted (output present, ledger says ok for a source of the
-same size and mtime, converted with the same options) and removes the scratch folders a killed run left. A failed input is one line on
-stderr and in the ledger, and the run goes on.
+same size and mtime, converted with the same options) and removes the scratch folders a killed run
+left. A failed input is one line on stderr and in the ledger, and the run goes on.
 
 Exit status: 0 when every input was converted or skipped, 1 when any failed (its reason is in the
 ledger) or lost parts (``--salvage``), 2 for a usage error or an input named that does not exist.

@@ -206,9 +206,9 @@ def dask(jobs: list[dict], scheduler: str | None, processes: int) -> Iterator[di
             stack.enter_context(dask_config.set({"distributed.worker.profile.enabled": False}))
             # No dashboard; the scheduler's HTTP server (health, metrics) still starts, on a free port
             # rather than 8787, which another cluster on the machine may hold.
-            cluster = stack.enter_context(LocalCluster(n_workers=processes, processes=True, threads_per_worker=1,
-                                                       dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"},
-                                                       silence_logs=logging.CRITICAL))
+            cluster = stack.enter_context(LocalCluster(
+                n_workers=processes, processes=True, threads_per_worker=1, dashboard_address=None,
+                scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL))
             client = stack.enter_context(Client(cluster))
         futures = client.map(run_on_dask_worker, jobs, pure=False)
         job_of = {future.key: job for future, job in zip(futures, jobs)}
