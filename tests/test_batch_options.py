@@ -4,6 +4,7 @@ ledger's torn lines, ``pln report`` and the progress line."""
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
 import os
@@ -208,3 +209,22 @@ def test_ctrl_c_stops_the_run_and_resume_finishes_it(tmp_path: Path) -> None:
     assert main(["convert", str(data), "-d", str(out), "--jobs", "2", "--resume"]) == 0
     assert len({e["source"] for e in ledger.read(report)}) == 12
     assert sorted(p.name for p in out.iterdir()) == [f"cube{i:02d}.pln" for i in range(12)] + ["pln-report.jsonl"]
+
+
+def test_a_terminal_sees_one_progress_line(tmp_path: Path) -> None:
+    import pty
+
+    for i in range(3):
+        shutil.copy(TET, tmp_path / f"tet{i}.ply")
+    leader, follower = pty.openpty()
+    proc = subprocess.Popen([*PLN, "convert", str(tmp_path), "-d", str(tmp_path / "out")], stderr=follower)
+    os.close(follower)
+    shown = b""
+    with contextlib.suppress(OSError):  # EIO once the process has closed its side
+        while chunk := os.read(leader, 4096):
+            shown += chunk
+    os.close(leader)
+    assert proc.wait(timeout=60) == 0
+    text = shown.decode()
+    assert "\r" in text and "3/3 files, 0 failed" in text and "ETA 0:00" in text, text
+    assert text.rstrip().splitlines()[-1].startswith("pln: 3 converted, 0 skipped"), text

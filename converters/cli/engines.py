@@ -186,6 +186,7 @@ def dask(jobs: list[dict], scheduler: str | None, processes: int) -> Iterator[di
     try:
         from dask import config as dask_config
         from distributed import Client, LocalCluster, as_completed
+        from distributed.scheduler import KilledWorker
     except ImportError as exc:
         raise PlnError("--engine dask needs Dask distributed: pip install 'planefmt[dask]'",
                        code="CONVERSION_FAILED") from exc
@@ -215,10 +216,14 @@ def dask(jobs: list[dict], scheduler: str | None, processes: int) -> Iterator[di
         for future in as_completed(futures):
             try:
                 entry = future.result()
-            except Exception as exc:  # noqa: BLE001 - KilledWorker (lost three times), a worker's error
+            except KilledWorker as exc:  # Dask gave up after losing several workers on this input
                 job = job_of[future.key]
                 entry = failed_entry(job, "WORKER_LOST", f"{job['source']}: the Dask workers converting it were "
                                      f"lost: {describe(exc)}")
+            except Exception as exc:  # noqa: BLE001 - the task's own error: a worker without planefmt...
+                job = job_of[future.key]
+                entry = failed_entry(job, "CONVERSION_FAILED", f"{job['source']}: on the Dask worker: "
+                                     f"{describe(exc)}")
             future.release()
             yield entry
 
