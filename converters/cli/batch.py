@@ -66,6 +66,10 @@ def run(args: argparse.Namespace, opts: dict) -> int:
                          "salvage": args.salvage, "timeout": args.timeout, "max_memory_mb": args.max_memory,
                          "token": f"{run_id}-{i}"})
 
+    # Before the ledger is opened: a cluster out of reach stops the run before it began. (Nothing left
+    # to convert starts no cluster; the local engine starts its processes on the first job.)
+    engine = engines.dask(jobs, args.scheduler, args.jobs) if args.engine == "dask" and jobs else \
+        engines.local(jobs, args.jobs)
     tally = {"ok": 0, "failed": 0, "skipped": 0, "lost": 0}
     bar = RunBar(sys.stderr, len(missing) + len(pairs), enabled=sys.stderr.isatty())
     with ledger.Ledger(report, resume=args.resume) as book:
@@ -86,8 +90,6 @@ def run(args: argparse.Namespace, opts: dict) -> int:
                     "message": f"{name}: cannot open: no such file or folder", "seconds": 0.0})
         for entry in skipped:
             record(entry)
-        engine = engines.dask(jobs, args.scheduler, args.jobs) if args.engine == "dask" else \
-            engines.local(jobs, args.jobs)
         try:
             with contextlib.closing(engine):
                 for entry in engine:

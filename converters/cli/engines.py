@@ -182,20 +182,20 @@ def local(jobs: list[dict], processes: int) -> Iterator[dict]:
 
 def dask(jobs: list[dict], scheduler: str | None, processes: int) -> Iterator[dict]:
     """Run ``jobs`` on the Dask cluster at ``scheduler``, or on a LocalCluster of ``processes`` workers
-    started for the run (one thread each, no dashboard)."""
+    started for the run (one thread each, no dashboard). Connects before returning, so that a cluster
+    out of reach is an error before the run has begun (and its ledger been opened)."""
     try:
-        from dask import config as dask_config
-        from distributed import Client, LocalCluster, as_completed
-        from distributed.scheduler import KilledWorker
+        from distributed import Client
     except ImportError as exc:
         raise PlnError("--engine dask needs Dask distributed: pip install 'planefmt[dask]'",
                        code="CONVERSION_FAILED") from exc
     from ..failures import describe
 
-    with contextlib.ExitStack() as stack:
-        # The cluster's own log lines (a worker lost and restarted...) are not the user's to act on:
-        # what they mean for an input is in its ledger line.
-        logging.getLogger("distributed").setLevel(logging.CRITICAL)
+    # The cluster's own log lines (a worker lost and restarted...) are not the user's to act on: what
+    # they mean for an input is in its ledger line.
+    logging.getLogger("distributed").setLevel(logging.CRITICAL)
+    stack = contextlib.ExitStack()
+    with stack:
         if scheduler:
             try:
                 client = stack.enter_context(Client(scheduler, timeout="30s"))
@@ -203,14 +203,30 @@ def dask(jobs: list[dict], scheduler: str | None, processes: int) -> Iterator[di
                 raise PlnError(f"cannot reach the Dask scheduler: {describe(exc)}", code="CONVERSION_FAILED",
                                file=scheduler) from exc
         else:
-            # No statistical profiler in the workers: it samples every 10 ms, for a dashboard the run has not.
-            stack.enter_context(dask_config.set({"distributed.worker.profile.enabled": False}))
-            # No dashboard; the scheduler's HTTP server (health, metrics) still starts, on a free port
-            # rather than 8787, which another cluster on the machine may hold.
-            cluster = stack.enter_context(LocalCluster(
-                n_workers=processes, processes=True, threads_per_worker=1, dashboard_address=None,
-                scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL))
-            client = stack.enter_context(Client(cluster))
+            client = stack.enter_context(Client(_local_cluster(stack, processes)))
+        return _dask_results(stack.pop_all(), client, jobs)
+
+
+def _local_cluster(stack: contextlib.ExitStack, processes: int):
+    from dask import config as dask_config
+    from distributed import LocalCluster
+
+    # No statistical profiler in the workers: it samples every 10 ms, for a dashboard the run has not.
+    stack.enter_context(dask_config.set({"distributed.worker.profile.enabled": False}))
+    # No dashboard; the scheduler's HTTP server (health, metrics) still starts, on a free port rather
+    # than 8787, which another cluster on the machine may hold.
+    return stack.enter_context(LocalCluster(
+        n_workers=processes, processes=True, threads_per_worker=1, dashboard_address=None,
+        scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL))
+
+
+def _dask_results(stack: contextlib.ExitStack, client, jobs: list[dict]) -> Iterator[dict]:
+    from distributed import as_completed
+    from distributed.scheduler import KilledWorker
+
+    from ..failures import describe
+
+    with stack:
         futures = client.map(run_on_dask_worker, jobs, pure=False)
         job_of = {future.key: job for future, job in zip(futures, jobs)}
         for future in as_completed(futures):
