@@ -34,6 +34,9 @@ def run(args: argparse.Namespace, opts: dict) -> int:
 
     from .convert import _refuse_conflicts
 
+    on_dask = args.engine == "dask" or (args.engine is None and args.scheduler is not None)
+    if args.scheduler and not on_dask:
+        raise PlnError("--scheduler names a Dask cluster: it goes with --engine dask", code="CONVERSION_FAILED")
     to = args.to or "pln"
     ext = registry.get(to).extensions[0]
     outdir = args.outdir if remote.is_url(args.outdir) else os.path.abspath(args.outdir)
@@ -68,7 +71,7 @@ def run(args: argparse.Namespace, opts: dict) -> int:
 
     # Before the ledger is opened: a cluster out of reach stops the run before it began. (Nothing left
     # to convert starts no cluster; the local engine starts its processes on the first job.)
-    engine = engines.dask(jobs, args.scheduler, args.jobs) if args.engine == "dask" and jobs else \
+    engine = engines.dask(jobs, args.scheduler, args.jobs) if on_dask and jobs else \
         engines.local(jobs, args.jobs)
     tally = {"ok": 0, "failed": 0, "skipped": 0, "lost": 0}
     bar = RunBar(sys.stderr, len(missing) + len(pairs), enabled=sys.stderr.isatty())
@@ -115,8 +118,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     g.add_argument("--timeout", type=_positive, metavar="S", help="fail an input whose conversion takes longer")
     g.add_argument("--max-memory", type=_positive, metavar="MB",
                    help="fail an input whose conversion needs more memory (address space) than this")
-    g.add_argument("--engine", choices=["local", "dask"], default="local",
-                   help="local: --jobs worker processes here (default); dask: a Dask distributed cluster")
+    g.add_argument("--engine", choices=["local", "dask"],
+                   help="local: --jobs worker processes here (the default, unless --scheduler names a cluster); "
+                        "dask: a Dask distributed cluster")
     g.add_argument("--scheduler", metavar="ADDRESS",
                    help="--engine dask: the scheduler of an existing cluster (tcp://host:8786); without it a "
                         "LocalCluster of --jobs workers is started for the run")
