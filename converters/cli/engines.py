@@ -27,6 +27,7 @@ from collections.abc import Iterator
 
 from planefmt.errors import PlnError
 
+from ..failures import describe
 from .worker import failed_entry, receive, scratch_for, send
 
 #: Seconds past --timeout after which a conversion that did not stop itself is killed.
@@ -156,7 +157,10 @@ def local(jobs: list[dict], processes: int) -> Iterator[dict]:
                 job = todo.get_nowait()
             except queue.Empty:
                 return
-            entry = worker.run(job)
+            try:
+                entry = worker.run(job)
+            except Exception as exc:  # noqa: BLE001 - no process could be started: say so, never hang the run
+                entry = failed_entry(job, "WORKER_LOST", f"{job['source']}: no worker process: {describe(exc)}")
             if not stopping.is_set():
                 done.put(entry)
 
@@ -189,7 +193,6 @@ def dask(jobs: list[dict], scheduler: str | None, processes: int) -> Iterator[di
     except ImportError as exc:
         raise PlnError("--engine dask needs Dask distributed: pip install 'planefmt[dask]'",
                        code="CONVERSION_FAILED") from exc
-    from ..failures import describe
 
     # The cluster's own log lines (a worker lost and restarted...) are not the user's to act on: what
     # they mean for an input is in its ledger line.
@@ -223,8 +226,6 @@ def _local_cluster(stack: contextlib.ExitStack, processes: int):
 def _dask_results(stack: contextlib.ExitStack, client, jobs: list[dict]) -> Iterator[dict]:
     from distributed import as_completed
     from distributed.scheduler import KilledWorker
-
-    from ..failures import describe
 
     with stack:
         futures = client.map(run_on_dask_worker, jobs, pure=False)
