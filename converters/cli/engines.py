@@ -220,7 +220,14 @@ def _local_cluster(stack: contextlib.ExitStack, processes: int):
     # than 8787, which another cluster on the machine may hold.
     return stack.enter_context(LocalCluster(
         n_workers=processes, processes=True, threads_per_worker=1, dashboard_address=None,
-        scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL))
+        scheduler_kwargs={"dashboard_address": ":0"}, silence_logs=logging.CRITICAL, preload=[__name__]))
+
+
+def dask_setup(worker: object) -> None:
+    """Dask's preload hook, run in each worker process of a run's LocalCluster as it starts: Ctrl-C on a
+    terminal reaches the whole process group, and it is the client's to act on (closing the cluster
+    ends the workers); a worker would print a KeyboardInterrupt traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _dask_results(stack: contextlib.ExitStack, client, jobs: list[dict]) -> Iterator[dict]:
