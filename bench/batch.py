@@ -8,7 +8,9 @@ Each configuration is ``pln convert DATASET -d OUT --engine E --jobs N`` in a su
 start to exit ("wall": process and cluster start-up included) and, from the ledger's ``finished`` times,
 between its first and last finished input ("steady": the rate once running). Prints the table, the
 ratio of 2 workers to 1 per engine, and the load average (``uptime``) before and after: on a machine
-shared with other work, the ratio says as much about the others as about the engines.
+shared with other work, the ratio says as much about the others as about the engines. As a control,
+the same pure-Python loop is timed in 1 and in 2 processes at once, before and after: the ratio the
+machine itself gives two processes at that moment (2.0 on two free cores).
 """
 
 from __future__ import annotations
@@ -30,6 +32,28 @@ PLN = [sys.executable, "-m", "planefmt_converters.cli"]
 
 def _uptime() -> str:
     return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+
+
+def _spin(loops: int) -> None:
+    total = 0
+    for i in range(loops):
+        total += i
+
+
+def control(loops: int = 10_000_000) -> float:
+    """Work per second of 2 processes over 1, for a loop that shares nothing."""
+    from multiprocessing import Process
+
+    seconds = []
+    for n in (1, 2):
+        start = time.monotonic()
+        processes = [Process(target=_spin, args=(loops,)) for _ in range(n)]
+        for p in processes:
+            p.start()
+        for p in processes:
+            p.join()
+        seconds.append(time.monotonic() - start)
+    return 2 * seconds[0] / seconds[1]
 
 
 def measure(dataset: Path, out: Path, engine: str, workers: int) -> dict:
@@ -55,7 +79,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="pln-bench-batch-") as folder:
         dataset = Path(folder) / "dataset"
         meshsets.build(dataset, count=args.count, broken=0)
-        print(f"{args.count} generated meshes; {os.cpu_count()} cores; before: {_uptime()}")
+        print(f"{args.count} generated meshes; {os.cpu_count()} cores; before: {_uptime()}; "
+              f"control: 2 processes / 1 = {control():.2f}x")
         rows = []
         for engine in args.engines.split(","):
             for workers in map(int, args.workers.split(",")):
@@ -63,7 +88,7 @@ def main() -> None:
                 row = rows[-1]
                 print(f"  {engine:<6} {workers} workers: {row['files']} files in {row['wall']:6.1f} s wall, "
                       f"{row['per_second']:5.1f} files/s; steady {row['steady']:5.1f} files/s", flush=True)
-        print(f"after: {_uptime()}")
+        print(f"after: {_uptime()}; control: 2 processes / 1 = {control():.2f}x")
     print("\n| engine | workers | files | wall s | files/s (wall) | files/s (steady) |")
     print("|---|---|---|---|---|---|")
     for row in rows:
