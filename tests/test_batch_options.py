@@ -26,7 +26,7 @@ from corpus import CORPUS
 PLN = [sys.executable, "-m", "planefmt_converters.cli"]
 TET = CORPUS / "convex" / "tet.ply"
 CUBE = CORPUS / "convex" / "cube_subd.obj"
-BOX = CORPUS / "cad" / "box.STL"  # seconds to encode
+BOX = CORPUS / "cad" / "box.STL"  # with the paper's scheme, tens of seconds to encode
 BUNNY = CORPUS / "smooth_dense" / "bun_zipper.ply"  # 69k triangles: tens of MB
 OPTS = {"tolerance": 1e-6, "compress": True, "compact": True, "watertight": True, "scheme": "shell"}
 
@@ -36,14 +36,16 @@ def _entries(path: Path) -> dict[str, dict]:
 
 
 def _job(src: Path, out: Path, **limits) -> dict:
-    return {"source": str(src), "output": str(out / (src.stem + ".pln")), "to": "pln", "from_": None, "opts": OPTS,
+    opts = {**OPTS, "scheme": "paper"} if src == BOX else OPTS  # BOX: long enough to be stopped midway
+    return {"source": str(src), "output": str(out / (src.stem + ".pln")), "to": "pln", "from_": None, "opts": opts,
             "salvage": False, "timeout": None, "max_memory_mb": None, "token": f"test-{src.stem}", **limits}
 
 
 def test_over_time_or_memory_fails_the_input_and_the_run_goes_on(tmp_path: Path,
                                                                   capsys: pytest.CaptureFixture) -> None:
     out = tmp_path / "out"
-    assert main(["convert", str(BOX), str(TET), "-d", str(out), "--timeout", "1", "--jobs", "2"]) == 1
+    assert main(["convert", str(BOX), str(TET), "-d", str(out), "--timeout", "1", "--jobs", "2",
+                 "--scheme", "paper"]) == 1
     assert main(["convert", str(BUNNY), str(TET), "-d", str(tmp_path / "mem"), "--max-memory", "20"]) == 1
     timed, capped = _entries(out / "pln-report.jsonl"), _entries(tmp_path / "mem" / "pln-report.jsonl")
     assert timed[str(BOX)]["code"] == "TIMEOUT" and "1 s" in timed[str(BOX)]["message"]
@@ -200,7 +202,7 @@ def test_ctrl_c_stops_the_run_and_resume_finishes_it(engine: str, tmp_path: Path
     proc = subprocess.Popen(args, stderr=subprocess.PIPE, text=True, start_new_session=True)
     report = out / "pln-report.jsonl"
     end = time.monotonic() + 120
-    while not (report.exists() and report.read_text().count("\n") >= 3):
+    while not (report.exists() and report.read_text().count("\n") >= 1):
         assert proc.poll() is None and time.monotonic() < end
         time.sleep(0.05)
     os.killpg(proc.pid, signal.SIGINT)  # what Ctrl-C on a terminal sends: to the whole process group
