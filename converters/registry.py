@@ -173,14 +173,19 @@ def detect(path: str | os.PathLike[str]) -> Format:
         raise ConversionError(f"cannot open: {exc.strerror or exc}", file=file) from exc
     if size == 0:
         raise ConversionError("the file is empty", file=file)
-    for fmt in formats():
-        if fmt.sniff is not None and fmt.read is not None and _sniffs(fmt.sniff, head, size):
-            return fmt
-    fmt = for_extension(file)
+    fmt = sniff(head, size) or for_extension(file)
     if fmt is None:
         raise ConversionError("unknown format: neither the content nor the extension "
                               "is one of a known mesh format", code="UNKNOWN_FORMAT", file=file)
     return fmt
+
+
+def sniff(head: bytes, size: int) -> Format | None:
+    """The first readable format that recognises ``head``, the first bytes of a file of ``size`` bytes."""
+    for fmt in formats():
+        if fmt.sniff is not None and fmt.read is not None and _sniffs(fmt.sniff, head, size):
+            return fmt
+    return None
 
 
 def _sniffs(sniff: Sniffer, head: bytes, size: int) -> bool:

@@ -70,6 +70,10 @@ _CATALOGUE = [
     Code("UNKNOWN_FORMAT", "error", "the input format could not be detected"),
     Code("CONVERSION_FAILED", "error", "a converter could not read or write the mesh"),
     Code("OUTPUT_CONFLICT", "error", "an output would replace an input, another output or a file not named"),
+    # batch conversion: limits a run puts on each input
+    Code("TIMEOUT", "error", "a conversion ran longer than the time allowed per input"),
+    Code("MEMORY_LIMIT", "error", "a conversion needed more memory than allowed per input"),
+    Code("WORKER_LOST", "error", "the process converting an input ended before it reported"),
 ]
 
 CODES: dict[str, Code] = {c.code: c for c in _CATALOGUE}

@@ -15,7 +15,7 @@ import warnings
 from .. import interrupts
 
 #: Subcommand modules of this package; each defines ``add_parser(subparsers)``.
-SUBCOMMANDS = ("info", "convert", "validate", "preview")
+SUBCOMMANDS = ("info", "convert", "validate", "preview", "report")
 
 EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
 

@@ -3,6 +3,7 @@
     pln convert IN OUT [--tolerance T] [--bits N] [--scheme shell|paper] [--allow-open] [--lossy --delta D --tau A]
         [-v] [--force]
     pln convert A B C -d OUTDIR --to glb [--jobs N]
+    pln convert meshes/ -d OUTDIR [--resume] [--engine local|dask]   (see batch.py: ledger, limits)
 
 ``-`` reads standard input (format detected from the content) or writes
 standard output (``--to`` names the format). Outputs are written atomically:
@@ -21,13 +22,11 @@ import shutil
 import sys
 import tempfile
 from collections.abc import Iterator
-from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING
 
 from planefmt.errors import GeometryError, PlnError
 from planefmt_converters import interrupts
-from planefmt_converters.cli import quiet_library_warnings
 from planefmt_converters.cli.progress import Status, summary
 
 if TYPE_CHECKING:
@@ -37,11 +36,13 @@ if TYPE_CHECKING:
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("convert", help="convert between mesh formats and .pln", description=__doc__,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("paths", nargs="+", metavar="PATH", help="IN OUT, or several inputs with -d")
-    p.add_argument("-d", "--outdir", help="batch: write each input into this folder")
-    p.add_argument("--to", help="output format name (glb, gltf, obj, ply, stl, off, usda, usdc, usdz, pln)")
+    p.add_argument("paths", nargs="*", metavar="PATH", help="IN OUT, or inputs (files, folders) with -d")
+    p.add_argument("-d", "--outdir", help="batch: write each input into this folder (or fsspec URL)")
+    p.add_argument("--to", help="output format name (glb, gltf, obj, ply, stl, off, usda, usdc, usdz, pln; "
+                               "batch: pln by default)")
     p.add_argument("--from", dest="from_", help="input format name instead of detecting it")
-    p.add_argument("--jobs", type=int, default=1, help="batch: convert this many files at once")
+    p.add_argument("--jobs", type=_at_least_one, default=1,
+                   help="batch: convert this many files at once (processes here, or LocalCluster workers)")
     p.add_argument("-v", "--verbose", action="store_true",
                    help="end with a summary line (bytes in and out, error bound, seconds) also when stderr is "
                         "not a terminal")
@@ -72,7 +73,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--lossy", action="store_true", help="allow the paper's lossy options below")
     g.add_argument("--delta", type=float, help="lossy: drop planes of faces under delta x total area")
     g.add_argument("--tau", type=float, help="lossy: merge neighbour planes whose normals differ < tau radians")
+    from planefmt_converters.cli import batch
+
+    batch.add_arguments(p)
     p.set_defaults(func=run)
+
+
+def _at_least_one(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"{text} is not a count of 1 or more")
+    return value
 
 
 class _Usage(PlnError):
@@ -105,16 +116,17 @@ def _pln_options(args: argparse.Namespace) -> dict:
 
 def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict,
                 salvage: bool = False, *, src_name: str | None = None, dst_name: str | None = None,
-                status: Status | None = None) -> tuple[list[str], list[str]]:
+                status: Status | None = None, facts: dict | None = None) -> tuple[list[str], list[str]]:
     """Convert one file; returns warning lines (what was dropped) and, with ``salvage``, what was lost.
 
     ``src_name`` and ``dst_name`` are what messages call ``src`` and ``dst`` (``<stdin>`` for a
-    temporary copy of standard input); ``status`` is told the stages. Raises PlnError on bad input.
+    temporary copy of standard input); ``status`` is told the stages; ``facts`` is given the source's
+    ``triangles``. Raises PlnError on bad input.
     """
     names = {src: src_name or src, dst: dst_name or dst}
     try:
         warnings, lost = _convert(src, dst, to, from_, pln_opts, salvage, names[src], names[dst],
-                                  status or Status(sys.stderr, enabled=False))
+                                  status or Status(sys.stderr, enabled=False), {} if facts is None else facts)
     except PlnError as exc:
         exc.file = names.get(exc.file, exc.file)
         raise
@@ -122,7 +134,7 @@ def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts:
 
 
 def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict, salvage: bool,
-             src_name: str, dst_name: str, status: Status) -> tuple[list[str], list[str]]:
+             src_name: str, dst_name: str, status: Status, facts: dict) -> tuple[list[str], list[str]]:
     from planefmt import progress
     from planefmt_converters import registry
 
@@ -139,6 +151,7 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
         dropped: list[str] = []
     else:
         scene, dropped = registry.read(src, from_)
+    facts["triangles"] = sum(len(node.mesh.faces) for node in scene.nodes if node.mesh is not None)
     fmt = _output_format(dst, to)
     # Conflicts beside the output were refused before any work, or --force allowed them.
     status.update("encoding" if fmt.name == "pln" else f"writing {dst_name}")
@@ -156,21 +169,16 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
     return warnings, [f"{src_name}: {line}" for line in lost]
 
 
-def _batch_job(job: tuple) -> tuple[str, list[str] | None, bool, str | None]:
-    src, dst, to, from_, opts, salvage = job
-    try:
-        warnings, lost = convert_one(src, dst, to, from_, opts, salvage)
-        return src, warnings + [f"lost {line}" for line in lost], bool(lost), None
-    except PlnError as exc:
-        return src, None, False, str(exc)
-
-
 def run(args: argparse.Namespace) -> int:
     with interrupts.handled():
         try:
             opts = _pln_options(args)
             if args.outdir:
-                code = _run_batch(args, opts)
+                from planefmt_converters.cli import batch
+
+                code = batch.run(args, opts)
+            elif args.from_list or any(os.path.isdir(path) for path in args.paths):
+                raise _Usage("folders and --from-list convert into a folder: add -d OUTDIR", code="CONVERSION_FAILED")
             elif len(args.paths) != 2:
                 raise _Usage("give IN OUT, or several inputs with -d OUTDIR --to FORMAT", code="CONVERSION_FAILED")
             else:
@@ -310,65 +318,3 @@ def _temporary(suffix: str) -> Iterator[str]:
     finally:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(name)
-
-
-def _run_batch(args: argparse.Namespace, opts: dict) -> int:
-    if not args.to:
-        raise _Usage("batch conversion needs --to FORMAT", code="UNKNOWN_FORMAT")
-    from planefmt_converters import registry
-
-    ext = registry.get(args.to).extensions[0]
-    outdir = Path(args.outdir)
-    pairs = [(src, str(outdir / (Path(src).stem + ext))) for src in args.paths]
-    _refuse_conflicts(pairs, args)
-    outdir.mkdir(parents=True, exist_ok=True)
-    jobs = [(src, dst, args.to, args.from_, opts, args.salvage) for src, dst in pairs]
-    failed = losses = 0
-    progress = _Progress(len(jobs))
-    with contextlib.ExitStack() as stack:
-        pool = stack.enter_context(ProcessPoolExecutor(args.jobs, initializer=quiet_library_warnings)) \
-            if args.jobs > 1 else None
-        for result in (pool.map if pool else map)(_batch_job, jobs):
-            failed += _report(result, progress)
-            losses += result[2]
-    progress.done()
-    return 2 if failed else 1 if losses else 0
-
-
-def _report(result: tuple, progress: "_Progress") -> int:
-    src, warnings, _, error = result
-    progress.step(src)
-    if error:
-        progress.clear()
-        print(f"pln: {error}", file=sys.stderr)
-        return 1
-    for line in warnings or []:
-        progress.clear()
-        print(f"pln: warning: {line}", file=sys.stderr)
-    return 0
-
-
-class _Progress:
-    """A one-line progress bar on stderr, shown only when stderr is a terminal."""
-
-    def __init__(self, total: int) -> None:
-        self.total = total
-        self.count = 0
-        self.enabled = sys.stderr.isatty()
-
-    def step(self, label: str) -> None:
-        self.count += 1
-        if self.enabled:
-            width = 30
-            filled = width * self.count // self.total
-            sys.stderr.write(f"\r[{'#' * filled}{'.' * (width - filled)}] {self.count}/{self.total} "
-                             f"{Path(label).name[:40]:<40}")
-            sys.stderr.flush()
-
-    def clear(self) -> None:
-        if self.enabled:
-            sys.stderr.write("\r" + " " * 80 + "\r")
-
-    def done(self) -> None:
-        if self.enabled:
-            sys.stderr.write("\n")

@@ -83,3 +83,66 @@ def summary(src: str, dst: str, bytes_in: int, bytes_out: int, error: float | No
         bound = f", error at most {error:.3g} of the diagonal" + (" (recorded in the input)" if recorded_in_input
                                                                   else "")
     return f"pln: {src} -> {dst}: {bytes_in:,} B in, {bytes_out:,} B out{bound}, {seconds:.1f} s"
+
+
+class RunBar:
+    """The one line of a batch run on ``stream``: files done of the total, failed, bytes in and out,
+    estimated time left; redrawn as inputs finish, at most every :data:`INTERVAL` seconds, and inert
+    unless ``enabled`` (a terminal)."""
+
+    def __init__(self, stream: TextIO, total: int, enabled: bool) -> None:
+        self.stream, self.total, self.enabled = stream, total, enabled
+        self.done = self.failed = self.bytes_in = self.bytes_out = 0
+        self.start = time.monotonic()
+        self._drawn = 0.0
+        self._width = 0
+
+    def add(self, failed: bool, bytes_in: int, bytes_out: int) -> None:
+        self.done += 1
+        self.failed += failed
+        self.bytes_in += bytes_in
+        self.bytes_out += bytes_out
+        now = time.monotonic()
+        if self.enabled and (now - self._drawn >= INTERVAL or self.done == self.total):
+            self._drawn = now
+            self._draw()
+
+    def clear(self) -> None:
+        """Take the line away, so that a message starts at the beginning of its own line."""
+        if self.enabled and self._width:
+            self.stream.write("\r" + " " * self._width + "\r")
+            self.stream.flush()
+            self._width = 0
+
+    def close(self) -> None:
+        if self.enabled and self._width:
+            self.stream.write("\n")
+            self.stream.flush()
+
+    def _draw(self) -> None:
+        width = 24
+        filled = width * self.done // max(self.total, 1)
+        elapsed = time.monotonic() - self.start
+        left = elapsed / self.done * (self.total - self.done) if self.done else 0
+        text = (f"pln: [{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total} files, "
+                f"{self.failed} failed, {_size(self.bytes_in)} in, {_size(self.bytes_out)} out, "
+                f"ETA {_duration(left)}")
+        self.stream.write("\r" + text.ljust(self._width))
+        self.stream.flush()
+        self._width = max(self._width, len(text))
+
+
+def _size(n: float) -> str:
+    if n < 1000:
+        return f"{n:.0f} B"
+    for unit in ("kB", "MB", "GB", "TB"):
+        n /= 1000
+        if n < 1000 or unit == "TB":
+            break
+    return f"{n:.1f} {unit}"
+
+
+def _duration(seconds: float) -> str:
+    seconds = int(seconds + 0.5)
+    return f"{seconds // 3600}:{seconds // 60 % 60:02d}:{seconds % 60:02d}" if seconds >= 3600 else \
+        f"{seconds // 60}:{seconds % 60:02d}"
