@@ -292,8 +292,10 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
 
 #: Plane widths (nu and phi; h follows) a shell scheme's coding is chosen among, by file size: every
 #: width is correct (a corner its planes cannot name within the budget is explicit), so the choice
-#: is one of bytes only.
-SHELL_WIDTHS = tuple(range(8, 33, 2))
+#: is one of bytes only. Steps of 4 bits: where named corners won on the corpus (20mm-xyz-cube,
+#: not_convex at 1e-6 and draco-14's error) they won at 24 bits, and neighbouring widths differed by
+#: 1-2% (bench widths printed per trial); half the trials of steps of 2.
+SHELL_WIDTHS = tuple(range(8, 33, 4))
 
 #: Times the corner budget is quartered when a decoding misses a lossless volume or area.
 _SHELL_TIGHTENINGS = 6
@@ -331,18 +333,20 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         g = groups[k]
         omega, h = from_triplets(planes[g.refs])
         shell = encode_shell(plan, omega, h, budget)
-        options = [(GroupKind.SHELL, shell, plan.points)] if GroupKind.SHELL in SHELL_LAYOUTS else []
-        trees = [k for k in TREE_KINDS if k in SHELL_LAYOUTS]
+        # Whichever layout deflates smaller. Of the two trees, parallelograms predict smooth and regular
+        # surfaces better (King_geom.usd's coordinates 39.2 kB -> 24.9 kB at draco-14's error), steps
+        # from a neighbour flat CAD faces (box.STL 7.5 kB against 10.0 kB). Kind 6 is packed only for a
+        # soup (a root for every other triangle or more, each paying a link and three codes): on every
+        # connected corpus mesh a tree is the smaller (bench/shell_bits.py).
+        options = []
+        trees = [layout for layout in TREE_KINDS if layout in SHELL_LAYOUTS]
         if trees:
             tree, source = shell_tree(shell, plan.walk)
-            options += [(k, tree, plan.points[source]) for k in trees]
-        # Whichever layout deflates smaller: a tree on every corpus mesh measured (bench/shell_bits.py),
-        # though a soup of separate triangles pays a link and a root's three codes for each; of the two
-        # trees, parallelograms predict smooth and regular surfaces better (King_geom.usd's coordinates
-        # 39.2 kB -> 24.9 kB at draco-14's error), steps from a neighbour flat CAD faces (box.STL
-        # 7.5 kB against 10.0 kB).
-        kind, shell, points = min(options, key=lambda c: len(records.pack(shellfields.shell_kind_data(c[0], c[1]), True,
-                                                                          records.SHELL_TREE_LEVEL)[1]))
+            bodies = shellfields.shell_tree_bodies(tree)
+            options += [(layout, tree, plan.points[source], bodies[layout]) for layout in trees]
+        if GroupKind.SHELL in SHELL_LAYOUTS and (not trees or 2 * int((tree.links == 0).sum()) >= len(tree.links)):
+            options.append((GroupKind.SHELL, shell, plan.points, shellfields.shell_kind_data(GroupKind.SHELL, shell)))
+        kind, shell, points, _ = min(options, key=lambda c: len(records.pack(c[3], True, records.SHELL_TREE_LEVEL)[1]))
         # A tree's named corners are solved with their planes in ascending order of reference, which the
         # writer renumbers (``reordered_tree``): every order of the three is measured, so the bound
         # holds for the one written.

@@ -305,6 +305,22 @@ def _shell_tree_body(shell: Shell, parallelogram: bool = False) -> bytes:
 def shell_tree_fields(shell: Shell, parallelogram: bool = False) -> dict[str, bytes]:
     """The fields of a SHELL_TREE body (spec §9.11), or a SHELL_TREE_PARALLELOGRAM one (§9.12), by
     name, in body order."""
+    common, coordinates = _tree_fields(shell)
+    return {**common, **coordinates(parallelogram)}
+
+
+def shell_tree_bodies(shell: Shell) -> dict[GroupKind, bytes]:
+    """The kind data of ``shell`` as a SHELL_TREE and as a SHELL_TREE_PARALLELOGRAM group, which
+    differ in their coordinates only: the rest is made once."""
+    common, coordinates = _tree_fields(shell)
+    head = b"".join(common.values())
+    return {kind: head + b"".join(coordinates(kind == GroupKind.SHELL_TREE_PARALLELOGRAM).values())
+            for kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM)}
+
+
+def _tree_fields(shell: Shell):
+    """The fields of a shell tree's body up to the picks, and a function of ``parallelogram`` giving
+    the grid and the coordinates (none without explicit corners)."""
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
     links = np.asarray(shell.links, dtype=np.int64)
@@ -335,15 +351,18 @@ def shell_tree_fields(shell: Shell, parallelogram: bool = False) -> dict[str, by
         key = np.repeat(np.arange(v), runs) * span + refs
         out["picks"] = varint.encode(np.searchsorted(key, named[wide, None] * span + vp[wide])
                                      - start[named[wide], None])
-    if explicit.any():
+
+    def coordinates(parallelogram: bool) -> dict[str, bytes]:
+        if not explicit.any():
+            return {}
         g_all = np.zeros((v, 3), dtype=np.int64)
         g_all[explicit] = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
         base = _predict(g_all, _tree_predictors(links, tri, explicit, np.where(root, 3, 1), new, parallelogram))
-        out["grid"] = schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step)))
         # Axis by axis: each axis's residuals deflate as one run (CAD/box.STL: 7.5 kB against 8.8 kB
         # interleaved).
-        out["coordinates"] = varint.encode(varint.zigzag((g_all - base)[explicit].T))
-    return out
+        return {"grid": schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step))),
+                "coordinates": varint.encode(varint.zigzag((g_all - base)[explicit].T))}
+    return out, coordinates
 
 
 def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: bool = False) -> Shell:
