@@ -382,3 +382,29 @@ def test_convex_groups_beside_a_shell_are_verified_against_their_own_faces(monke
     source, decoded = flatten(scene), flatten(codec.decode_scene(io.BytesIO(buf.getvalue())))
     measured = relative_hausdorff((source.vertices, source.faces), (decoded.vertices, decoded.faces), tolerance=1e-7)
     assert measured.upper <= header.error_bound * (1 + 1e-6) and header.error_bound <= 1e-3
+
+
+def _punctured_sphere() -> tuple[np.ndarray, np.ndarray]:
+    """An icosphere of 5,120 triangles less one: open, with a rim of three short edges."""
+    import trimesh
+
+    sphere = trimesh.creation.icosphere(subdivisions=4)
+    return np.asarray(sphere.vertices, dtype=np.float64), np.asarray(sphere.faces)[1:]
+
+
+def test_an_open_shell_at_a_lossy_tolerance_uses_its_budget_and_its_area_moves_only_as_its_corners():
+    # Held to its rim's allowance alone, the area (its corners moved within the tolerance) sent the
+    # encoder down to a sixteenth of the budget, as bun_zipper.ply at draco-11's error.
+    v, f = _punctured_sphere()
+    tolerance = 1e-3
+    header, decoded, _ = encode(v, f, tolerance)
+    assert 0.25 * tolerance < header.error_bound <= tolerance and not header.lossy
+    diag = float(np.linalg.norm(np.ptp(v, axis=0)))
+    moved = header.error_bound * diag * (1 + 1e-9)
+    p = v[f]
+    half_perimeters = float(np.linalg.norm(p - p[:, [1, 2, 0]], axis=2).sum()) / 2
+
+    def area(vv, ff):
+        q = vv[ff]
+        return float(np.linalg.norm(np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]), axis=1).sum()) / 2
+    assert abs(area(decoded.vertices, decoded.faces) - area(v, f)) <= moved * half_perimeters + 2 * len(f) * moved ** 2

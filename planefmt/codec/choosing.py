@@ -479,10 +479,12 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
             error = plane_error(cod, q, tolerance, diag_src)
             meshes = [_concatenate(_decode_object(rt[a:b], o, error))
                       for o, a, b in zip(built, offsets[:-1], offsets[1:])]
-            # Shells alone keep the source's topology by construction: only volume or area can move.
-            problems = [structure_problem(m, o, band * diag_src / sc,
-                                          topology=any(g.kind not in SHELL_KINDS for g in o.groups))
-                        for m, o, sc in zip(meshes, built, scale)]
+            # Shells alone keep the source's topology by construction: only volume or area can move, and
+            # at a lossy tolerance an open shell's area as far as its corners moved.
+            problems = [structure_problem(m, o, band * diag_src / sc, topology=not shells_only,
+                                          moved=mv if shells_only and band > 0 else None)
+                        for m, o, sc, mv in zip(meshes, built, scale, moved)
+                        for shells_only in [all(g.kind in SHELL_KINDS for g in o.groups)]]
             problems = [p for p in problems if p is not None]
             if not problems:
                 break
