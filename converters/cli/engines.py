@@ -235,29 +235,39 @@ def _dask_results(stack: contextlib.ExitStack, client, jobs: list[dict]) -> Iter
     from distributed.scheduler import KilledWorker
 
     with stack:
-        futures = client.map(run_on_dask_worker, jobs, pure=False)
-        job_of = {future.key: job for future, job in zip(futures, jobs)}
+        # A few inputs per task: each task costs the scheduler, the client and the worker's comms a few
+        # milliseconds, which on two cores busy with two conversions come out of the conversions (300
+        # tiny meshes, bench/batch.py: 2 workers over 1 1.47x one input a task, 1.7x or more in tasks
+        # of up to DASK_TASK_INPUTS), while at least 8 tasks a worker keep the ends of the run even.
+        workers = max(1, len(client.scheduler_info().get("workers", {})))
+        size = max(1, min(DASK_TASK_INPUTS, len(jobs) // (8 * workers)))
+        chunks = [jobs[i:i + size] for i in range(0, len(jobs), size)]
+        futures = client.map(run_on_dask_worker, chunks, pure=False)
+        chunk_of = {future.key: chunk for future, chunk in zip(futures, chunks)}
         for future in as_completed(futures):
+            chunk = chunk_of[future.key]
             try:
-                entry = future.result()
-            except KilledWorker as exc:  # Dask gave up after losing several workers on this input
-                job = job_of[future.key]
-                entry = failed_entry(job, "WORKER_LOST", f"{job['source']}: the Dask workers converting it were "
-                                     f"lost: {describe(exc)}")
+                entries = future.result()
+            except KilledWorker as exc:  # Dask gave up after losing several workers on these inputs
+                entries = [failed_entry(job, "WORKER_LOST", f"{job['source']}: the Dask workers converting it "
+                                        f"were lost: {describe(exc)}") for job in chunk]
             except Exception as exc:  # noqa: BLE001 - the task's own error: a worker without planefmt...
-                job = job_of[future.key]
-                entry = failed_entry(job, "CONVERSION_FAILED", f"{job['source']}: on the Dask worker: "
-                                     f"{describe(exc)}")
+                entries = [failed_entry(job, "CONVERSION_FAILED", f"{job['source']}: on the Dask worker: "
+                                        f"{describe(exc)}") for job in chunk]
             future.release()
-            yield entry
+            yield from entries
 
 
 _on_this_thread = threading.local()
 
 
-def run_on_dask_worker(job: dict) -> dict:
-    """The Dask task: convert ``job`` in this worker thread's worker process."""
+#: Inputs per Dask task, at most.
+DASK_TASK_INPUTS = 8
+
+
+def run_on_dask_worker(jobs: list[dict]) -> list[dict]:
+    """The Dask task: convert ``jobs`` in turn in this worker thread's worker process."""
     worker = getattr(_on_this_thread, "worker", None)
     if worker is None:
         worker = _on_this_thread.worker = Worker()
-    return worker.run(job)
+    return [worker.run(job) for job in jobs]
