@@ -25,13 +25,32 @@ export function allFiles() {
 let version = '';
 
 /**
+ * What the encoder is: a digest of planefmt's and the converters' sources, whose package version does
+ * not change with every encoder change (a cache keyed on `pln --version` alone kept files of an older
+ * encoder, without the kind 8 groups of version 3.4).
+ */
+function encoderVersion() {
+  const hash = crypto.createHash('sha1');
+  const walk = (dir) => {
+    for (const entry of fs.readdirSync(dir, { withFileTypes: true }).sort((a, b) => (a.name < b.name ? -1 : 1))) {
+      const full = path.join(dir, entry.name);
+      if (entry.isDirectory()) walk(full);
+      else if (/\.(py|c)$/.test(entry.name)) hash.update(entry.name).update(fs.readFileSync(full));
+    }
+  };
+  walk(path.join(ROOT, 'planefmt'));
+  walk(path.join(ROOT, 'converters'));
+  return hash.digest('hex');
+}
+
+/**
  * The .pln of a corpus file, encoded by `pln convert` once per source, options and encoder
  * version and kept in the temporary directory.
  * @param {string} rel a path relative to the corpus
  * @param {string[]} [options] of `pln convert`, e.g. ['--scheme', 'paper']
  */
 export function encoded(rel, options = []) {
-  version ||= execFileSync(PLN, ['--version']).toString().trim();
+  version ||= encoderVersion();
   const src = path.join(CORPUS, rel);
   const stat = fs.statSync(src);
   const key = crypto.createHash('sha1').update(`${rel}\0${stat.size}\0${stat.mtimeMs}\0${version}\0${options.join(' ')}`)
