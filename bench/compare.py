@@ -266,9 +266,15 @@ def pln_parts(data: bytes) -> dict:
 
 def measure(path: str, name: str, tolerances: tuple[float, ...], timeout: float,
             matched: float | None = None) -> dict:
+    return run_forked(_measure, (path, name, tolerances, matched), timeout)
+
+
+def run_forked(target, args: tuple, timeout: float) -> dict:
+    """``target(*args, conn)`` in a forked child that sends one result dict on ``conn``, killed after
+    ``timeout`` seconds; the dict, with its ``wall`` seconds (a ``failed`` reason where it gave none)."""
     ctx = multiprocessing.get_context("fork")
     parent, child = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_measure, args=(path, name, tolerances, matched, child))
+    proc = ctx.Process(target=target, args=(*args, child))
     t = time.perf_counter()
     proc.start()
     child.close()

@@ -57,7 +57,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
 
 from compare import (CATEGORIES, CORPUS, MEASURE_GAP, MEASURE_PIECES, MEASURE_RESOLUTION,  # noqa: E402
-                     _draco, _machine, _pln, load)
+                     _draco, _machine, _pln, load, run_forked)
 
 ROOT = os.path.normpath(os.path.join(HERE, ".."))
 DEFAULT_OUT = os.path.join(ROOT, "docs", "rate_distortion")
@@ -98,23 +98,7 @@ def _point(scene, v, f, codec: str, param: float, conn) -> None:
 def measure_point(scene, v, f, codec: str, param: float, timeout: float) -> dict:
     """One point in a forked child (the mesh already loaded in the parent), killed after ``timeout`` s;
     the same machinery as ``compare.measure``."""
-    ctx = multiprocessing.get_context("fork")
-    parent, child = ctx.Pipe(duplex=False)
-    proc = ctx.Process(target=_point, args=(scene, v, f, codec, param, child))
-    t = time.perf_counter()
-    proc.start()
-    child.close()
-    result = {"failed": f"timeout after {timeout:g} s"}
-    if parent.poll(timeout):
-        try:
-            result = parent.recv()
-        except EOFError:
-            result = {"failed": "the measuring process died"}
-    if proc.is_alive():
-        proc.kill()
-    proc.join()
-    result["wall"] = time.perf_counter() - t
-    return result
+    return run_forked(_point, (scene, v, f, codec, param), timeout)
 
 
 def measure_mesh(rel: str, bits: tuple[int, ...], tolerances: tuple[float, ...], timeout: float) -> dict:
