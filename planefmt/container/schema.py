@@ -196,6 +196,10 @@ ShellGrid = cs.Struct(
     "step" / cs.Float64l,
 )
 SHELL_GRID_BYTES = 32
+# spec §9.11 Shell tree (kind 7) and §9.12 (kind 8, explicit corners predicted by parallelograms)
+# data: corner and triangle counts, links, corner codes, face codes (varints), one flag bit per
+# corner, picks (varints), then where a corner is explicit the same ShellGrid and zigzag varint
+# residuals, every x, then every y, then every z (read in bulk by shellfields.py)
 
 # spec §10.1 Face colours (cOLR, ancillary)
 Colours = cs.Struct(
