@@ -111,13 +111,7 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
     pos += used
     origin, step, grid = np.zeros(3), 0.0, np.zeros((0, 3), dtype=np.int64)
     if e:
-        if len(raw) < pos + schema.SHELL_GRID_BYTES:
-            raise FormatError("shell group: the body ends inside its grid", code="BAD_PAYLOAD")
-        g = schema.ShellGrid.parse(raw[pos:pos + schema.SHELL_GRID_BYTES].tobytes())
-        pos += schema.SHELL_GRID_BYTES
-        origin, step = np.array(g.origin, dtype=np.float64), float(g.step)
-        deltas, used = varint.decode(raw[pos:], 3 * e, "shell corner coordinates")
-        pos += used
+        origin, step, deltas, pos = _read_grid(raw, pos, e, "shell group", "shell corner coordinates")
         steps = varint.unzigzag(deltas).reshape(-1, 3)
     gaps, used = varint.decode(raw[pos:], t - u, "shell face references")
     pos += used
@@ -151,6 +145,18 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
 
 
 # spec 3.3 §8.10 Shell trees ----------------------------------------------------------------------
+
+def _read_grid(raw: np.ndarray, pos: int, explicit: int, label: str,
+               field: str) -> tuple[np.ndarray, float, np.ndarray, int]:
+    """A shell body's grid (spec §9.10) at ``pos`` and the ``3 * explicit`` coordinate varints after it
+    (``field`` in messages): ``(origin, step, raw coordinate varints, position after them)``."""
+    if len(raw) < pos + schema.SHELL_GRID_BYTES:
+        raise FormatError(f"{label}: the body ends inside its grid", code="BAD_PAYLOAD")
+    g = schema.ShellGrid.parse(raw[pos:pos + schema.SHELL_GRID_BYTES].tobytes())
+    pos += schema.SHELL_GRID_BYTES
+    deltas, used = varint.decode(raw[pos:], 3 * explicit, field)
+    return np.array(g.origin, dtype=np.float64), float(g.step), deltas, pos + used
+
 
 def resolve_chains(value: np.ndarray, pointer: np.ndarray, offset: np.ndarray) -> np.ndarray:
     """``value[k]`` where ``pointer[k] < 0``, else ``offset[k]`` plus the resolved value at
@@ -454,13 +460,7 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: boo
     e = int(explicit.sum())
     origin, step, grid = np.zeros(3), 0.0, np.zeros((0, 3), dtype=np.int64)
     if e:
-        if len(raw) < pos + schema.SHELL_GRID_BYTES:
-            raise FormatError("shell tree: the body ends inside its grid", code="BAD_PAYLOAD")
-        g = schema.ShellGrid.parse(raw[pos:pos + schema.SHELL_GRID_BYTES].tobytes())
-        pos += schema.SHELL_GRID_BYTES
-        origin, step = np.array(g.origin, dtype=np.float64), float(g.step)
-        deltas, used = varint.decode(raw[pos:], 3 * e, "shell tree corner coordinates")
-        pos += used
+        origin, step, deltas, pos = _read_grid(raw, pos, e, "shell tree", "shell tree corner coordinates")
         steps = varint.unzigzag(deltas).reshape(3, -1).T
         if np.abs(steps).max(initial=0) > MAX_GRID:
             raise bad("a grid residual is beyond 2^52")
