@@ -7,6 +7,7 @@ by the scheme's strategies (:func:`_prepare`); and the structure a decoding must
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, replace
 
@@ -14,9 +15,9 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from ..errors import GeometryError, PlnError
+from ..errors import GeometryError, PlnError, PlnWarning
 from ..geometry.planes import to_triplets, transform_points
-from ..geometry.polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize, weld
+from ..geometry.polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize, split_planes, weld
 from ..geometry.repair import mend_cracks
 from ..geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from ..geometry.planetable import PlaneTable
@@ -103,6 +104,13 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     # A fit within the tolerance: King_geom.usd's gently curved quads fitted 1.42e-6 of the
     # diagonal from their vertices with the default drift bound, over the lossless 1e-6.
     poly = polygonize(vertices, faces, tolerance=min(COPLANAR_TOLERANCE, tolerance / 2), max_drift=tolerance)
+    colours = None if face_colours is None else np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)
+    # A shell's free triangles take its last reference's colour: an object of several colours keeps
+    # the plane of every face (each plane takes its faces' colour), and a plane in several colours
+    # becomes one plane per colour (geo.usda: 24 faces in 11 colours on 4 planes).
+    every = colours is not None and bool((colours != colours[0]).any())
+    if every and scheme == "shell":
+        poly = split_planes(poly, np.unique(colours, axis=0, return_inverse=True)[1].reshape(-1))
     omega, h, face_plane = poly.omega, poly.h, poly.face_plane
     if tau:
         omega, h, face_plane = merge_planes(poly, tau)
@@ -118,10 +126,6 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     by_body = np.argsort(body_of_face, kind="stable")
     groups: list[GroupSpec] = []
     table = PlaneTable(omega, h)
-    colours = None if face_colours is None else np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)
-    # A shell's free triangles take its last reference's colour: an object of several colours keeps
-    # the plane of every face (each plane takes its faces' colour).
-    every = colours is not None and bool((colours != colours[0]).any())
     for b, faces_b in enumerate(np.split(by_body, np.cumsum(np.bincount(body_of_face))[:-1])):
         body = Body(poly, faces_b, face_plane[faces_b], omega, h, tolerance, table, simplified, splitters, every)
         groups.extend(_encode_body(body, b, SCHEMES[scheme]))
@@ -141,6 +145,13 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
         on = np.flatnonzero(face_plane >= 0)[::-1]
         mapped = index[face_plane[on]]
         plane_colours[mapped[mapped >= 0]] = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[on][mapped >= 0]
+        stored = index[np.maximum(face_plane, 0)]
+        recoloured = int(((face_plane >= 0) & (stored >= 0)
+                          & (plane_colours[np.maximum(stored, 0)] != colours).any(axis=1)).sum())
+        if recoloured:
+            warnings.warn(PlnWarning(f"the colours of {recoloured} of {len(colours)} faces: each takes the colour "
+                                     f"of its plane's first face (the {scheme} scheme stores one colour per plane)"),
+                          stacklevel=3)
     kept = np.where(face_plane >= 0, index[np.maximum(face_plane, 0)], -1)
     return _Object(vertices=poly.vertices, faces=poly.faces, triplets=to_triplets(omega[order], h[order]),
                    groups=tuple(groups), world=world, simplified=simplified, fit=poly.max_distance,

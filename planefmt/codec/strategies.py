@@ -146,10 +146,13 @@ CONVEX_MAX_PLANES = 256
 
 
 def encode_convex_or_shell(body: Body) -> list[GroupSpec]:
-    """A convex body of at most :data:`CONVEX_MAX_PLANES` planes as one ``CONVEX`` group (the paper's
-    pure planes), any other as a shell."""
+    """A convex body of at most :data:`CONVEX_MAX_PLANES` planes, each in one colour, as one ``CONVEX``
+    group (the paper's pure planes), any other as a shell."""
     planes = np.unique(body.face_plane[body.face_plane >= 0])
-    groups = encode_convex_body(body) if len(planes) <= CONVEX_MAX_PLANES else None
+    # Colours split a plane into equal planes (preparing.split_planes); a convex group decodes one
+    # face on each plane, in one colour, where a shell keeps each triangle's.
+    one_colour = len(np.unique(np.column_stack([body.omega[planes], body.h[planes]]), axis=0)) == len(planes)
+    groups = encode_convex_body(body) if len(planes) <= CONVEX_MAX_PLANES and one_colour else None
     if groups is None:
         return encode_shell_body(body)
     return [replace(groups[0], faces=body.faces)]

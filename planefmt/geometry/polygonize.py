@@ -206,6 +206,30 @@ def polygonize(vertices: np.ndarray, faces: np.ndarray, *,
                     polygon_plane=polygon_plane, diagonal=diagonal)
 
 
+def split_planes(poly: Polygons, label: np.ndarray) -> Polygons:
+    """``poly`` with every plane split into one plane per distinct ``label`` (m,) of its faces, and
+    every polygon likewise: the planes of a shell carry its colours (spec §10.1: one colour per
+    reference), so faces of one plane in two colours need two planes, of equal ``omega`` and ``h``.
+    Planes and polygons of one label keep their order; a plane of one label is unchanged."""
+    label = np.asarray(label, dtype=np.int64)
+    on = poly.face_plane >= 0
+    span = int(label.max(initial=0)) + 1
+    plane_key, plane = np.unique(poly.face_plane[on] * span + label[on], return_inverse=True)
+    polygon_key, polygon = np.unique(poly.face_polygon[on] * span + label[on], return_inverse=True)
+    face_plane = np.full(len(label), -1, dtype=np.int64)
+    face_polygon = np.full(len(label), -1, dtype=np.int64)
+    face_plane[on], face_polygon[on] = plane, polygon
+    source = plane_key // span
+    p = poly.vertices[poly.faces[on]]
+    area = np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 1]), axis=1) * 0.5
+    polygon_plane = np.empty(len(polygon_key), dtype=np.int64)
+    polygon_plane[polygon] = plane
+    return Polygons(vertices=poly.vertices, faces=poly.faces, omega=poly.omega[source], h=poly.h[source],
+                    area=np.bincount(plane, weights=area, minlength=len(plane_key)),
+                    distance=poly.distance[source], face_plane=face_plane, face_polygon=face_polygon,
+                    polygon_plane=polygon_plane, diagonal=poly.diagonal)
+
+
 def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     graph = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n, n))
     return connected_components(graph, directed=False)[1].astype(np.int64)
