@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0, 3.1, 3.2, 3.3), written from
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4 and 4.0), written from
 spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
 
     python conformance/independent/plnspec.py FILE
@@ -7,6 +7,12 @@ spec/pln.md alone (no planefmt, no construct, none of the other readers or spec 
 prints one JSON object in the form of conformance/README.md ("The contract"): the file's
 header, plane table, objects, part-group records, colours, metadata and findings, and exits 0; or
 prints {"error": "CODE"} and exits 1. It does not decode geometry ("geometry": null).
+
+Version 4.0 (§6 compression method 2, Brotli; §8 transforms coded entry by entry; §10.1 a cOLR
+of one colour for every reference) was added from the 4.0 text of those sections and of §13 and
+Appendix A. Its Brotli payloads need the PyPI package `brotli` (1.2 or later, for the output
+bound of process()); it is imported only when a method 2 payload is met, so files of versions 1.0
+to 3.4, and 4.0 files without Brotli payloads, are read without it.
 
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
 comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
@@ -35,7 +41,7 @@ OBJECT_LIMIT = 1 << 24
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 # §10.3: the values of the keywords the spec defines
 META_VALUES = {"up_axis": ("Y", "Z")}
-NEWEST_MINOR = {1: 0, 2: 0, 3: 4}  # §9.3: "for this document: 1.0, 2.0, 3.4"
+NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 0}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.0"
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
 PI_F32 = np.frombuffer(struct.pack("<I", 0x40490FDB), "<f4")[0]
@@ -143,17 +149,20 @@ def none_if_nan(x: float):
 # ---------------------------------------------------------------------------------------------
 # §6: compression
 
-def decompress(method: int, raw_size: int, stored: bytes) -> bytes:
-    if method not in (0, 1):
-        fail("BAD_COMPRESSION", f"method {method}")
+def decompress(method: int, raw_size: int, stored: bytes, major: int) -> bytes:
+    # step 1: method 2 exists in version 4 only (Appendix A: BAD_COMPRESSION in 1.0 to 3.4)
+    if method not in ((0, 1, 2) if major >= 4 else (0, 1)):
+        fail("BAD_COMPRESSION", f"method {method} in a version {major} file")
     if raw_size > PAYLOAD_LIMIT:
         fail("LIMIT_EXCEEDED", f"raw size {raw_size}")
     if method == 0:
         if len(stored) != raw_size:
             fail("SIZE_MISMATCH", f"stored {len(stored)} bytes, raw size {raw_size}")
         return stored
-    if raw_size > RATIO_LIMIT * len(stored):
+    if raw_size > RATIO_LIMIT * len(stored):  # step 4, methods 1 and 2
         fail("LIMIT_EXCEEDED", f"raw size {raw_size} from {len(stored)} stored bytes")
+    if method == 2:
+        return brotli_decompress(raw_size, stored)
     inflater = zlib.decompressobj()
     try:
         out = inflater.decompress(stored, raw_size + 1)  # never more than raw size + 1 bytes
@@ -168,6 +177,74 @@ def decompress(method: int, raw_size: int, stored: bytes) -> bytes:
     if len(out) != raw_size:
         fail("SIZE_MISMATCH", f"inflates to {len(out)} bytes, raw size {raw_size}")
     return out
+
+
+BROTLI_PIECE = 1 << 16  # stored bytes handed to the Brotli decoder at a time
+
+
+class _BrotliError(Exception):
+    """The decoder reported an error while it was given the piece starting at `start`."""
+
+    def __init__(self, start: int):
+        super().__init__(start)
+        self.start = start
+
+
+def _brotli_run(brotli, raw_size: int, stored: bytes, bytewise_from: int | None) -> bytes:
+    """One pass of §6 step 5 for method 2: the stored bytes are handed over in pieces (one byte at
+    a time from `bytewise_from` on), and the output is drained in blocks of at most ~32 KiB
+    (output_buffer_limit=1: the binding stops growing its buffer after one block), so that the
+    pass stops as soon as the output passes raw size (SPEC_NOTES 25)."""
+    d = brotli.Decompressor()
+    out = bytearray()
+    pos = 0
+    start = 0
+    while not d.is_finished():
+        if d.can_accept_more_data() and pos < len(stored):
+            step = BROTLI_PIECE
+            if bytewise_from is not None:
+                step = 1 if pos >= bytewise_from else min(step, bytewise_from - pos)
+            start = pos
+            data = stored[pos:pos + step]
+            pos += len(data)
+        else:
+            data = b""  # output still held back by the block bound, or the input is all given
+        try:
+            block = d.process(data, output_buffer_limit=1)
+        except brotli.error:
+            raise _BrotliError(start) from None
+        out += block
+        if len(out) > raw_size:
+            fail("SIZE_MISMATCH", "decompresses to more than raw size")
+        if not data and not block and not d.is_finished():
+            if pos == len(stored):
+                fail("SIZE_MISMATCH", "the stored bytes end inside the Brotli stream")
+            if not d.can_accept_more_data():
+                raise RuntimeError("the Brotli decoder neither gives output nor takes input")
+    if pos < len(stored):
+        fail("SIZE_MISMATCH", f"{len(stored) - pos} stored bytes after the Brotli stream")
+    if len(out) != raw_size:
+        fail("SIZE_MISMATCH", f"decompresses to {len(out)} bytes, raw size {raw_size}")
+    return bytes(out)
+
+
+def brotli_decompress(raw_size: int, stored: bytes) -> bytes:
+    """§6 method 2: one Brotli stream (RFC 7932) of exactly raw size bytes ending with the last
+    stored byte. The binding reports bytes after the stream's end (SIZE_MISMATCH) as a decoder
+    error, like an invalid stream (BAD_COMPRESSION); so where it reports an error, the piece it was
+    given is handed over again one byte at a time, which stops at the stream's end and shows
+    which of the two it was."""
+    try:
+        import brotli
+    except ImportError:
+        raise SystemExit("plnspec.py: compression method 2 (Brotli) needs the package 'brotli'")
+    try:
+        return _brotli_run(brotli, raw_size, stored, None)
+    except _BrotliError as first:
+        try:
+            return _brotli_run(brotli, raw_size, stored, first.start)
+        except _BrotliError:
+            fail("BAD_COMPRESSION", "invalid Brotli stream")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -273,10 +350,10 @@ class Reader:
         if len(p) < 2:
             fail("BAD_PAYLOAD", "PHDR under 2 bytes")
         major, minor = p[0], p[1]
-        if major not in (1, 2, 3):
+        if major not in (1, 2, 3, 4):
             fail("UNSUPPORTED_VERSION", f"{major}.{minor}")
         self.major, self.minor = major, minor
-        if major == 3:
+        if major >= 3:  # §5 (4) and A.3 (3): the same layout
             self.phdr_v3(p)
         else:
             self.phdr_v1(p)
@@ -362,7 +439,7 @@ class Reader:
     # §7
     def plns(self, p: bytes, offset: int):
         c = Cursor(p)
-        if self.major == 3:
+        if self.major >= 3:
             first = c.varint("first")
             count = c.varint32("count")
             method = c.u8("compression")
@@ -388,7 +465,7 @@ class Reader:
             ok = 3 * count <= raw_size <= 15 * count
         if not ok:
             fail("SIZE_MISMATCH", f"raw size {raw_size} for {count} planes")
-        raw = decompress(method, raw_size, p[c.pos:])
+        raw = decompress(method, raw_size, p[c.pos:], self.major)
         if coding in (0, 1):
             planes = self.float_planes(raw, count, coding)
         elif coding == 2:
@@ -474,7 +551,7 @@ class Reader:
         if len(self.objects) >= OBJECT_LIMIT:
             fail("LIMIT_EXCEEDED", "objects")
         c = Cursor(p)
-        if self.major == 3:
+        if self.major >= 3:
             index = c.varint32("index")
             parent = c.varint32("parent")
             flags = c.u8("flags")
@@ -488,7 +565,9 @@ class Reader:
             name_length = c.u16("name_length")
             parent = None if parent == 0xFFFFFFFF else parent
         name = c.take(name_length, "the name")
-        transform = [c.f64("the transform") for _ in range(16)] if flags & 1 else None
+        transform = None
+        if flags & 1:
+            transform = self.transform_v4(c) if self.major >= 4 else [c.f64("the transform") for _ in range(16)]
         n = len(self.objects)
         if index != n:
             fail("BAD_OBJECT", f"index {index}, {n} objects before")
@@ -499,20 +578,44 @@ class Reader:
         except UnicodeDecodeError:
             fail("BAD_OBJECT", "name not UTF-8")
         if transform is not None:
+            # A.3: the last row is checked in 1.0 to 3.4; in 4.0 it is not stored (always 0 0 0 1)
             if not all(math.isfinite(v) for v in transform) or transform[12:] != [0.0, 0.0, 0.0, 1.0]:
                 fail("BAD_OBJECT", f"transform {transform}")
         self.chunks.append((offset, b"OBJT", index))
         self.objects.append({"name": name, "parent": parent, "transform": transform})
 
+    @staticmethod
+    def transform_v4(c: Cursor) -> list[float]:
+        """§8, version 4: a bit string (§2.1) of twelve 2-bit codes in 3 bytes, entry i's code bit
+        2i + 2 x bit 2i+1 (0: +0.0, 1: 1.0, 2: an f32 follows, 3: an f64 follows), then the values
+        of codes 2 and 3 in entry order; the entries are the top three rows, row by row, the
+        last row is 0 0 0 1. Ending inside the codes or the values is BAD_PAYLOAD (step 4); the
+        24 code bits fill their 3 bytes, so there is no padding (SPEC_NOTES 27)."""
+        codes = int.from_bytes(c.take(3, "the transform's codes"), "little")
+        entries = []
+        for i in range(12):
+            code = (codes >> (2 * i)) & 3
+            if code == 0:
+                entries.append(0.0)
+            elif code == 1:
+                entries.append(1.0)
+            elif code == 2:
+                entries.append(c.f32("the transform's values"))  # widened exactly
+            else:
+                entries.append(c.f64("the transform's values"))
+        return entries + [0.0, 0.0, 0.0, 1.0]
+
     # §9
     def kinds(self) -> set[int]:
+        if self.major >= 4:
+            return set(range(9))  # §9.3: kinds 0-8 in 4.0
         if self.major == 3:
             return set(range(5 + min(self.minor, 4)))  # §9.3: 3.1 adds kind 5, 3.2 kind 6, 3.3 kind 7, 3.4 kind 8
         return set(range(5))
 
     def grup(self, p: bytes, offset: int):
         c = Cursor(p)
-        if self.major == 3:
+        if self.major >= 3:
             index = c.varint32("index")
             obj = c.varint32("object")
             kind = c.u8("kind")
@@ -533,7 +636,7 @@ class Reader:
             if self.minor <= NEWEST_MINOR[self.major]:
                 fail("UNKNOWN_GROUP_KIND", f"kind {kind} in {self.major}.{self.minor}")
             skipped = True
-        body = decompress(method, raw_size, p[c.pos:])  # skipped kinds too (SPEC_NOTES 12)
+        body = decompress(method, raw_size, p[c.pos:], self.major)  # skipped kinds too (SPEC_NOTES 12)
         b = Cursor(body)
         if self.major == 1:
             refs, roles = self.common_body_v1(b)
@@ -926,14 +1029,22 @@ class Reader:
     def colr(self, p: bytes):
         c = Cursor(p)
         group, count = c.u32("the cOLR head"), c.u32("the cOLR head")
-        rgba = c.take(4 * count, "the colours")
-        if c.left():
-            fail("BAD_COLOURS", "bytes after the colours")
+        one = self.major >= 4 and len(p) == 12  # version 4: one colour every reference takes
+        if one:
+            rgba = c.take(4, "the colour")
+        else:  # A: in 1.0 to 3.4 always count x 4 bytes
+            rgba = c.take(4 * count, "the colours")
+            if c.left():
+                fail("BAD_COLOURS", "bytes after the colours")
         if group >= len(self.groups):
             fail("BAD_COLOURS", f"group {group} not read yet")
         if count != self.group_refs[group]:
             fail("BAD_COLOURS", f"{count} colours for {self.group_refs[group]} references")
-        self.colours.append({"group": group, "rgba": [list(rgba[4 * i:4 * i + 4]) for i in range(count)]})
+        if one:  # reported expanded, as the per-reference form would be (SPEC_NOTES 28)
+            colours = [list(rgba) for _ in range(count)]
+        else:
+            colours = [list(rgba[4 * i:4 * i + 4]) for i in range(count)]
+        self.colours.append({"group": group, "rgba": colours})
 
     # §10.3 (added with that section, from its text)
     def meta(self, p: bytes):
@@ -978,7 +1089,7 @@ class Reader:
 
     # §4.4 and A.1
     def pend(self, p: bytes):
-        if self.major == 3:
+        if self.major >= 3:
             if len(p) not in (0, 8):
                 fail("BAD_PAYLOAD", f"PEND of {len(p)} bytes")
             if len(p) == 8:
