@@ -4,9 +4,12 @@ It was written from `spec/pln-1.md`, `spec/pln-2.md` and `spec/pln-3.md`
 alone (plus the output contract of `conformance/README.md`), without looking
 at planefmt or at the suite's generator, to show that the written spec and
 the conformance contract are enough for a second implementation.  It uses
-the Python 3.11 standard library only.  It reads versions 1.0, 2.0, 3.0,
-3.1, 3.2 and 3.3 (pln-3 §11: files of major versions 1, 2 and 3, each as its
-own document says).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
+the Python 3.11 standard library, and for the Brotli payloads of version
+4.0 (compression method 2) the PyPI package `brotli` (1.2 or later),
+imported only when such a payload is met: files of versions 1.0 to 3.4, and
+4.0 files without Brotli payloads, need nothing else.  It reads versions
+1.0, 2.0, 3.0 to 3.4 and 4.0 (pln.md §13: files of major versions 1, 2, 3
+and 4, each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
 was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
 text and the golden files' JSON, not planefmt's shell code; its version 3.3
@@ -21,7 +24,14 @@ It checks everything a reader must check without decoding geometry
 objects, part groups of every kind with their cells/tree structure,
 colours, index, end chunk, versioning, zlib compression, limits) and, for a
 valid file, prints the JSON object of conformance/README.md ("geometry" is
-null: this reader does not decode geometry).  Version 2.0 files are
+null: this reader does not decode geometry).  Version 4.0 (pln.md §5 to
+§13 and Appendix A, added from that text) is version 3.4 with three
+changes: compression method 2, one Brotli stream (pln.md §6; method 2 is
+BAD_COMPRESSION in 1.0 to 3.4); an OBJT transform coded entry by entry, 3
+bytes of 2-bit codes then the f32/f64 values, its last row implicit
+(pln.md §8), reported as the 16 entries of M; and a cOLR of exactly 12
+bytes, one colour every reference takes (pln.md §10.1), reported expanded,
+one colour per reference.  Version 2.0 files are
 reported in the same form as 1.0 ones: predicted planes (coding 3) are
 dequantized like coding 2, and varint group bodies (pln-2 §8.7) are given
 as absolute plane indices, cells entries 2j + s and tree tokens in the
@@ -79,15 +89,15 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0, 2.0 and 3.3; pln-3 §11: a reader of 3.m reads major versions 1, 2 and 3)
-READER_VERSIONS = {1: 0, 2: 0, 3: 4}
+# (1.0, 2.0, 3.4 and 4.0; pln.md §13: a reader of 4.0 reads major versions 1 to 4)
+READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 0}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 
 # §10.3 limits (the reference reader's defaults)
 LIMIT_CHUNK = 256 * 1024 * 1024
 LIMIT_RAW = 256 * 1024 * 1024
-LIMIT_DEFLATE_RATIO = 1100
+LIMIT_DEFLATE_RATIO = 1100  # pln.md §12.4: of a compressed payload, methods 1 and 2
 LIMIT_PLANES = 2**28
 LIMIT_REFS = 2**24
 LIMIT_OBJECTS = 2**24
@@ -290,10 +300,12 @@ def check_bit_padding(data, nbits, what):
             raise PlnError("BAD_PAYLOAD", "%s: non-zero padding bits" % what)
 
 
-def decompress(method, raw_size, stored, what):
+def decompress(method, raw_size, stored, what, major):
     """§6 compression, with the §10.3 limits checked before inflating."""
-    if method not in (0, 1):
-        raise PlnError("BAD_COMPRESSION", "%s: compression method %d" % (what, method))
+    # pln.md §6 step 1: method 2 (Brotli) exists in version 4 only (Appendix A)
+    if method not in ((0, 1, 2) if major >= 4 else (0, 1)):
+        raise PlnError("BAD_COMPRESSION", "%s: compression method %d in a version %d file"
+                       % (what, method, major))
     if raw_size > LIMIT_RAW:
         raise PlnError("LIMIT_EXCEEDED", "%s: raw size %d above the limit" % (what, raw_size))
     if method == 0:
@@ -309,6 +321,8 @@ def decompress(method, raw_size, stored, what):
             "%s: raw size %d above %d x the %d stored bytes"
             % (what, raw_size, LIMIT_DEFLATE_RATIO, len(stored)),
         )
+    if method == 2:
+        return unbrotli(raw_size, stored, what)
     d = zlib.decompressobj()
     try:
         out = d.decompress(stored, raw_size + 1)  # never more than raw_size + 1
@@ -339,6 +353,82 @@ def decompress(method, raw_size, stored, what):
             "SIZE_MISMATCH", "%s: %d bytes after the zlib stream" % (what, len(d.unused_data))
         )
     return out
+
+
+BROTLI_STEP = 32768  # stored bytes given to the Brotli decoder per call
+
+
+class BrotliStop(Exception):
+    """The Brotli decoder reported an error on the input given from `at` on."""
+
+    def __init__(self, at):
+        Exception.__init__(self, at)
+        self.at = at
+
+
+def brotli_pass(brotli, raw_size, stored, what, one_by_one_from):
+    """Decode the stored bytes, giving them BROTLI_STEP at a time (one at a
+    time from `one_by_one_from`, if not None) and taking the output in the
+    binding's smallest blocks (output_buffer_limit=1: about 32 KiB a call),
+    so that decoding stops as soon as the output passes raw_size (pln.md §6:
+    at most raw_size + 1 bytes; SPEC_NOTES 25)."""
+    dec = brotli.Decompressor()
+    out = []
+    total = 0
+    given = 0  # stored bytes given to the decoder
+    at = 0
+    while not dec.is_finished():
+        data = b""
+        if given < len(stored) and dec.can_accept_more_data():
+            n = BROTLI_STEP
+            if one_by_one_from is not None:
+                n = 1 if given >= one_by_one_from else min(n, one_by_one_from - given)
+            at = given
+            data = stored[given:given + n]
+            given += len(data)
+        try:
+            block = dec.process(data, output_buffer_limit=1)
+        except brotli.error:
+            raise BrotliStop(at)
+        out.append(block)
+        total += len(block)
+        if total > raw_size:
+            raise PlnError("SIZE_MISMATCH", "%s: Brotli stream decompresses to more than raw size %d"
+                           % (what, raw_size))
+        if not data and not block and not dec.is_finished():
+            if given == len(stored):
+                raise PlnError("SIZE_MISMATCH", "%s: Brotli stream ends early" % what)
+            if not dec.can_accept_more_data():
+                raise RuntimeError("Brotli decoder takes no input and gives no output")
+    if given < len(stored):
+        raise PlnError("SIZE_MISMATCH", "%s: %d bytes after the Brotli stream"
+                       % (what, len(stored) - given))
+    if total != raw_size:
+        raise PlnError("SIZE_MISMATCH", "%s: Brotli stream decompresses to %d bytes, raw size %d"
+                       % (what, total, raw_size))
+    return b"".join(out)
+
+
+def unbrotli(raw_size, stored, what):
+    """pln.md §6 method 2: one Brotli stream (RFC 7932) that decompresses to
+    exactly raw_size bytes and ends with the last stored byte.  An error the
+    decoder reports is BAD_COMPRESSION; a stream the stored bytes end inside,
+    bytes after its end, or an output other than raw_size bytes is
+    SIZE_MISMATCH.  The binding reports bytes after the end of the stream as
+    a decoder error too, so a call that fails is replayed with its input
+    given one byte at a time: the decoder then finishes before the first byte
+    after the stream, or fails inside it."""
+    try:
+        import brotli
+    except ImportError:
+        raise SystemExit("plnread: compression method 2 (Brotli) needs the Python package 'brotli'")
+    try:
+        return brotli_pass(brotli, raw_size, stored, what, None)
+    except BrotliStop as stop:
+        try:
+            return brotli_pass(brotli, raw_size, stored, what, stop.at)
+        except BrotliStop:
+            raise PlnError("BAD_COMPRESSION", "%s: invalid Brotli stream" % what)
 
 
 # --------------------------------------------------------------------------
@@ -487,13 +577,13 @@ class Reader:
     # -- §5 header ---------------------------------------------------------
 
     def read_header(self, p):
-        # pln-3 §10.1: a major version other than 1, 2 or 3
+        # pln.md §5 step 2: a major version other than 1, 2, 3 or 4
         if len(p) >= 1 and p[0] not in READER_VERSIONS:
             raise PlnError("UNSUPPORTED_VERSION", "major version %d" % p[0])
         # the layout is chosen by the major version: that of §5 for 1 and 2
-        # (pln-2 §5), the compact one of pln-3 §5 for 3; every field is read
-        # (BAD_PAYLOAD) before any value is checked
-        if len(p) >= 1 and p[0] == 3:
+        # (pln-2 §5), the compact one of pln-3 §5 for 3 and 4 (pln.md §5);
+        # every field is read (BAD_PAYLOAD) before any value is checked
+        if len(p) >= 1 and p[0] >= 3:
             fields = self.parse_header_v3(p)
         else:
             fields = self.parse_header_v1(p)
@@ -580,7 +670,7 @@ class Reader:
         # pln-3 §5: the coding is checked as soon as the fixed part is read,
         # because it decides which fields follow
         if coding not in (0, 1, 2, 3):
-            raise PlnError("UNSUPPORTED_CODING", "coding %d in a version 3 file" % coding)
+            raise PlnError("UNSUPPORTED_CODING", "coding %d in a version %d file" % (coding, major))
         # h range only for codings 2 and 3 ("coding 2 or 3")
         h_min = h_max = 0.0
         if coding in (CODING_QUANTIZED, CODING_PREDICTED):
@@ -602,30 +692,39 @@ class Reader:
     # -- §8.1 objects ------------------------------------------------------
 
     def read_object(self, p, offset):
+        # pln.md §8 checks, in its order: the object limit; the head
+        # (BAD_PAYLOAD); name_length; the name and the transform (BAD_PAYLOAD);
+        # then index, parent, UTF-8 and the transform's values (BAD_OBJECT)
+        if len(self.objects) + 1 > LIMIT_OBJECTS:
+            raise PlnError("LIMIT_EXCEEDED", "more than %d objects" % LIMIT_OBJECTS)
         c = Cursor(p, "OBJT")
-        if self.major == 3:
+        if self.major >= 3:
             index, parent, flags, name_len = self.read_object_head_v3(c)
         else:
             head = c.take(12, "OBJT head")
             index, parent, flags, name_len = u32(head, 0), u32(head, 4), head[8], u16(head, 10)
-        if index != len(self.objects):
-            raise PlnError("BAD_OBJECT", "object index %d, expected %d" % (index, len(self.objects)))
-        if len(self.objects) + 1 > LIMIT_OBJECTS:
-            raise PlnError("LIMIT_EXCEEDED", "more than %d objects" % LIMIT_OBJECTS)
-        if parent != NO_PARENT and parent >= index:
-            raise PlnError("BAD_OBJECT", "parent %d is not an earlier object" % parent)
         if name_len > MAX_NAME_LENGTH:  # only a pln-3 varint can exceed it; checked before the name
             raise PlnError("BAD_OBJECT", "name_length %d above %d" % (name_len, MAX_NAME_LENGTH))
         raw_name = c.take(name_len, "name")
+        m = None
+        if flags & OBJ_HAS_TRANSFORM:
+            if self.major >= 4:
+                m = self.read_transform_v4(c)
+            else:
+                m = list(struct.unpack("<16d", c.take(128, "transform")))
+        if index != len(self.objects):
+            raise PlnError("BAD_OBJECT", "object index %d, expected %d" % (index, len(self.objects)))
+        if parent != NO_PARENT and parent >= index:
+            raise PlnError("BAD_OBJECT", "parent %d is not an earlier object" % parent)
         try:
             name = raw_name.decode("utf-8")
         except UnicodeDecodeError:
             raise PlnError("BAD_OBJECT", "name is not UTF-8")
         transform = None
-        if flags & OBJ_HAS_TRANSFORM:
-            m = list(struct.unpack("<16d", c.take(128, "transform")))
+        if m is not None:
             if not all(math.isfinite(v) for v in m):
                 raise PlnError("BAD_OBJECT", "transform entry not finite")
+            # pln.md Appendix A: checked in 1.0 to 3.4; not stored in 4.0
             if m[12:16] != [0.0, 0.0, 0.0, 1.0]:
                 raise PlnError("BAD_OBJECT", "transform last row %r is not 0 0 0 1" % m[12:16])
             transform = m
@@ -636,6 +735,28 @@ class Reader:
             "transform": transform,
         })
         self.chunk_list.append((offset, b"OBJT", index))
+
+    def read_transform_v4(self, c):
+        """pln.md §8, version 4: codes, a 3-byte bit string (§2.1, least
+        significant bit first) of twelve 2-bit codes, entry i's code being bit
+        2i + 2 * bit 2i+1 (0 is +0.0, 1 is 1.0, 2 an f32 follows, 3 an f64
+        follows), for m00 .. m23 row by row; then the f32/f64 values in entry
+        order.  The last row is 0 0 0 1, not stored.  A payload that ends
+        inside the codes or the values is BAD_PAYLOAD."""
+        codes = c.take(3, "transform codes")
+        bits = codes[0] | codes[1] << 8 | codes[2] << 16
+        m = []
+        for i in range(12):
+            code = (bits >> (2 * i)) & 0b11
+            if code == 0:
+                m.append(0.0)
+            elif code == 1:
+                m.append(1.0)
+            elif code == 2:
+                m.append(c.f32s(1, "transform value %d (f32)" % i)[0])  # widened exactly
+            else:
+                m.append(c.f64s(1, "transform value %d (f64)" % i)[0])
+        return m + [0.0, 0.0, 0.0, 1.0]
 
     def read_object_head_v3(self, c):
         """pln-3 §8.1: index, parent (varint32, 0 for a root, else the parent's
@@ -650,7 +771,7 @@ class Reader:
     # -- §7 plane table ----------------------------------------------------
 
     def read_planes(self, p, offset):
-        if self.major == 3:
+        if self.major >= 3:
             first, count, method, raw_size, stored = self.read_planes_head_v3(p)
         else:
             if len(p) < 20:
@@ -677,7 +798,7 @@ class Reader:
             if raw_size != expected:
                 raise PlnError("SIZE_MISMATCH",
                                "raw_size %d, %d planes take %d" % (raw_size, count, expected))
-        data = decompress(method, raw_size, stored, "PLNS data")
+        data = decompress(method, raw_size, stored, "PLNS data", self.major)
         base = len(self.planes)
         if self.coding == 0:
             vals = struct.unpack("<%df" % (3 * count), data)
@@ -791,7 +912,7 @@ class Reader:
     # -- §8.2 part groups --------------------------------------------------
 
     def read_group(self, p, offset):
-        if self.major == 3:
+        if self.major >= 3:
             index, obj, kind, method, raw_size, stored = self.read_group_head_v3(p)
         else:
             if len(p) < 16:
@@ -808,7 +929,7 @@ class Reader:
         if not known and self.minor <= READER_VERSIONS[self.major]:
             raise PlnError("UNKNOWN_GROUP_KIND",
                            "kind %d in a version %d.%d file" % (kind, self.major, self.minor))
-        body = decompress(method, raw_size, stored, "GRUP body")
+        body = decompress(method, raw_size, stored, "GRUP body", self.major)
 
         c = Cursor(body, "GRUP body")
         v2 = self.major >= 2  # pln-2 §8.7: varint bodies, in major 3 too (pln-3 §8.2)
@@ -1299,17 +1420,33 @@ class Reader:
     # -- §8.5 colours ------------------------------------------------------
 
     def read_colours(self, p):
+        # pln.md §10.1, checks in its order: a payload that ends inside the
+        # head or the colours (BAD_PAYLOAD); bytes after them, a group not
+        # read yet, a count other than its ref_count (BAD_COLOURS)
         if len(p) < 8:
             raise PlnError("BAD_PAYLOAD", "cOLR payload of %d bytes, under 8" % len(p))
         group, count = u32(p, 0), u32(p, 4)
+        # version 4: a payload of exactly 12 bytes is one colour for every
+        # reference, whatever the count; in 1.0 to 3.4 (Appendix A) always
+        # count x 4 bytes, so 12 bytes with a count above 1 end inside them
+        one_colour = self.major >= 4 and len(p) == 12
+        if not one_colour:
+            if len(p) < 8 + 4 * count:
+                raise PlnError("BAD_PAYLOAD", "cOLR payload of %d bytes ends inside %d colours"
+                               % (len(p), count))
+            if len(p) > 8 + 4 * count:
+                raise PlnError("BAD_COLOURS", "%d bytes after the %d colours"
+                               % (len(p) - 8 - 4 * count, count))
         if group >= len(self.groups):
             raise PlnError("BAD_COLOURS", "colours for group %d, %d defined" % (group, len(self.groups)))
         if count != self.group_refcounts[group]:
             raise PlnError("BAD_COLOURS", "%d colours for %d references"
                            % (count, self.group_refcounts[group]))
-        if len(p) != 8 + 4 * count:
-            raise PlnError("BAD_COLOURS", "cOLR payload of %d bytes for %d colours" % (len(p), count))
-        rgba = [list(p[8 + 4 * i:12 + 4 * i]) for i in range(count)]
+        if one_colour:
+            # reported as the per-reference form would be (SPEC_NOTES 28)
+            rgba = [list(p[8:12]) for _ in range(count)]
+        else:
+            rgba = [list(p[8 + 4 * i:12 + 4 * i]) for i in range(count)]
         self.colours.append({"group": group, "rgba": rgba})
 
     # -- pln.md §10.3 metadata ---------------------------------------------
@@ -1354,7 +1491,7 @@ class Reader:
                 raise PlnError("BAD_INDEX", "entry %d: offsets do not increase" % i)
             prev = off
             # pln-3 §8.6: "after the header" is at or after the chunk that follows PHDR
-            if self.major == 3 and off < self.after_header:
+            if self.major >= 3 and off < self.after_header:
                 raise PlnError("BAD_INDEX", "entry %d: offset %d before %d, the end of the header"
                                % (i, off, self.after_header))
             if off >= offset:
@@ -1371,7 +1508,7 @@ class Reader:
     # -- §4.4 end ----------------------------------------------------------
 
     def read_end(self, p):
-        if self.major == 3:
+        if self.major >= 3:
             self.read_end_v3(p)
         else:
             if len(p) != PEND_PAYLOAD_V1:
