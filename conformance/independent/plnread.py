@@ -358,38 +358,34 @@ def decompress(method, raw_size, stored, what, major):
 BROTLI_STEP = 32768  # stored bytes given to the Brotli decoder per call
 
 
-class BrotliStop(Exception):
-    """The Brotli decoder reported an error on the input given from `at` on."""
-
-    def __init__(self, at):
-        Exception.__init__(self, at)
-        self.at = at
-
-
-def brotli_pass(brotli, raw_size, stored, what, one_by_one_from):
-    """Decode the stored bytes, giving them BROTLI_STEP at a time (one at a
-    time from `one_by_one_from`, if not None) and taking the output in the
-    binding's smallest blocks (output_buffer_limit=1: about 32 KiB a call),
-    so that decoding stops as soon as the output passes raw_size (pln.md §6:
-    at most raw_size + 1 bytes; SPEC_NOTES 25)."""
+def unbrotli(raw_size, stored, what):
+    """pln.md §6 step 6, method 2: one Brotli stream (RFC 7932) that
+    decompresses to exactly raw_size bytes and ends with the last stored
+    byte.  An invalid stream and stored bytes after its end are
+    BAD_COMPRESSION (the binding itself reports the latter as a decoder
+    error); a stream the stored bytes end inside, or an output other than
+    raw_size bytes, is SIZE_MISMATCH.  The stored bytes are given
+    BROTLI_STEP at a time and the output taken in the binding's smallest
+    blocks (output_buffer_limit=1: about 32 KiB a call), and decoding stops
+    as soon as the output passes raw_size, so at most raw_size + 32 KiB is
+    held (pln.md §6 allows raw size + 16 MiB; SPEC_NOTES 25)."""
+    try:
+        import brotli
+    except ImportError:
+        raise SystemExit("plnread: compression method 2 (Brotli) needs the Python package 'brotli'")
     dec = brotli.Decompressor()
     out = []
     total = 0
     given = 0  # stored bytes given to the decoder
-    at = 0
     while not dec.is_finished():
         data = b""
         if given < len(stored) and dec.can_accept_more_data():
-            n = BROTLI_STEP
-            if one_by_one_from is not None:
-                n = 1 if given >= one_by_one_from else min(n, one_by_one_from - given)
-            at = given
-            data = stored[given:given + n]
+            data = stored[given:given + BROTLI_STEP]
             given += len(data)
         try:
             block = dec.process(data, output_buffer_limit=1)
         except brotli.error:
-            raise BrotliStop(at)
+            raise PlnError("BAD_COMPRESSION", "%s: invalid Brotli stream, or bytes after its end" % what)
         out.append(block)
         total += len(block)
         if total > raw_size:
@@ -401,34 +397,12 @@ def brotli_pass(brotli, raw_size, stored, what, one_by_one_from):
             if not dec.can_accept_more_data():
                 raise RuntimeError("Brotli decoder takes no input and gives no output")
     if given < len(stored):
-        raise PlnError("SIZE_MISMATCH", "%s: %d bytes after the Brotli stream"
+        raise PlnError("BAD_COMPRESSION", "%s: %d bytes after the Brotli stream"
                        % (what, len(stored) - given))
     if total != raw_size:
         raise PlnError("SIZE_MISMATCH", "%s: Brotli stream decompresses to %d bytes, raw size %d"
                        % (what, total, raw_size))
     return b"".join(out)
-
-
-def unbrotli(raw_size, stored, what):
-    """pln.md §6 method 2: one Brotli stream (RFC 7932) that decompresses to
-    exactly raw_size bytes and ends with the last stored byte.  An error the
-    decoder reports is BAD_COMPRESSION; a stream the stored bytes end inside,
-    bytes after its end, or an output other than raw_size bytes is
-    SIZE_MISMATCH.  The binding reports bytes after the end of the stream as
-    a decoder error too, so a call that fails is replayed with its input
-    given one byte at a time: the decoder then finishes before the first byte
-    after the stream, or fails inside it."""
-    try:
-        import brotli
-    except ImportError:
-        raise SystemExit("plnread: compression method 2 (Brotli) needs the Python package 'brotli'")
-    try:
-        return brotli_pass(brotli, raw_size, stored, what, None)
-    except BrotliStop as stop:
-        try:
-            return brotli_pass(brotli, raw_size, stored, what, stop.at)
-        except BrotliStop:
-            raise PlnError("BAD_COMPRESSION", "%s: invalid Brotli stream" % what)
 
 
 # --------------------------------------------------------------------------

@@ -182,37 +182,31 @@ def decompress(method: int, raw_size: int, stored: bytes, major: int) -> bytes:
 BROTLI_PIECE = 1 << 16  # stored bytes handed to the Brotli decoder at a time
 
 
-class _BrotliError(Exception):
-    """The decoder reported an error while it was given the piece starting at `start`."""
-
-    def __init__(self, start: int):
-        super().__init__(start)
-        self.start = start
-
-
-def _brotli_run(brotli, raw_size: int, stored: bytes, bytewise_from: int | None) -> bytes:
-    """One pass of §6 step 5 for method 2: the stored bytes are handed over in pieces (one byte at
-    a time from `bytewise_from` on), and the output is drained in blocks of at most ~32 KiB
-    (output_buffer_limit=1: the binding stops growing its buffer after one block), so that the
-    pass stops as soon as the output passes raw size (SPEC_NOTES 25)."""
+def brotli_decompress(raw_size: int, stored: bytes) -> bytes:
+    """§6 step 6, method 2: one Brotli stream (RFC 7932) of exactly raw size bytes ending with the
+    last stored byte. An invalid stream, and stored bytes after the stream's end, are
+    BAD_COMPRESSION; an output other than raw size bytes, or a stream the stored bytes end inside,
+    SIZE_MISMATCH. The stored bytes are handed over in pieces and the output drained in blocks of
+    at most about 32 KiB (output_buffer_limit=1: the binding stops growing its buffer after one
+    block), and decoding stops as soon as the output passes raw size, so this reader holds at
+    most raw size + 32 KiB (§6: at most raw size + 16 MiB; SPEC_NOTES 25)."""
+    try:
+        import brotli
+    except ImportError:
+        raise SystemExit("plnspec.py: compression method 2 (Brotli) needs the package 'brotli'")
     d = brotli.Decompressor()
     out = bytearray()
     pos = 0
-    start = 0
     while not d.is_finished():
         if d.can_accept_more_data() and pos < len(stored):
-            step = BROTLI_PIECE
-            if bytewise_from is not None:
-                step = 1 if pos >= bytewise_from else min(step, bytewise_from - pos)
-            start = pos
-            data = stored[pos:pos + step]
+            data = stored[pos:pos + BROTLI_PIECE]
             pos += len(data)
         else:
             data = b""  # output still held back by the block bound, or the input is all given
         try:
             block = d.process(data, output_buffer_limit=1)
-        except brotli.error:
-            raise _BrotliError(start) from None
+        except brotli.error:  # the binding also reports bytes after the stream's end so
+            fail("BAD_COMPRESSION", "invalid Brotli stream, or bytes after its end")
         out += block
         if len(out) > raw_size:
             fail("SIZE_MISMATCH", "decompresses to more than raw size")
@@ -221,30 +215,11 @@ def _brotli_run(brotli, raw_size: int, stored: bytes, bytewise_from: int | None)
                 fail("SIZE_MISMATCH", "the stored bytes end inside the Brotli stream")
             if not d.can_accept_more_data():
                 raise RuntimeError("the Brotli decoder neither gives output nor takes input")
-    if pos < len(stored):
-        fail("SIZE_MISMATCH", f"{len(stored) - pos} stored bytes after the Brotli stream")
+    if pos < len(stored):  # the stream ended at the end of a piece, and more pieces follow
+        fail("BAD_COMPRESSION", f"{len(stored) - pos} stored bytes after the Brotli stream")
     if len(out) != raw_size:
         fail("SIZE_MISMATCH", f"decompresses to {len(out)} bytes, raw size {raw_size}")
     return bytes(out)
-
-
-def brotli_decompress(raw_size: int, stored: bytes) -> bytes:
-    """§6 method 2: one Brotli stream (RFC 7932) of exactly raw size bytes ending with the last
-    stored byte. The binding reports bytes after the stream's end (SIZE_MISMATCH) as a decoder
-    error, like an invalid stream (BAD_COMPRESSION); so where it reports an error, the piece it was
-    given is handed over again one byte at a time, which stops at the stream's end and shows
-    which of the two it was."""
-    try:
-        import brotli
-    except ImportError:
-        raise SystemExit("plnspec.py: compression method 2 (Brotli) needs the package 'brotli'")
-    try:
-        return _brotli_run(brotli, raw_size, stored, None)
-    except _BrotliError as first:
-        try:
-            return _brotli_run(brotli, raw_size, stored, first.start)
-        except _BrotliError:
-            fail("BAD_COMPRESSION", "invalid Brotli stream")
 
 
 # ---------------------------------------------------------------------------------------------
