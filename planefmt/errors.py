@@ -37,13 +37,13 @@ _CATALOGUE = [
     Code("TRAILING_DATA", "error", "bytes follow the PEND chunk"),
     Code("BAD_PAYLOAD", "error", "a chunk payload does not match its declared structure"),
     # header (spec §5)
-    Code("UNSUPPORTED_VERSION", "error", "the major version is not 1, 2 or 3"),
+    Code("UNSUPPORTED_VERSION", "error", "the major version is not 1, 2, 3 or 4"),
     Code("NEWER_MINOR_VERSION", "info", "the file has a newer minor version; unknown parts were ignored"),
     Code("UNSUPPORTED_CODING", "error", "the triplet coding is unknown or its bit widths are invalid"),
     Code("BAD_HEADER_VALUE", "error", "a header field is out of its allowed range"),
     Code("COUNT_MISMATCH", "error", "header counts disagree with the chunks present"),
     # payloads (spec §6–§10)
-    Code("BAD_COMPRESSION", "error", "unknown compression method or corrupt deflate stream"),
+    Code("BAD_COMPRESSION", "error", "unknown compression method, or a corrupt deflate or Brotli stream"),
     Code("SIZE_MISMATCH", "error", "a payload's size disagrees with its declared count or raw size"),
     Code("LIMIT_EXCEEDED", "error", "a declared size exceeds the reader's configured limits"),
     Code("BAD_TRIPLET", "error", "a plane triplet is NaN, infinite or outside its range (float or quantized)"),

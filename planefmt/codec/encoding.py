@@ -130,15 +130,13 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     group that uses them: in first-use order, or with ``compact`` sorted
     within each object's block. Options as for :func:`encode_mesh`.
 
-    ``compress`` (the default, as ``pln convert``): payloads deflated where
-    that saves bytes. ``compact`` (the default, as ``pln convert``; False
-    writes version 1.0): a version 3.0 file (spec/pln.md): quantized planes in
-    whichever of the bit-packed and the predicted coding takes fewer bytes,
-    group references, cells and trees as varints, chunk heads as varints. The
-    planes and the decoded surface are those of the version 1 file. A scene
-    with sealed groups (closed bodies no BSP tree decodes faithfully) is
-    written as version 3.1 whatever ``compact`` says: version 1.0 has no such
-    kind, and a writer uses the lowest version that covers what it writes.
+    ``compress`` (the default, as ``pln convert``): payloads deflated or Brotli-compressed, whichever
+    is smaller, where that saves bytes. ``compact`` (the default, as ``pln convert``; False writes
+    version 1.0): a version 4.0 file (spec/pln.md): quantized planes in whichever of the bit-packed
+    and the predicted coding takes fewer bytes, group references, cells and trees as varints, chunk
+    heads as varints, transforms entry by entry, a group's one colour once. The planes and the
+    decoded surface are those of the version 1 file. A scene with sealed or shell groups is written
+    as version 4.0 whatever ``compact`` says: version 1.0 has no such kinds.
     """
     worlds = _world_transforms(scene.nodes)
     meshes = [i for i, n in enumerate(scene.nodes) if n.mesh is not None and len(n.mesh.faces)]
@@ -214,8 +212,6 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     """Write the scene's ``objects`` (those of nodes ``meshes``) in the chosen coding; its header."""
     sealed = any(g.kind == GroupKind.SEALED for o in objects for g in o.groups)
     shells = any(g.kind in SHELL_KINDS for o in objects for g in o.groups)
-    trees = any(g.kind == GroupKind.SHELL_TREE for o in objects for g in o.groups)
-    parallelograms = any(g.kind == GroupKind.SHELL_TREE_PARALLELOGRAM for o in objects for g in o.groups)
     compact = compact or sealed or shells
     table = quantize.roundtrip(np.concatenate([o.triplets for o in objects]), choice.coding,
                                choice.quantization)
@@ -238,8 +234,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     if compact and stored.quantized:
         stored = min((Coding.QUANTIZED, Coding.PREDICTED), key=lambda c: _table_bytes(rows, c, choice.quantization,
                                                                                        compress))
-    header = Header(version=((3, 4) if parallelograms else (3, 3) if trees else (3, 2) if shells else (3, 1) if sealed else (3, 0)) if compact
-                    else (1, 0), lossy=choice.lossy, coding=stored,
+    header = Header(version=(4, 0) if compact else (1, 0), lossy=choice.lossy, coding=stored,
                     quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
                     tolerance=float(tolerance), error_bound=choice.error_bound,
                     plane_count=len(rows), object_count=len(scene.nodes),

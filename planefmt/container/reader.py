@@ -184,7 +184,7 @@ class Reader:
                 group = _with_planes(group, self._table[group.refs])
             return group
         if t == schema.COLR:
-            return records.decode_colours(raw.payload, self._group_refs)
+            return records.decode_colours(raw.payload, self._group_refs, self.header.version[0])
         if t == schema.META:
             if self._listed:
                 raise FormatError("mETA after an OBJT, PLNS or GRUP chunk: metadata precedes the geometry",
@@ -258,7 +258,7 @@ class Reader:
         end = self._fp.seek(0, os.SEEK_END) - self._base
         major = self.header.version[0]
         stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
-        if major == 3 and end >= 12:
+        if major >= 3 and end >= 12:
             # A version 3 file without an index ends in an empty PEND (spec §4.4).
             self._fp.seek(self._base + end - 12)
             if self._fp.read(12) == chunk_bytes(schema.PEND, b""):

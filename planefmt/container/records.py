@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 import zlib
 
+import brotli
+
 import construct as cs
 import numpy as np
 
@@ -21,9 +23,9 @@ from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, TREE_KINDS, UP_A
 from .shellfields import _decode_shell, _decode_shell_tree, _shell_body, _shell_tree_body
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 4}
+VERSIONS = {1: 0, 2: 0, 3: 4, 4: 0}
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
-CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3)}
+CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
 KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3),
@@ -63,7 +65,7 @@ def encode_header(h: Header) -> bytes:
         version_major=h.version[0], version_minor=h.version[1], flags=flags, coding=int(h.coding),
         bits_nu=q.bits_nu if q else 0, bits_phi=q.bits_phi if q else 0, bits_h=q.bits_h if q else 0,
         units=int(h.units), extra=h.extra)
-    if h.version[0] == 3:
+    if h.version[0] >= 3:
         return schema.Header3.build(dict(
             fields, h_range=[q.h_min, q.h_max] if h.coding.quantized else None,
             bbox=None if h.bbox is None else [*_f32_toward(bbox[0], -math.inf, "a bounding box coordinate"),
@@ -97,7 +99,7 @@ def _f32_up(value: float, name: str) -> float:
 
 def header_size(major: int) -> int:
     """The smallest PHDR payload of a version ``major`` file."""
-    return schema.HEADER3_FIXED if major == 3 else schema.HEADER_SIZE
+    return schema.HEADER3_FIXED if major >= 3 else schema.HEADER_SIZE
 
 
 def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
@@ -106,14 +108,14 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
         raise FormatError("PHDR is too short to hold a version", code="BAD_PAYLOAD")
     major, minor = payload[0], payload[1]
     if major not in VERSIONS:
-        raise VersionError(f"major version {major} is not supported (this reader reads 1.x, 2.x and 3.x)")
+        raise VersionError(f"major version {major} is not supported (this reader reads 1.x, 2.x, 3.x and 4.x)")
     if len(payload) < header_size(major):
         raise FormatError(f"PHDR is {len(payload)} bytes, version {major} needs {header_size(major)}",
                           code="BAD_PAYLOAD")
     findings = []
     if minor > VERSIONS[major]:
         findings.append(("NEWER_MINOR_VERSION", f"file is version {major}.{minor}; read as {major}.{VERSIONS[major]}"))
-    if major == 3:
+    if major >= 3:
         # The coding decides which fields follow the fixed part, so it is checked before they are read.
         if payload[4] not in CODINGS[major]:
             raise VersionError(f"triplet coding {payload[4]} is not supported in a version {major} file",
@@ -157,8 +159,8 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
 
 def leading_index(payload: bytes, major: int, width: int) -> int:
     """The number an OBJT, PLNS or GRUP payload starts with (index or first plane): a u32 / u64 of
-    ``width`` bytes in versions 1 and 2, a varint in version 3."""
-    if major == 3:
+    ``width`` bytes in versions 1 and 2, a varint in versions 3 and 4."""
+    if major >= 3:
         return _parse(schema.Varint, bytes(payload[:schema.VARINT_MAX_BYTES]), "chunk head")
     return int.from_bytes(payload[:width], "little")
 
@@ -171,20 +173,37 @@ def leading_index(payload: bytes, major: int, width: int) -> int:
 SHELL_TREE_LEVEL = 6
 
 
-def pack(data: bytes, compress: bool, level: int = 9) -> tuple[int, bytes]:
-    """(compression method, stored bytes): deflate at ``level`` only where it saves bytes."""
+def pack(data: bytes, compress: bool, level: int = 9, brotli_allowed: bool = False) -> tuple[int, bytes]:
+    """(compression method, stored bytes): deflate at ``level``, or Brotli where ``brotli_allowed``
+    (version 4), whichever is smallest, and only where that saves bytes and stays within the ratio
+    every reader accepts (spec §6)."""
+    best = (schema.COMPRESSION_NONE, data)
     if compress:
-        z = zlib.compress(data, level)
-        if len(z) < len(data):
-            return schema.COMPRESSION_ZLIB, z
-    return schema.COMPRESSION_NONE, data
+        candidates = [(schema.COMPRESSION_ZLIB, zlib.compress(data, level))]
+        if brotli_allowed:
+            candidates.append((schema.COMPRESSION_BROTLI, brotli.compress(data, quality=_brotli_quality(len(data)))))
+        for method, stored in candidates:
+            if len(stored) < len(best[1]) and len(data) <= schema.MAX_WRITTEN_RATIO * len(stored):
+                best = (method, stored)
+    return best
 
 
-def unpack(method: int, stored: bytes, raw_size: int, limits: Limits) -> bytes:
-    """The raw bytes of a stored payload, checked in the order of spec/pln.md §6, with the deflate-bomb
-    caps of spec §12.4: the method (a defect of the file) before the reader's own limits."""
-    if method not in (schema.COMPRESSION_NONE, schema.COMPRESSION_ZLIB):
-        raise FormatError(f"unknown compression method {method}", code="BAD_COMPRESSION")
+#: Brotli's quality 11 (its densest) by raw size: it takes about 1 s a megabyte, so that larger
+#: payloads drop to quality 9 (smooth_dense/bun_zipper.ply's 0.4 MB shell tree at draco-14's error).
+BROTLI_DENSEST_BYTES = 256 * 1024
+
+
+def _brotli_quality(size: int) -> int:
+    return 11 if size <= BROTLI_DENSEST_BYTES else 9
+
+
+def unpack(method: int, stored: bytes, raw_size: int, limits: Limits, major: int = 3) -> bytes:
+    """The raw bytes of a stored payload, checked in the order of spec/pln.md §6, with the decompression-bomb
+    caps of spec §12.4: the method (a defect of the file) before the reader's own limits. Brotli
+    (method 2) exists from version 4 on."""
+    methods = (schema.COMPRESSION_NONE, schema.COMPRESSION_ZLIB) + ((schema.COMPRESSION_BROTLI,) if major >= 4 else ())
+    if method not in methods:
+        raise FormatError(f"unknown compression method {method} in a version {major} file", code="BAD_COMPRESSION")
     if raw_size > limits.max_raw_size:
         raise LimitError(f"declared raw size {raw_size} exceeds the limit {limits.max_raw_size}")
     if method == schema.COMPRESSION_NONE:
@@ -194,6 +213,8 @@ def unpack(method: int, stored: bytes, raw_size: int, limits: Limits) -> bytes:
     if raw_size > max(len(stored), 1) * limits.max_compression_ratio:
         raise LimitError(f"declared raw size {raw_size} is over {limits.max_compression_ratio}x "
                          f"the {len(stored)} stored bytes")
+    if method == schema.COMPRESSION_BROTLI:
+        return _unbrotli(bytes(stored), raw_size)
     d = zlib.decompressobj()
     try:
         raw = d.decompress(stored, raw_size + 1)
@@ -205,12 +226,39 @@ def unpack(method: int, stored: bytes, raw_size: int, limits: Limits) -> bytes:
     return raw
 
 
+#: Stored bytes fed to the Brotli decoder at a time: one meta-block yields at most 16 MiB, so checking
+#: the output after each piece holds it to raw size + 16 MiB (spec §6).
+_BROTLI_PIECE = 64 * 1024
+
+
+def _unbrotli(stored: bytes, raw_size: int) -> bytes:
+    """A Brotli stream (spec §6, method 2) that must decompress to exactly ``raw_size`` bytes and end
+    with the last stored byte."""
+    d = brotli.Decompressor()
+    out: list[bytes] = []
+    made = 0
+    try:
+        for start in range(0, len(stored), _BROTLI_PIECE):
+            if d.is_finished():
+                raise FormatError("bytes after the end of the Brotli stream", code="BAD_COMPRESSION")
+            piece = d.process(stored[start:start + _BROTLI_PIECE])
+            made += len(piece)
+            if made > raw_size:
+                raise FormatError(f"Brotli stream decompresses to more than {raw_size} bytes", code="SIZE_MISMATCH")
+            out.append(piece)
+    except brotli.error as exc:
+        raise FormatError(f"corrupt Brotli stream, or bytes after its end ({exc})", code="BAD_COMPRESSION") from None
+    if not d.is_finished() or made != raw_size:
+        raise FormatError(f"Brotli stream does not decompress to exactly {raw_size} bytes", code="SIZE_MISMATCH")
+    return b"".join(out)
+
+
 # spec §7 Plane table -------------------------------------------------------------------------
 
 def encode_planes(first: int, triplets: np.ndarray, header: Header, compress: bool) -> bytes:
     raw = quantize.encode_payload(triplets, header.coding, header.quantization)
-    method, stored = pack(raw, compress)
-    if header.version[0] == 3:
+    method, stored = pack(raw, compress, brotli_allowed=header.version[0] >= 4)
+    if header.version[0] >= 3:
         return schema.PlaneBlock3.build(dict(first=first, count=len(triplets), compression=method,
                                              raw_size=len(raw), data=stored))
     return schema.PlaneBlock.build(dict(first=first, count=len(triplets), compression=method,
@@ -219,7 +267,7 @@ def encode_planes(first: int, triplets: np.ndarray, header: Header, compress: bo
 
 def decode_planes(payload: bytes, header: Header, expected_first: int, limits: Limits) -> PlaneBlock:
     # Only the head goes through construct: the data stays a zero-copy view.
-    if header.version[0] == 3:
+    if header.version[0] >= 3:
         r = _parse(schema.PlaneBlock3, bytes(payload[:schema.PLANE_BLOCK3_MAX_HEAD]), "PLNS")
         start = r.data_offset
     else:
@@ -242,7 +290,7 @@ def decode_planes(payload: bytes, header: Header, expected_first: int, limits: L
     elif r.raw_size != expected:
         raise FormatError(f"raw size {r.raw_size} != {expected} bytes for {r.count} planes",
                           code="SIZE_MISMATCH")
-    raw = unpack(r.compression, memoryview(payload)[start:], r.raw_size, limits)
+    raw = unpack(r.compression, memoryview(payload)[start:], r.raw_size, limits, header.version[0])
     triplets = quantize.decode_payload(raw, r.count, header.coding, header.quantization)
     return PlaneBlock(first=r.first, triplets=triplets)
 
@@ -253,23 +301,57 @@ def encode_object(o: ObjectRecord, major: int = 1) -> bytes:
     name = o.name.encode("utf-8")
     if len(name) > 0xFFFF:
         raise PlnError(f"object name is {len(name)} bytes, at most 65535", code="BAD_OBJECT")
-    t = None if o.transform is None else np.asarray(o.transform, dtype="<f8").reshape(4, 4).tobytes()
-    flags = schema.OBJECT_HAS_TRANSFORM if t is not None else 0
-    if major == 3:
+    m = None if o.transform is None else np.asarray(o.transform, dtype=np.float64).reshape(4, 4)
+    flags = schema.OBJECT_HAS_TRANSFORM if m is not None else 0
+    if major >= 3:
         head = dict(index=o.index, parent=0 if o.parent is None else o.parent + 1, flags=flags, name_length=len(name))
-        return schema.Object3.build(dict(head=head, name=name, transform=t, extra=b""))
+        if major >= 4:
+            return schema.Object4.build(dict(head=head, name=name, transform=None if m is None else _transform4(m),
+                                             extra=b""))
+        return schema.Object3.build(dict(head=head, name=name, transform=None if m is None else m.astype("<f8").tobytes(),
+                                         extra=b""))
     return schema.Object.build(dict(
         index=o.index, parent=NO_PARENT if o.parent is None else o.parent,
-        flags=flags, reserved=b"\0", name_length=len(name), name=name, transform=t, extra=b""))
+        flags=flags, reserved=b"\0", name_length=len(name), name=name,
+        transform=None if m is None else m.astype("<f8").tobytes(), extra=b""))
+
+
+def _transform4(m: np.ndarray) -> dict:
+    """Spec §8, version 4: each entry of the top three rows with the shortest code that holds it."""
+    if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
+        raise PlnError("a transform's last row must be 0 0 0 1", code="BAD_OBJECT")
+    entries = m[:3].reshape(-1)
+    f32 = entries.astype(np.float32)
+    exact32 = f32.astype(np.float64) == entries
+    zero = (entries == 0.0) & ~np.signbit(entries)
+    codes = np.where(zero, 0, np.where(entries == 1.0, 1, np.where(exact32, 2, 3)))
+    bits = sum(int(c) << (2 * i) for i, c in enumerate(codes))
+    values = b"".join(f32[i].astype("<f4").tobytes() if c == 2 else entries[i].astype("<f8").tobytes()
+                      for i, c in enumerate(codes) if c >= 2)
+    return dict(codes=bits.to_bytes(schema.TRANSFORM_CODE_BYTES, "little"), values=values)
+
+
+def _transform_from4(t) -> np.ndarray:
+    codes = schema.transform_codes(t.codes)
+    values = memoryview(bytes(t["values"]))
+    entries, pos = [], 0
+    for c in codes:
+        if c < 2:
+            entries.append(float(c))
+        else:
+            size = schema.TRANSFORM_VALUE_SIZES[c]
+            entries.append(float(np.frombuffer(values[pos:pos + size], dtype="<f4" if c == 2 else "<f8")[0]))
+            pos += size
+    return np.vstack([np.array(entries, dtype=np.float64).reshape(3, 4), [0.0, 0.0, 0.0, 1.0]])
 
 
 def decode_object(payload: bytes, expected_index: int, major: int = 1) -> ObjectRecord:
-    if major == 3:
+    if major >= 3:
         # The head first: a name length over the cap is BAD_OBJECT before the name is looked for.
         head = _parse(schema.Object3Head, bytes(payload[:3 * schema.VARINT_MAX_BYTES + 1]), "OBJT")
         if head.name_length > schema.OBJECT3_MAX_NAME:
             raise FormatError(f"object name of {head.name_length} bytes, at most 65535", code="BAD_OBJECT")
-        r = _parse(schema.Object3, payload, "OBJT")
+        r = _parse(schema.Object4 if major >= 4 else schema.Object3, payload, "OBJT")
         index, parent = head.index, None if head.parent == 0 else head.parent - 1
     else:
         r = _parse(schema.Object, payload, "OBJT")
@@ -284,7 +366,10 @@ def decode_object(payload: bytes, expected_index: int, major: int = 1) -> Object
         raise FormatError("object name is not valid UTF-8", code="BAD_OBJECT") from None
     transform = None
     if r.transform is not None:
-        transform = np.frombuffer(r.transform, dtype="<f8").reshape(4, 4).astype(np.float64)
+        if major >= 4:
+            transform = _transform_from4(r.transform)
+        else:
+            transform = np.frombuffer(r.transform, dtype="<f8").reshape(4, 4).astype(np.float64)
         if not np.isfinite(transform).all() or not np.array_equal(transform[3], [0, 0, 0, 1]):
             raise FormatError("transform is not a finite affine matrix (last row 0 0 0 1)", code="BAD_OBJECT")
     return ObjectRecord(index=index, name=name, parent=parent, transform=transform)
@@ -295,13 +380,13 @@ def decode_object(payload: bytes, expected_index: int, major: int = 1) -> Object
 def encode_group(g: PartGroup, compress: bool, major: int = 1) -> bytes:
     """The GRUP payload; ``major`` 2 and 3 write the varint body of spec §9.2, 3 with the varint
     head of 3.0 (spec §9.1, §9.2; version 1's u32 body: Appendix A.1)."""
-    if g.facets is not None and major != 3:
+    if g.facets is not None and major < 3:
         raise PlnError("sealed groups need version 3.1", code="UNKNOWN_GROUP_KIND")
-    if g.shell is not None and major != 3:
+    if g.shell is not None and major < 3:
         raise PlnError("shell groups need version 3.2", code="UNKNOWN_GROUP_KIND")
     body = _compact_body(g) if major >= 2 else _body(g)
-    method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9)
-    if major == 3:
+    method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9, brotli_allowed=major >= 4)
+    if major >= 3:
         return schema.GroupHead3.build(dict(index=g.index, object=g.object, kind=int(g.kind), compression=method,
                                             raw_size=len(body), body=stored))
     return schema.GroupHead.build(dict(index=g.index, object=g.object, kind=int(g.kind), compression=method,
@@ -365,7 +450,7 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
                  minor: int, limits: Limits, major: int = 1) -> tuple[PartGroup, list[tuple[str, str]]]:
     """A part group of a version ``major``.``minor`` file, checked against the objects and planes
     defined so far."""
-    if major == 3:
+    if major >= 3:
         head = _parse(schema.GroupHead3, payload, "GRUP")
     elif len(payload) < schema.GROUP_HEAD:
         raise FormatError("GRUP payload is shorter than its 16-byte head", code="BAD_PAYLOAD")
@@ -383,7 +468,7 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
             raise FormatError(f"unknown part group kind {head.kind} in a version {major}.{minor} file",
                               code="UNKNOWN_GROUP_KIND")
         findings.append(("SKIPPED_GROUP_KIND", f"group {head.index} has kind {head.kind} of a newer minor version"))
-    body = unpack(head.compression, bytes(head.body), head.raw_size, limits)
+    body = unpack(head.compression, bytes(head.body), head.raw_size, limits, major)
     if major >= 2:
         group = _decode_compact(head, body, planes, limits, kinds)
         return group, findings
@@ -590,20 +675,27 @@ def check_tree(tokens: np.ndarray, count: int) -> None:
 
 # spec §10.1 Colours ---------------------------------------------------------------------------
 
-def encode_colours(c: Colours) -> bytes:
+def encode_colours(c: Colours, major: int = 1) -> bytes:
+    """A cOLR payload; from version 4 on, a group in one colour stores it once (spec §10.1)."""
     rgba = np.ascontiguousarray(c.rgba, dtype=np.uint8).reshape(-1, 4)
+    if major >= 4 and len(rgba) > 1 and (rgba == rgba[0]).all():
+        return schema.ColoursHead.build(dict(group=c.group, count=len(rgba))) + rgba[0].tobytes()
     return schema.Colours.build(dict(group=c.group, count=len(rgba), rgba=rgba.tobytes()))
 
 
-def decode_colours(payload: bytes, group_refs: dict[int, int]) -> Colours:
+def decode_colours(payload: bytes, group_refs: dict[int, int], major: int = 1) -> Colours:
     """A cOLR chunk, checked against ``group_refs``: the colour count of each group read so far."""
-    r = _parse(schema.Colours, payload, "cOLR")
-    if len(payload) != 8 + 4 * r.count:
-        raise FormatError("cOLR size does not match its count", code="BAD_COLOURS")
-    if r.group not in group_refs or group_refs[r.group] != r.count:
-        raise FormatError(f"cOLR for group {r.group} does not match a preceding group's references",
+    head = _parse(schema.ColoursHead, bytes(payload[:8]), "cOLR")
+    uniform = major >= 4 and len(payload) == 12
+    if not uniform:
+        r = _parse(schema.Colours, payload, "cOLR")
+        if len(payload) != 8 + 4 * r.count:
+            raise FormatError("cOLR size does not match its count", code="BAD_COLOURS")
+    if head.group not in group_refs or group_refs[head.group] != head.count:
+        raise FormatError(f"cOLR for group {head.group} does not match a preceding group's references",
                           code="BAD_COLOURS")
-    return Colours(group=r.group, rgba=np.frombuffer(r.rgba, dtype=np.uint8).reshape(-1, 4).copy())
+    rgba = np.frombuffer(bytes(payload[8:]), dtype=np.uint8).reshape(-1, 4)
+    return Colours(group=head.group, rgba=np.repeat(rgba, head.count, axis=0) if uniform else rgba.copy())
 
 
 # spec §10.3 Metadata ------------------------------------------------------------------------
@@ -662,20 +754,20 @@ def decode_index(payload: bytes, index_offset: int, first_chunk: int = 8 + 12 + 
 
 
 def encode_end(index_offset: int, major: int = 1) -> bytes:
-    """The PEND payload; version 3 leaves it empty when there is no index (spec §4.4)."""
-    if major == 3 and not index_offset:
+    """The PEND payload; versions 3 and 4 leave it empty when there is no index (spec §4.4)."""
+    if major >= 3 and not index_offset:
         return b""
     return schema.End.build(dict(index_offset=index_offset))
 
 
 def decode_end(payload: bytes, major: int = 1) -> int:
-    sizes = schema.END3_SIZES if major == 3 else (schema.END_SIZE,)
+    sizes = schema.END3_SIZES if major >= 3 else (schema.END_SIZE,)
     if len(payload) not in sizes:
         raise FormatError(f"PEND payload is {len(payload)} bytes, not {' or '.join(map(str, sizes))}",
                           code="BAD_PAYLOAD")
     if not payload:
         return 0
     index_offset = schema.End.parse(payload).index_offset
-    if major == 3 and not index_offset:
-        raise FormatError("a version 3 PEND of 8 bytes must point at the index, not 0", code="BAD_INDEX")
+    if major >= 3 and not index_offset:
+        raise FormatError("a version 3 or 4 PEND of 8 bytes must point at the index, not 0", code="BAD_INDEX")
     return index_offset

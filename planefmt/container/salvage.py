@@ -171,7 +171,7 @@ class _Salvager:
         elif t == schema.GRUP:
             self._take_group(chunk)
         elif t == schema.COLR:
-            self.out.records.append(records.decode_colours(chunk.payload, self.group_refs))
+            self.out.records.append(records.decode_colours(chunk.payload, self.group_refs, self.out.header.version[0]))
         elif t == schema.META:
             # Salvage keeps what it can read wherever it is: a late or repeated keyword is no loss.
             self.out.records.append(records.decode_metadata(chunk.payload))

@@ -113,6 +113,10 @@ HEADER_SIZE = 108
 # spec §6 Compression of PLNS data and GRUP bodies
 COMPRESSION_NONE = 0
 COMPRESSION_ZLIB = 1
+#: Version 4.0 and later: one Brotli stream (RFC 7932).
+COMPRESSION_BROTLI = 2
+#: Largest raw size / stored size a writer stores (spec §6): every reader within spec §12.4's limits reads it.
+MAX_WRITTEN_RATIO = 1024
 
 # spec Appendix A.1 Plane table head (PLNS) of versions 1 and 2
 PlaneBlock = cs.Struct(
@@ -207,6 +211,11 @@ Colours = cs.Struct(
     "count" / cs.Int32ul,
     "rgba" / cs.Bytes(cs.this.count * 4),
 )
+#: The head of every cOLR; in version 4 a payload of this head and 4 bytes is one colour for all.
+ColoursHead = cs.Struct(
+    "group" / cs.Int32ul,
+    "count" / cs.Int32ul,
+)
 
 # spec §10.3 Metadata (mETA, ancillary): a keyword of printable ASCII, a NUL, a UTF-8 value
 Metadata = cs.Struct(
@@ -269,6 +278,30 @@ Object3 = cs.Struct(
     "head" / Object3Head,
     "name" / cs.Bytes(cs.this.head.name_length),
     "transform" / cs.If(cs.this.head.flags & OBJECT_HAS_TRANSFORM, cs.Bytes(128)),
+    "extra" / cs.GreedyBytes,
+)
+
+# spec §8 Objects of version 4: the transform's top three rows entry by entry, each a 2-bit code
+# (0: +0.0, 1: 1.0, 2: an f32 follows, 3: an f64 follows) of a 3-byte bit string, then the values.
+TRANSFORM_CODE_BYTES = 3
+TRANSFORM_ENTRIES = 12
+TRANSFORM_VALUE_SIZES = (0, 0, 4, 8)
+
+
+def transform_codes(codes: bytes) -> list[int]:
+    """The twelve 2-bit codes of a version 4 transform (bit 2i + 2 * bit 2i + 1 of the bit string)."""
+    bits = int.from_bytes(bytes(codes), "little")
+    return [(bits >> (2 * i)) & 3 for i in range(TRANSFORM_ENTRIES)]
+
+
+Transform4 = cs.Struct(
+    "codes" / cs.Bytes(TRANSFORM_CODE_BYTES),
+    "values" / cs.Bytes(lambda ctx: sum(TRANSFORM_VALUE_SIZES[c] for c in transform_codes(ctx.codes))),
+)
+Object4 = cs.Struct(
+    "head" / Object3Head,
+    "name" / cs.Bytes(cs.this.head.name_length),
+    "transform" / cs.If(cs.this.head.flags & OBJECT_HAS_TRANSFORM, Transform4),
     "extra" / cs.GreedyBytes,
 )
 

@@ -80,7 +80,7 @@ class Writer:
         self._version = tuple(header.version)
         declared = (header.plane_count, header.object_count, header.group_count)
         # Version 3 counts are varints: written up front if the caller declares them, never patched.
-        self._declared = declared if self._major == 3 and None not in declared else None
+        self._declared = declared if self._major >= 3 and None not in declared else None
         if self._declared is None:
             header = dataclasses.replace(header, plane_count=None, object_count=None, group_count=None)
         self._header = header
@@ -205,7 +205,7 @@ class Writer:
         rgba = np.asarray(rgba, dtype=np.uint8).reshape(-1, 4)
         if not 0 <= group < len(self._groups) or self._groups[group] != len(rgba):
             raise PlnError("colours need a written group and one colour per reference", code="BAD_COLOURS")
-        self._emit(schema.COLR, records.encode_colours(Colours(group, rgba)))
+        self._emit(schema.COLR, records.encode_colours(Colours(group, rgba), self._major))
 
     def add_metadata(self, key: str, value: str) -> None:
         """Write a mETA chunk (spec §10.3): ``key`` = ``value``, each key once, before any object,
@@ -262,7 +262,7 @@ class Writer:
                                f"{self._declared[2]} groups; {actual[0]}, {actual[1]}, {actual[2]} were written",
                                code="COUNT_MISMATCH")
             self._emit(schema.PEND, records.encode_end(index_offset, self._major))
-            if self._major != 3:
+            if self._major < 3:
                 self._patch_counts()
             self._fp.flush()
             if self._path is not None:
