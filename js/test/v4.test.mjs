@@ -188,11 +188,16 @@ const cube3 = chunksOf(CUBE).filter((c) => c.type !== 'iNDX').map((c) => (c.type
 const cube4 = chunksOf(upgrade(CUBE));
 const cubeRefs = readNode(CUBE).container.groups[0].refs.length;
 
-/** cube4 with chunk `type` replaced (or, with `after`, a chunk added after it). @param {string} type @param {Uint8Array} payload */
-function cubeWith(type, payload, { after = false, chunks = cube4 } = {}) {
+/**
+ * cube4 (or `chunks`) with chunk `type` replaced, or, with `after`, a chunk of type `after` added
+ * after it.
+ * @param {string} type @param {Uint8Array} payload
+ * @param {{after?: string, chunks?: Chunk[]}} [options]
+ */
+function cubeWith(type, payload, { after = '', chunks = cube4 } = {}) {
   const out = [];
   for (const ch of chunks) {
-    if (ch.type === type && after) out.push(ch, { type: after === true ? type : after, payload });
+    if (ch.type === type && after) out.push(ch, { type: after, payload });
     else out.push(ch.type === type ? { type, payload } : ch);
   }
   return assemble(out);
