@@ -80,8 +80,8 @@ def finish(layout: Layout, index: bool = True, major: int = 1) -> Layout:
 
 def stored_header(h: Header) -> Header:
     """The header values a reader gets back: version 3 stores the bbox rounded outward to float32 and
-    tolerance and error bound rounded up (spec §5), written out here from that rule."""
-    if h.version[0] != 3:
+    tolerance and error bound rounded up (spec §5), written out here from that rule; so does 4."""
+    if h.version[0] < 3:
         return h
 
     def toward(x: float, direction: float) -> float:

@@ -16,6 +16,8 @@ import dataclasses
 import math
 import re
 import zlib
+
+import brotli
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -290,9 +292,9 @@ def _():
 
 # -- header (spec §5) --------------------------------------------------------------------------
 
-@case("xhdr_major4", "UNSUPPORTED_VERSION", "version 4.0")
+@case("xhdr_major5", "UNSUPPORTED_VERSION", "version 5.0")
 def _():
-    return file(cube(PHDR=header(version=(4, 0))))
+    return file(cube(PHDR=header(version=(5, 0))))
 
 
 @case("xhdr_predicted_v1", "UNSUPPORTED_CODING", "coding 3 (predicted, version 2.0) in a version 1.0 header")
@@ -1482,3 +1484,103 @@ def _():
 def _():
     geometry_defect("EMPTY_POLYTOPE", 3, CUBE, [True] * 6)
     return group_file(CUBE, grup(range(6), kind=3, bounding=[True] * 6))
+
+
+# -- version 4.0: Brotli payloads (spec §6), transforms entry by entry (§8), one colour for a group (§10.1) --
+
+V4_F64 = dataclasses.replace(SPEC_HEADER, version=(4, 0), coding=Coding.FLOAT64)
+
+
+def v4_file(group_body: bytes | None = None, *, method: int = schema.COMPRESSION_BROTLI, raw_size: int | None = None,
+            version: tuple[int, int] = (4, 0), objt: bytes | None = None, colours: bytes | None = None) -> bytes:
+    """The kind 8 shell tree pyramid in a version 4.0 file (or ``version``), float64, its group body
+    stored as ``group_body`` with compression ``method`` and ``raw_size`` (default: a Brotli stream
+    of the body), the object as ``objt``, and a cOLR of ``colours`` after the group if given."""
+    body = pyramid_body()
+    stored = brotli.compress(body) if group_body is None else group_body
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=8, compression=method,
+                                         raw_size=len(body) if raw_size is None else raw_size, body=stored))
+    layout = cube(PHDR=header(version=version, coding=Coding.FLOAT64),
+                  OBJT=objt or records.encode_object(ObjectRecord(0, "pyramid", None, None), version[0]),
+                  PLNS=records.encode_planes(0, CUBE, dataclasses.replace(V4_F64, version=version), False), GRUP=group)
+    if colours is not None:
+        layout.append((schema.COLR, colours))
+    return frame(finish(layout, True, version[0]))
+
+
+def pyramid_body() -> bytes:
+    return b"\x01\x04\0" + b"".join(tree_fields(TREE_PYRAMID, parallelogram=True).values())
+
+
+@case("xv4_brotli_in_3_4", "BAD_COMPRESSION", "a version 3.4 file whose group body is a well-formed Brotli stream "
+      "(method 2): versions before 4.0 have methods 0 and 1 only")
+def _():
+    return v4_file(version=(3, 4))
+
+
+@case("xv4_brotli_corrupt", "BAD_COMPRESSION", "version 4.0: a group body whose Brotli stream has a window-size "
+      "header that Brotli forbids (the first byte 0x11, WBITS marked reserved)")
+def _():
+    stored = bytearray(brotli.compress(pyramid_body()))
+    stored[0] = 0x11
+    return v4_file(bytes(stored))
+
+
+@case("xv4_brotli_truncated", "SIZE_MISMATCH", "version 4.0: a group body's Brotli stream without its last 3 bytes: "
+      "the stored bytes end inside the stream")
+def _():
+    return v4_file(brotli.compress(pyramid_body())[:-3])
+
+
+@case("xv4_brotli_trailing", "BAD_COMPRESSION", "version 4.0: a whole Brotli stream followed by one more stored byte "
+      "(spec §6: bytes after a Brotli stream are an invalid stream)")
+def _():
+    return v4_file(brotli.compress(pyramid_body()) + b"\x00")
+
+
+@case("xv4_brotli_longer", "SIZE_MISMATCH", "version 4.0: a group body's Brotli stream that decompresses to one "
+      "byte more than the raw size the head declares")
+def _():
+    return v4_file(raw_size=len(pyramid_body()) - 1)
+
+
+def _v4_object(transform_bytes: bytes) -> bytes:
+    head = schema.Object3Head.build(dict(index=0, parent=0, flags=schema.OBJECT_HAS_TRANSFORM, name_length=7))
+    return head + b"pyramid" + transform_bytes
+
+
+#: Codes of a translation: m00, m11, m22 code 1; m03, m13, m23 code 2 (f32); the rest 0.
+_TRANSLATION_CODES = sum(c << (2 * i) for i, c in enumerate([1, 0, 0, 2, 0, 1, 0, 2, 0, 0, 1, 2])).to_bytes(3, "little")
+
+
+@case("xv4_transform_truncated", "BAD_PAYLOAD", "version 4.0: an OBJT whose transform codes call for three f32 "
+      "values and which ends after two")
+def _():
+    return v4_file(objt=_v4_object(_TRANSLATION_CODES + np.array([1.0, 2.0], dtype="<f4").tobytes()))
+
+
+@case("xv4_transform_nan", "BAD_OBJECT", "version 4.0: an OBJT transform whose translation in y is an f32 NaN")
+def _():
+    return v4_file(objt=_v4_object(_TRANSLATION_CODES + np.array([1.0, np.nan, 3.0], dtype="<f4").tobytes()))
+
+
+@case("xv4_uniform_colour_in_3_4", "BAD_PAYLOAD", "a version 3.4 file with a 12-byte cOLR for the cube group of 6 "
+      "references: one colour for all is a form of version 4.0, so in 3.4 the payload ends inside its colours")
+def _():
+    return _uniform_in(3, schema.ColoursHead.build(dict(group=0, count=6)) + bytes([1, 2, 3, 255]))
+
+
+def _uniform_in(major: int, colours: bytes) -> bytes:
+    layout = cube(PHDR=header(version=(major, 4 if major == 3 else 0)),
+                  OBJT=records.encode_object(ObjectRecord(0, "cube", None, None), major),
+                  PLNS=records.encode_planes(0, CUBE, dataclasses.replace(V3_HEAD, version=(major, 0)), False),
+                  GRUP=records.encode_group(PartGroup(0, 0, 0, np.arange(6, dtype=np.uint32), np.zeros(6, bool)),
+                                            False, major))
+    layout.append((schema.COLR, colours))
+    return frame(finish(layout, True, major))
+
+
+@case("xv4_colour_count", "BAD_COLOURS", "version 4.0: a 12-byte cOLR of one colour whose count, 5, is not the "
+      "group's 6 references")
+def _():
+    return _uniform_in(4, schema.ColoursHead.build(dict(group=0, count=5)) + bytes([1, 2, 3, 255]))

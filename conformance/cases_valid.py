@@ -13,9 +13,11 @@ from __future__ import annotations
 import dataclasses
 import io
 import math
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import brotli
 import numpy as np
 
 import planefmt
@@ -153,8 +155,8 @@ class _Pipe(io.RawIOBase):
 def written(case: ValidCase, header: Header) -> bytes:
     """The file as ``planefmt.Writer`` writes it."""
     sink = _Pipe() if case.stream else io.BytesIO()
-    if header.version[0] == 3 and case.counts is not None:
-        # A version 3 writer writes the counts it is told up front (spec §5).
+    if header.version[0] >= 3 and case.counts is not None:
+        # A version 3 or 4 writer writes the counts it is told up front (spec §5).
         header = dataclasses.replace(header, plane_count=case.counts[0], object_count=case.counts[1],
                                      group_count=case.counts[2])
     with planefmt.Writer(sink, header, compress=case.compress, index=case.index) as w:
@@ -198,7 +200,7 @@ def assembled(case: ValidCase, header: Header) -> bytes:
             layout.append((schema.GRUP, records.encode_group(rec, case.compress, header.version[0])))
             groups += 1
         elif isinstance(op, Colour):
-            layout.append((schema.COLR, records.encode_colours(Colours(op.group, op.rgba))))
+            layout.append((schema.COLR, records.encode_colours(Colours(op.group, op.rgba), header.version[0])))
         elif isinstance(op, Meta):
             layout.append((schema.META, records.encode_metadata(Metadata(op.key, op.value))))
         else:
@@ -456,6 +458,12 @@ V33_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 3))
 TREE_BOX = tree_of([1] * 8, [], [(1, 0, 0), (1, 1, 0), (1, 1, 1), (1, 0, 1), (0, 0, 1), (0, 1, 1), (0, 1, 0), (0, 0, 0)],
                    TREE_CUBE.facets, TREE_CUBE.links)
 V34_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 4))
+V40_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 0))
+#: A rotation by 30 degrees about z: cos and sin are not float32 values, so version 4 stores them as f64.
+ROT30 = np.array([[math.cos(math.pi / 6), -math.sin(math.pi / 6), 0.0], [math.sin(math.pi / 6), math.cos(math.pi / 6), 0.0],
+                  [0.0, 0.0, 1.0]])
+#: A mirror in x with a -0.0 entry (-0.0 is no code-0 zero: version 4 stores it as an f32).
+MIRROR = np.array([[-1.0, -0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
 
 #: A newer minor version's additions: OBJT bytes after the transform, a group of unknown kind 9
 #: between two known ones, a new flag bit (the PHDR bytes are each case's header extra).
@@ -465,6 +473,24 @@ NEWER_MINOR = dict(
          Group(0, GroupKind.PSEUDO_CONVEX, tuple(range(6)), bounding=(4,))),
     decoded_bbox=True, assembled_only=True, header_flags=0x0100,
     findings=("SKIPPED_GROUP_KIND",), findings_optional=("NEWER_MINOR_VERSION",))
+
+def brotli_payloads(layout: list) -> list:
+    """Every GRUP body and PLNS block of ``layout`` stored again as a Brotli stream (spec §6, method 2),
+    whether or not it is the smaller: a writer picks the smallest, and on these small payloads deflate
+    ties."""
+    out = []
+    for kind, payload in layout:
+        if kind == schema.GRUP:
+            head = schema.GroupHead3.parse(payload)
+            raw = zlib.decompress(head.body) if head.compression == schema.COMPRESSION_ZLIB else bytes(head.body)
+            payload = schema.GroupHead3.build(dict(head, compression=schema.COMPRESSION_BROTLI, body=brotli.compress(raw)))
+        elif kind == schema.PLNS:
+            head = schema.PlaneBlock3.parse(payload)
+            raw = zlib.decompress(head.data) if head.compression == schema.COMPRESSION_ZLIB else bytes(head.data)
+            payload = schema.PlaneBlock3.build(dict(head, compression=schema.COMPRESSION_BROTLI, data=brotli.compress(raw)))
+        out.append((kind, payload))
+    return out
+
 
 def ignored_fields(layout: list) -> list:
     """Every field spec/pln.md §2.1 says readers ignore, set: the PHDR's undefined flag bits (through
@@ -693,6 +719,25 @@ CASES = [
               V34_CUBE,
               (Obj("pyramid"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_TREE_PARALLELOGRAM, (0,), shell=TREE_PYRAMID),
                Colour(0, np.array([[0, 128, 0, 255]], dtype=np.uint8))), decoded_bbox=True),
+    ValidCase("brotli_shell_tree_v4_0", "version 4.0: the kind 8 shell tree cube of shell_tree_box_v3_4 and the "
+              "kind 8 pyramid beside it, the plane block and both group bodies stored as Brotli streams (compression "
+              "method 2, spec §6)", V40_CUBE,
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL_TREE_PARALLELOGRAM, tuple(range(6)), shell=TREE_BOX),
+               Obj("pyramid", None, translation(2.0, 0.0, 0.0)),
+               Group(1, GroupKind.SHELL_TREE_PARALLELOGRAM, (4,), shell=TREE_PYRAMID)),
+              compress=True, decoded_bbox=True, assembled_only=True, edit=brotli_payloads),
+    ValidCase("scene_transforms_v4_0", "version 4.0: three cubes under a root, with transforms coded entry by entry "
+              "(spec §8): a translation by (2.5, -1, 0.125) (codes 1, 0 and f32), a rotation by 30 degrees about z "
+              "with a translation by 0.1 (f64 entries), and a mirror with -0.0 (an f32); a cOLR of one colour for "
+              "the six references of the first cube (spec §10.1), one colour per reference for the second",
+              V40_CUBE,
+              (Obj("root"), Obj("a", 0, translation(2.5, -1.0, 0.125)), Planes(CUBE),
+               Group(1, GroupKind.CONVEX, tuple(range(6))), Colour(0, np.array([[200, 30, 40, 255]] * 6, dtype=np.uint8)),
+               Obj("b", 0, affine(ROT30, 0.1, 0.0, 0.0)), Group(2, GroupKind.CONVEX, tuple(range(6))),
+               Colour(1, np.array([[10, 20, 30, 255]] * 3 + [[90, 80, 70, 128]] * 3, dtype=np.uint8)),
+               Obj("c", 0, affine(MIRROR, 0.0, 3.0, -0.0)),
+               Group(3, GroupKind.CONVEX, tuple(range(6)))),
+              decoded_bbox=True),
     ValidCase("cube_meta_up_z", "version 3.0: the cube of cube_v3 with a mETA chunk up_axis = Z right after PHDR "
               "(spec §10.3: any version may hold it; its version stays 3.0)", V3_CUBE,
               (Meta(UP_AXIS, "Z"), *cube_ops())),
