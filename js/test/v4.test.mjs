@@ -408,3 +408,19 @@ test('Appendix A: a version 3 cOLR of 12 bytes and count above 1 ends inside its
   expectBoth(v3(colr(0, cubeRefs, [1, 2, 3, 4])), 'BAD_PAYLOAD');
   expectBoth(v3(colr(0, cubeRefs, Array(4 * cubeRefs).fill(1))), 'ok');
 });
+
+test('the 4.0 conformance cases through both entries (the browser entry included for invalid files)', () => {
+  const suite = path.resolve(VALID, '..');
+  const cases = fs.readFileSync(path.join(suite, 'manifest.tsv'), 'utf8').split('\n').slice(1).filter(Boolean)
+    .map((line) => line.split('\t')).filter(([file]) => /_v4_0\.pln$|\/xv4_|xhdr_major5/.test(file));
+  assert.ok(cases.length >= 12, `${cases.length} cases`);
+  for (const [file, expected] of cases) {
+    const bytes = new Uint8Array(fs.readFileSync(path.join(suite, file)));
+    expectBoth(bytes, expected === 'ok' ? 'ok' : JSON.parse(fs.readFileSync(path.join(suite, file.replace(/\.pln$/, '.json')), 'utf8')).error);
+  }
+  // scene_transforms_v4_0: −0.0 entries coded as f32 stay −0.0; the first cube's one colour expanded
+  const scene = readBrowser(fs.readFileSync(path.join(VALID, 'scene_transforms_v4_0.pln')));
+  const c = /** @type {number[]} */ (scene.objects[3].transform);
+  assert.ok(Object.is(c[1], -0) && Object.is(c[11], -0) && c[0] === -1);
+  assert.equal(scene.container.colours[0].rgba.length, 4 * scene.container.groups[0].refs.length);
+});
