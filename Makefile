@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml planefmt/container/_chains.c js/package-lock.json
 	$(BIN)/python -m pip install -q -e '.[test]'
 	# Khronos glTF-Validator (npm, pinned by tools/validators/package-lock.json) for the converter tests
 	if command -v npm >/dev/null; then tools/install_validators.sh; fi
-	# the JavaScript reader's packages (js/package-lock.json: fflate, three, playwright-core, draco3d)
+	# the JavaScript reader's packages (js/package-lock.json: fflate, brotli-dec-wasm, three, playwright-core, draco3d)
 	if command -v npm >/dev/null; then (cd js && npm ci --silent --no-audit --no-fund); fi
 	touch $(STAMP)
 

@@ -135,8 +135,8 @@ def files(draw):
     planes = draw(plane_sets)
     coding = draw(st.sampled_from(list(Coding)))
     q = draw(quantizations) if coding.quantized else None
-    versions = [(2, 0), (3, 0), (3, 1), (3, 2), (3, 3), (3, 4)] if coding == Coding.PREDICTED else \
-        [(1, 0), (2, 0), (3, 0), (3, 1), (3, 2), (3, 3), (3, 4)]
+    versions = [(2, 0), (3, 0), (3, 1), (3, 2), (3, 3), (3, 4), (4, 0)] if coding == Coding.PREDICTED else \
+        [(1, 0), (2, 0), (3, 0), (3, 1), (3, 2), (3, 3), (3, 4), (4, 0)]
     version = draw(st.sampled_from(versions))
     groups = groups_for(len(planes), draw, version)
     if version[0] >= 2:

@@ -96,7 +96,7 @@ def test_wall_with_a_hole_converts():
     v, f = wall_with_hole()
     assert len(f) == 66
     header, mesh, data = encode(v, f, 1e-6)
-    assert header.version in ((3, 3), (3, 4)) and header.error_bound <= 1e-6 and not header.lossy
+    assert header.version == (4, 0) and header.error_bound <= 1e-6 and not header.lossy
     assert len(mesh.faces) == 66
     assert abs(shapes.area(mesh.vertices, mesh.faces) - 8.25) <= 1e-6 * 8.25
     with planefmt.open(io.BytesIO(data)) as r:
@@ -260,7 +260,7 @@ def test_shell_tree_is_chosen_where_smaller_and_its_bound_holds(path, tolerance,
     (mesh,) = [n.mesh for n in scene.nodes if n.mesh is not None]
     v, f = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
     header, decoded, data = encode(v, f, tolerance)
-    assert header.version in ((3, 3), (3, 4)) and header.error_bound <= tolerance
+    assert header.version == (4, 0) and header.error_bound <= tolerance
     with planefmt.open(io.BytesIO(data)) as r:
         (group,) = list(r.part_groups())
     assert group.kind in TREE_KINDS
@@ -349,7 +349,7 @@ def test_the_smaller_predictor_is_chosen(path, kind, gain):
     header, decoded, data = encode(v, f, 3.5e-5)
     with planefmt.open(io.BytesIO(data)) as r:
         (group,) = list(r.part_groups())
-    assert group.kind == kind and header.version == ((3, 4) if kind == GroupKind.SHELL_TREE_PARALLELOGRAM else (3, 3))
+    assert group.kind == kind and header.version == (4, 0)
     sizes = {p: len(zlib.compress(shellfields._shell_tree_body(group.shell, p), 6)) for p in (False, True)}
     chosen = kind == GroupKind.SHELL_TREE_PARALLELOGRAM
     assert sizes[not chosen] > gain * sizes[chosen]

@@ -58,11 +58,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--bits", type=int, help="force quantized coding with this many bits per component")
     g.add_argument("--coding", choices=["float32", "float64", "quantized"], help="force a triplet coding")
     g.add_argument("--compress", action=argparse.BooleanOptionalAction, default=True,
-                   help="deflate plane and group payloads where that saves bytes (spec §6; the default)")
+                   help="deflate or Brotli-compress plane and group payloads, whichever is smaller, where that "
+                        "saves bytes (spec §6; the default)")
     g.add_argument("--compact", action=argparse.BooleanOptionalAction, default=True,
-                   help="write version 3.0 (spec/pln.md; the default): bit-packed or predicted plane codes, "
-                        "whichever is smaller, varint group bodies and chunk heads. --no-compact writes version "
-                        "1.0, for readers of 1.x only")
+                   help="write version 4.0 (spec/pln.md; the default): bit-packed or predicted plane codes, "
+                        "whichever is smaller, varint group bodies and chunk heads, transforms entry by entry. "
+                        "--no-compact writes version 1.0, for readers of 1.x only")
     g.add_argument("--allow-open", action="store_true",
                    help="store a closed mesh that planes cannot close as an open surface (distance and area "
                         "kept, not watertight; marked lossy) instead of failing")

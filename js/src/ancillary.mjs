@@ -10,16 +10,22 @@ const KEYWORDS = { up_axis: ['Y', 'Z'] };
 /**
  * @param {Uint8Array} payload
  * @param {import('./groups.mjs').Group[]} groups read so far
- * @returns {{group: number, rgba: Uint8Array}} 4 bytes per reference
+ * @param {number} major the file's major version: from 4, a 12-byte payload is one colour for all
+ * @returns {{group: number, rgba: Uint8Array}} 4 bytes per reference (a single colour repeated)
  */
-export function readColours(payload, groups) {
+export function readColours(payload, groups, major) {
   const c = new Cursor(payload);
   const group = c.u32();
   const count = c.u32();
-  const rgba = c.take(4 * count).slice();
+  const uniform = major >= 4 && payload.length === 12;
+  const colours = c.take(uniform ? 4 : 4 * count);
   if (c.left > 0) fail('BAD_COLOURS', `${c.left} bytes after the colours`);
   if (group >= groups.length) fail('BAD_COLOURS', `group ${group} not read yet`);
   if (count !== groups[group].refs.length) fail('BAD_COLOURS', `${count} colours for ${groups[group].refs.length} references`);
+  // expanded only now that count is the group's ref_count (within the reader's limit)
+  const rgba = new Uint8Array(4 * count);
+  if (uniform) for (let i = 0; i < rgba.length; i += 4) rgba.set(colours, i);
+  else rgba.set(colours);
   return { group, rgba };
 }
 

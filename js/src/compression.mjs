@@ -1,6 +1,7 @@
 /**
- * Compressed payloads (spec §6). The zlib inflater is injected so that this module runs in a
- * browser as well as in Node: see InflateFn.
+ * Compressed payloads (spec §6): method 1 (zlib) and, from version 4, method 2 (Brotli). The
+ * decompressors are injected so that this module runs in a browser as well as in Node: see
+ * InflateFn and BrotliFn.
  */
 import { fail, PlnError } from './errors.mjs';
 
@@ -11,6 +12,21 @@ import { fail, PlnError } from './errors.mjs';
  * Error whose `truncated` property is true where the input ends inside the stream, and any other
  * Error for corrupt data.
  * @typedef {(stored: Uint8Array, maxOutputLength: number) => (Uint8Array | {output: Uint8Array, consumed?: number})} InflateFn
+ */
+
+/**
+ * A decompressor of one Brotli stream (RFC 7932), with InflateFn's contract: output never longer
+ * than maxOutputLength, `consumed` the input bytes up to the stream's end where it can tell (bytes
+ * after it are BAD_COMPRESSION for Brotli, §6 step 6), an Error with `truncated` where the input
+ * ends inside the stream, `tooLong` where the output would pass maxOutputLength, any other Error
+ * for an invalid stream.
+ * @typedef {InflateFn} BrotliFn
+ */
+
+/**
+ * The decompressors a reader was given; null where it has none (such payloads are then
+ * BAD_COMPRESSION).
+ * @typedef {{inflate: InflateFn | null, brotli: BrotliFn | null}} Codecs
  */
 
 /**
@@ -33,36 +49,48 @@ export const DEFAULT_LIMITS = Object.freeze({
   objects: 2 ** 24,
 });
 
+/** The stream of each compressed method, for messages. */
+const NAMES = ['', 'zlib', 'Brotli'];
+
 /**
  * The raw bytes of a payload stored with `method` (§6, checks in its order).
  * @param {number} method
  * @param {number} rawSize
  * @param {Uint8Array} stored
  * @param {Limits} limits
- * @param {InflateFn | null} inflate
+ * @param {Codecs} codecs
+ * @param {number} major the file's major version: method 2 exists from version 4 (Appendix A)
  * @returns {Uint8Array}
  */
-export function decompress(method, rawSize, stored, limits, inflate) {
-  if (method !== 0 && method !== 1) fail('BAD_COMPRESSION', `method ${method}`);
+export function decompress(method, rawSize, stored, limits, codecs, major) {
+  if (method !== 0 && method !== 1 && !(method === 2 && major >= 4)) fail('BAD_COMPRESSION', `method ${method} in a version ${major} file`);
   if (rawSize > limits.rawSize) fail('LIMIT_EXCEEDED', `raw size ${rawSize}`);
   if (method === 0) {
     if (stored.length !== rawSize) fail('SIZE_MISMATCH', `${stored.length} stored bytes, raw size ${rawSize}`);
     return stored;
   }
   if (rawSize > limits.ratio * stored.length) fail('LIMIT_EXCEEDED', `raw size ${rawSize} from ${stored.length} bytes`);
-  if (!inflate) fail('BAD_COMPRESSION', 'no inflater given for a compressed payload');
+  const name = NAMES[method];
+  const fn = method === 1 ? codecs.inflate : codecs.brotli;
+  if (!fn) fail('BAD_COMPRESSION', `no ${name} decompressor given for a compressed payload`);
   let result;
   try {
-    result = inflate(stored, rawSize + 1);
+    result = fn(stored, rawSize + 1);
   } catch (err) {
     if (err instanceof PlnError) throw err;
-    if (/** @type {any} */ (err).truncated) fail('SIZE_MISMATCH', 'the stored bytes end inside the zlib stream');
-    if (/** @type {any} */ (err).tooLong) fail('SIZE_MISMATCH', 'the stream inflates beyond raw size');
-    fail('BAD_COMPRESSION', String(/** @type {any} */ (err).message ?? err));
+    if (/** @type {any} */ (err).truncated) fail('SIZE_MISMATCH', `the stored bytes end inside the ${name} stream`);
+    if (/** @type {any} */ (err).tooLong) fail('SIZE_MISMATCH', `the ${name} stream decompresses beyond raw size`);
+    fail('BAD_COMPRESSION', `${name}: ${String(/** @type {any} */ (err).message ?? err)}`);
   }
   const output = result instanceof Uint8Array ? result : result.output;
   const consumed = result instanceof Uint8Array ? undefined : result.consumed;
-  if (output.length !== rawSize) fail('SIZE_MISMATCH', `inflated to ${output.length} bytes, raw size ${rawSize}`);
+  // an output that passed raw size was cut short there: where its stream ends is unknown
+  if (output.length > rawSize) fail('SIZE_MISMATCH', `the ${name} stream decompresses beyond raw size ${rawSize}`);
+  // Brotli: bytes after the stream are an invalid stream (§6 step 6), before the output's size
+  if (method === 2 && consumed !== undefined && consumed !== stored.length) {
+    fail('BAD_COMPRESSION', `${stored.length - consumed} stored bytes after the Brotli stream`);
+  }
+  if (output.length !== rawSize) fail('SIZE_MISMATCH', `decompressed to ${output.length} bytes, raw size ${rawSize}`);
   if (consumed !== undefined && consumed !== stored.length) fail('SIZE_MISMATCH', 'stored bytes after the zlib stream');
   return output;
 }

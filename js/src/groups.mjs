@@ -19,7 +19,7 @@ import { readShellTree } from './shelltree.mjs';
  */
 
 /** The newest minor version this reader knows, per major (§9.3). */
-const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4 };
+const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 0 };
 
 /**
  * Whether `kind` is a kind of the file's version (§9.3).
@@ -27,6 +27,7 @@ const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4 };
  */
 function kindOfVersion(kind, [major, minor]) {
   if (kind <= 4) return true;
+  if (major >= 4) return kind <= 8; // kinds 0-8 in 4.0
   return major === 3 && kind <= 8 && minor >= kind - 4;
 }
 
@@ -39,7 +40,7 @@ function kindOfVersion(kind, [major, minor]) {
  * @param {number} ctx.objects objects read before
  * @param {number} ctx.planes planes defined before this chunk
  * @param {import('./compression.mjs').Limits} ctx.limits
- * @param {import('./compression.mjs').InflateFn | null} ctx.inflate
+ * @param {import('./compression.mjs').Codecs} ctx.codecs
  * @returns {Group}
  */
 export function readGroup(payload, ctx) {
@@ -69,12 +70,12 @@ export function readGroup(payload, ctx) {
   if (object >= ctx.objects) fail('BAD_OBJECT_REFERENCE', `object ${object} not defined`);
   let skipped = false;
   if (!kindOfVersion(kind, ctx.version)) {
-    if (ctx.version[1] <= NEWEST_MINOR[/** @type {1|2|3} */ (major)]) {
+    if (ctx.version[1] <= NEWEST_MINOR[/** @type {1|2|3|4} */ (major)]) {
       fail('UNKNOWN_GROUP_KIND', `kind ${kind} in a ${ctx.version.join('.')} file`);
     }
     skipped = true;
   }
-  const body = decompress(method, rawSize, payload.subarray(c.pos), ctx.limits, ctx.inflate);
+  const body = decompress(method, rawSize, payload.subarray(c.pos), ctx.limits, ctx.codecs, major);
   const b = new Cursor(body);
   const { refs, roles } = major === 1 ? readBodyV1(b, ctx) : readBody(b, ctx);
   const m = refs.length;
@@ -92,7 +93,7 @@ export function readGroup(payload, ctx) {
 }
 
 /**
- * §9.2: varint references as differences, then role bits (versions 2 and 3).
+ * §9.2: varint references as differences, then role bits (versions 2 to 4).
  * @param {Cursor} b @param {{planes: number, limits: import('./compression.mjs').Limits}} ctx
  */
 function readBody(b, ctx) {

@@ -1,4 +1,4 @@
-/** The header chunk PHDR: spec §5 (version 3) and Appendix A.1 (versions 1 and 2). */
+/** The header chunk PHDR: spec §5 (versions 3 and 4) and Appendix A.1 (versions 1 and 2). */
 import { fail } from './errors.mjs';
 import { Cursor } from './varint.mjs';
 
@@ -25,13 +25,13 @@ export function parseHeader(payload) {
   if (payload.length < 2) fail('BAD_PAYLOAD', 'PHDR under 2 bytes');
   const major = payload[0];
   const minor = payload[1];
-  if (major !== 1 && major !== 2 && major !== 3) fail('UNSUPPORTED_VERSION', `major version ${major}`);
+  if (major < 1 || major > 4) fail('UNSUPPORTED_VERSION', `major version ${major}`);
   const old = major < 3;
   if (payload.length < (old ? 108 : 9)) fail('BAD_PAYLOAD', 'PHDR too short');
   c.pos = 2;
   const flags = c.u16();
   const coding = c.u8();
-  // version 1 has no predicted coding (A.1); 2 and 3 have it
+  // version 1 has no predicted coding (A.1); 2 to 4 have it
   if (coding > (major === 1 ? 2 : 3)) fail('UNSUPPORTED_CODING', `coding ${coding}`);
   const quantized = coding >= 2;
   const bits = /** @type {[number, number, number]} */ ([c.u8(), c.u8(), c.u8()]);

@@ -1,6 +1,7 @@
 /**
  * planefmt's .pln files in JavaScript: read a file (spec/pln.md) and decode its geometry.
- * Browser-safe: no Node import here (Node's zlib comes in through node.mjs).
+ * Browser-safe: no Node import here (Node's zlib and Brotli come in through node.mjs, the browser's
+ * through browser.mjs).
  */
 import { readContainer } from './reader.mjs';
 import { decodeGroup } from './decode.mjs';
@@ -10,7 +11,8 @@ export { PlnError };
 
 /**
  * @typedef {object} ReadOptions
- * @property {import('./compression.mjs').InflateFn | null} [inflate] zlib inflater for compressed payloads (§6)
+ * @property {import('./compression.mjs').InflateFn | null} [inflate] zlib inflater for payloads of method 1 (§6)
+ * @property {import('./compression.mjs').BrotliFn | null} [brotli] Brotli decompressor for payloads of method 2 (§6, version 4)
  * @property {boolean} [decode] decode geometry (default true)
  * @property {Partial<import('./compression.mjs').Limits>} [limits] resource limits (§12.4)
  */

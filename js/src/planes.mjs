@@ -39,9 +39,9 @@ export class PlaneTable {
  * @param {import('./header.mjs').Header} header
  * @param {PlaneTable} table
  * @param {import('./compression.mjs').Limits} limits
- * @param {import('./compression.mjs').InflateFn | null} inflate
+ * @param {import('./compression.mjs').Codecs} codecs
  */
-export function readPlanes(payload, header, table, limits, inflate) {
+export function readPlanes(payload, header, table, limits, codecs) {
   const c = new Cursor(payload);
   let first;
   let count;
@@ -69,7 +69,7 @@ export function readPlanes(payload, header, table, limits, inflate) {
     const size = coding === 0 ? 12 * count : coding === 1 ? 24 * count : Math.ceil((count * (bits[0] + bits[1] + bits[2])) / 8);
     if (rawSize !== size) fail('SIZE_MISMATCH', `raw size ${rawSize} for ${count} planes`);
   }
-  const raw = decompress(method, rawSize, payload.subarray(c.pos), limits, inflate);
+  const raw = decompress(method, rawSize, payload.subarray(c.pos), limits, codecs, header.version[0]);
   const at = table.reserve(count);
   const out = table.data;
   if (coding === 0 || coding === 1) readFloats(raw, coding, count, out, at);

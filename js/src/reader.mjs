@@ -9,7 +9,7 @@ import { readColours, checkIndex, readMetadata } from './ancillary.mjs';
 import { DEFAULT_LIMITS } from './compression.mjs';
 
 const KNOWN = new Set(['PHDR', 'OBJT', 'PLNS', 'GRUP', 'cOLR', 'iNDX', 'mETA', 'PEND']);
-const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4 };
+const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 0 };
 
 /**
  * @typedef {object} Container
@@ -25,12 +25,14 @@ const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4 };
 
 /**
  * @param {Uint8Array} bytes a whole file
- * @param {{limits?: Partial<import('./compression.mjs').Limits>, inflate?: import('./compression.mjs').InflateFn | null}} [options]
+ * @param {{limits?: Partial<import('./compression.mjs').Limits>, inflate?: import('./compression.mjs').InflateFn | null,
+ *   brotli?: import('./compression.mjs').BrotliFn | null}} [options]
  * @returns {Container}
  */
 export function readContainer(bytes, options = {}) {
   const limits = { ...DEFAULT_LIMITS, ...options.limits };
-  const inflate = options.inflate ?? null;
+  /** @type {import('./compression.mjs').Codecs} */
+  const codecs = { inflate: options.inflate ?? null, brotli: options.brotli ?? null };
   checkSignature(bytes);
   /** @type {import('./header.mjs').Header | null} */
   let header = null;
@@ -70,26 +72,26 @@ export function readContainer(bytes, options = {}) {
       if (type === 'PHDR') {
         header = parseHeader(payload);
         const [major, minor] = header.version;
-        if (minor > NEWEST_MINOR[/** @type {1|2|3} */ (major)]) findings.add('NEWER_MINOR_VERSION');
+        if (minor > NEWEST_MINOR[/** @type {1|2|3|4} */ (major)]) findings.add('NEWER_MINOR_VERSION');
         continue;
       }
       const h = /** @type {import('./header.mjs').Header} */ (header);
       if (type === 'PLNS') {
         listed.push({ offset, type, ordinal: table.count });
-        readPlanes(payload, h, table, limits, inflate);
+        readPlanes(payload, h, table, limits, codecs);
       } else if (type === 'OBJT') {
         listed.push({ offset, type, ordinal: objects.length });
         objects.push(readObject(payload, h.version[0], objects.length, limits));
       } else if (type === 'GRUP') {
         listed.push({ offset, type, ordinal: groups.length });
         const g = readGroup(payload, {
-          version: h.version, groups: groups.length, objects: objects.length, planes: table.count, limits, inflate,
+          version: h.version, groups: groups.length, objects: objects.length, planes: table.count, limits, codecs,
         });
         if (g.skipped) findings.add('SKIPPED_GROUP_KIND');
         groups.push(g);
         objects[g.object].groups.push(g);
       } else if (type === 'cOLR') {
-        colours.push(readColours(payload, groups));
+        colours.push(readColours(payload, groups, h.version[0]));
       } else if (type === 'mETA') {
         if (listed.length > 0) fail('BAD_METADATA', 'mETA after an OBJT, PLNS or GRUP');
         readMetadata(payload, metadata);
@@ -132,7 +134,7 @@ function checkEnd(payload, header, indexOffset, read) {
   if (payload.length === 8) {
     const view = new DataView(payload.buffer, payload.byteOffset, 8);
     const at = view.getUint32(4, true) * 4294967296 + view.getUint32(0, true);
-    // versions 1 and 2 write 0 for "no index"; version 3 writes an empty PEND instead
+    // versions 1 and 2 write 0 for "no index"; versions 3 and 4 write an empty PEND instead
     if (!(old && at === 0) && (at === 0 || at !== indexOffset)) fail('BAD_INDEX', `PEND index offset ${at}`);
   }
   const counts = header.counts;

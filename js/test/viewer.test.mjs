@@ -2,7 +2,8 @@
 // from a node:http static server of js/: it opens corpus parts encoded by `pln convert` with
 // ?file=, and a test must see a drawn model (the WebGL canvas's screenshot: more than 5 % of its
 // pixels away from the background, many distinct colours) and the panel's counts equal to what
-// readPln reports for the same file in Node. Skipped, with the reason, where Chromium or
+// readPln reports for the same file in Node; two 4.0 golden files (Brotli decoded in the page by
+// brotli-dec-wasm's WebAssembly) likewise. Skipped, with the reason, where Chromium or
 // playwright-core is missing. About 10 s.
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
@@ -40,6 +41,8 @@ before(async () => {
   extra['box.pln'] = part('cad/box.STL', 'shell_tree_box_v3_4.pln');
   extra['truck.pln'] = part('gltf_scene/CesiumMilkTruck.glb', 'scene_v3_stream.pln');
   extra['up_z.pln'] = path.join(ROOT, 'conformance/valid/cube_meta_up_z.pln');
+  extra['brotli.pln'] = path.join(ROOT, 'conformance/valid/brotli_shell_tree_v4_0.pln');
+  extra['scene4.pln'] = path.join(ROOT, 'conformance/valid/scene_transforms_v4_0.pln');
   const bad = fs.readFileSync(extra['box.pln']).subarray(0, 100);
   tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'pln-viewer-'));
   extra['truncated.pln'] = path.join(tmp, 'truncated.pln');
@@ -153,6 +156,19 @@ test('viewer: up_axis Z turns the model +z up', { skip: why ?? false, timeout: 6
   });
   assert.ok(Math.abs(rotation + Math.PI / 2) < 1e-12, `rotation ${rotation}`);
   await checkPanel('up_z.pln');
+});
+
+test('viewer: version 4.0, Brotli payloads decoded in the page (brotli-dec-wasm), coded transforms, one colour', { skip: why ?? false, timeout: 60000 }, async (t) => {
+  for (const name of ['brotli.pln', 'scene4.pln']) {
+    const stats = await open(name);
+    const want = await checkPanel(name);
+    assert.equal(want.version, '4.0');
+    assert.equal(stats.triangles, want.triangles, `${name}: window.plnViewer.stats`);
+    const px = await canvasPixels();
+    t.diagnostic(`${name}: canvas ${px.width}x${px.height}: ${(100 * px.off).toFixed(1)} % drawn, ${px.colours} colours`);
+    assert.ok(px.off > 0.05, `${name}: ${(100 * px.off).toFixed(1)} % of the canvas drawn`);
+  }
+  assert.deepEqual(chrome.consoleErrors, []);
 });
 
 test('viewer: an invalid file is refused with its error code', { skip: why ?? false, timeout: 60000 }, async () => {

@@ -17,8 +17,8 @@
  * ('Y', 'Z' or null) and `file` (readPln's result). A mesh's userData: {groupIndex, kind,
  * kindName, object}. The loader does not turn a Z-up file Y-up; a viewer may (§10.3).
  *
- * Decoding uses ../src/browser.mjs (fflate inflates): in a browser, an import map resolves
- * `three` and `fflate`; in Node, node_modules does. An invalid file raises readPln's PlnError
+ * Decoding uses ../src/browser.mjs (fflate inflates, brotli-dec-wasm decodes Brotli): in a browser,
+ * an import map resolves `three`, `fflate` and `brotli-dec-wasm/web`; in Node, node_modules does. An invalid file raises readPln's PlnError
  * (through onError in `load`).
  */
 import {

@@ -1,0 +1,110 @@
+"""Version 4.0 (spec §6, §8, §10.1): Brotli payloads where they are smaller than deflate, within the ratio
+every reader accepts; transforms entry by entry, bit-exact; a group's one colour stored once."""
+
+from __future__ import annotations
+
+import io
+import math
+
+import numpy as np
+import pytest
+
+import planefmt
+from planefmt import codec
+from planefmt.container import records, schema
+from planefmt.model import Coding, GroupKind, Header, Mesh, Node, ObjectRecord, Scene, Units
+
+from corpus import CORPUS
+
+
+def _payload_methods(data: bytes) -> list[int]:
+    methods, pos = [], len(schema.SIGNATURE)
+    while pos < len(data):
+        kind, size = data[pos:pos + 4], int.from_bytes(data[pos + 4:pos + 8], "little")
+        payload, pos = data[pos + 8:pos + 8 + size], pos + 12 + size
+        if kind == schema.GRUP:
+            methods.append(schema.GroupHead3.parse(payload).compression)
+        elif kind == schema.PLNS:
+            methods.append(schema.PlaneBlock3.parse(payload).compression)
+    return methods
+
+
+def test_a_corpus_shell_is_stored_as_brotli_and_decodes_as_before(tmp_path) -> None:
+    from planefmt_converters import registry
+
+    scene, _ = registry.read(str(CORPUS / "nonconvex_watertight" / "torus.STL"))
+    header = codec.encode_scene(scene, tmp_path / "t.pln", tolerance=3e-5)
+    data = (tmp_path / "t.pln").read_bytes()
+    assert header.version == (4, 0) and schema.COMPRESSION_BROTLI in _payload_methods(data)
+    source = next(n.mesh for n in scene.nodes if n.mesh is not None)
+    decoded = codec.decode_scene(tmp_path / "t.pln").nodes[0].mesh
+    assert len(decoded.faces) == len(source.faces)
+    with planefmt.open(tmp_path / "t.pln") as r:
+        (group,) = list(r.part_groups())
+    assert group.kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM)
+
+
+@pytest.mark.parametrize("data", [bytes(1_000_000), b"plane" * 200_000], ids=["zeros", "repeats"])
+def test_no_payload_is_written_past_the_ratio_every_reader_accepts(data) -> None:
+    method, stored = records.pack(data, True, brotli_allowed=True)
+    assert len(data) <= schema.MAX_WRITTEN_RATIO * len(stored)
+    assert records.unpack(method, stored, len(data), records.Limits(), 4) == data
+
+
+def test_brotli_only_in_version_4() -> None:
+    raw = bytes(range(256)) * 8
+    method, stored = records.pack(raw, True, brotli_allowed=True)
+    assert method == schema.COMPRESSION_BROTLI
+    assert records.unpack(method, stored, len(raw), records.Limits(), 4) == raw
+    with pytest.raises(planefmt.FormatError) as err:
+        records.unpack(method, stored, len(raw), records.Limits(), 3)
+    assert err.value.code == "BAD_COMPRESSION"
+
+
+def _rotation(angle: float) -> np.ndarray:
+    m = np.eye(4)
+    m[:2, :2] = [[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]]
+    return m
+
+
+@pytest.mark.parametrize("transform", [
+    np.eye(4),
+    np.array([[1, 0, 0, 2.5], [0, 1, 0, -1], [0, 0, 1, 0.125], [0, 0, 0, 1]], dtype=float),
+    _rotation(0.3) @ np.diag([2.0, 2.0, 2.0, 1.0]),
+    np.array([[-0.0, 1e-300, 0, 1e300], [0, -1, 0, 0.1], [0, 0, 1, -0.0], [0, 0, 0, 1]]),
+], ids=["identity", "translation", "rotation", "signed zeros and extremes"])
+def test_transforms_round_trip_bit_exactly_in_fewer_bytes(transform) -> None:
+    record = ObjectRecord(0, "node", None, transform)
+    payload = records.encode_object(record, 4)
+    back = records.decode_object(payload, 0, 4).transform
+    assert back.tobytes() == transform.astype(np.float64).tobytes()
+    assert len(payload) < len(records.encode_object(record, 3))
+
+
+def test_one_colour_for_a_group_is_stored_once(tmp_path) -> None:
+    import trimesh
+
+    box = trimesh.creation.box()
+    colours = np.tile(np.array([[12, 34, 56, 255]], dtype=np.uint8), (len(box.faces), 1))
+    scene = Scene(nodes=(Node("box", mesh=Mesh(np.asarray(box.vertices), np.asarray(box.faces),
+                                               face_colours=colours)),))
+    codec.encode_scene(scene, tmp_path / "c.pln", tolerance=1e-6)
+    data = (tmp_path / "c.pln").read_bytes()
+    at = data.index(schema.COLR)
+    assert int.from_bytes(data[at + 4:at + 8], "little") == 12
+    decoded = codec.decode_scene(tmp_path / "c.pln").nodes[0].mesh
+    assert (decoded.face_colours == [12, 34, 56, 255]).all()
+
+
+def test_a_version_3_4_writer_still_writes_what_3_4_readers_read() -> None:
+    header = Header(version=(3, 4), coding=Coding.FLOAT32, units=Units.METRE)
+    buf = io.BytesIO()
+    with planefmt.Writer(buf, header, compress=True) as w:
+        w.add_object("n", None, np.eye(4))
+        w.add_planes(np.array([[0.5, 0.5, 1.0]] * 4))
+        w.add_group(0, GroupKind.CONVEX, np.arange(4), np.zeros(4, bool))
+        w.add_colours(0, np.tile(np.array([[1, 2, 3, 4]], dtype=np.uint8), (4, 1)))
+    data = buf.getvalue()
+    assert schema.COMPRESSION_BROTLI not in _payload_methods(data)
+    at = data.index(schema.COLR)
+    assert int.from_bytes(data[at + 4:at + 8], "little") == 8 + 4 * 4
