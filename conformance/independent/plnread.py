@@ -5,8 +5,8 @@ alone (plus the output contract of `conformance/README.md`), without looking
 at planefmt or at the suite's generator, to show that the written spec and
 the conformance contract are enough for a second implementation.  It uses
 the Python 3.11 standard library, and for the Brotli payloads of version
-4.0 (compression method 2) the PyPI package `brotli` (1.2 or later),
-imported only when such a payload is met: files of versions 1.0 to 3.4, and
+4.0 (compression method 2) the PyPI package `brotli` (1.2 bounds the output
+of each call; with 1.1 the stored bytes are given one at a time), imported only when such a payload is met: files of versions 1.0 to 3.4, and
 4.0 files without Brotli payloads, need nothing else.  It reads versions
 1.0, 2.0, 3.0 to 3.4 and 4.0 (pln.md §13: files of major versions 1, 2, 3
 and 4, each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
@@ -374,16 +374,20 @@ def unbrotli(raw_size, stored, what):
     except ImportError:
         raise SystemExit("plnread: compression method 2 (Brotli) needs the Python package 'brotli'")
     dec = brotli.Decompressor()
+    # brotli 1.1's process() has no output bound: the stored bytes are then
+    # given one at a time (one byte yields at most about a meta-block, 16 MiB)
+    bounded = hasattr(dec, "can_accept_more_data")
+    step = BROTLI_STEP if bounded else 1
     out = []
     total = 0
     given = 0  # stored bytes given to the decoder
     while not dec.is_finished():
         data = b""
-        if given < len(stored) and dec.can_accept_more_data():
-            data = stored[given:given + BROTLI_STEP]
+        if given < len(stored) and (not bounded or dec.can_accept_more_data()):
+            data = stored[given:given + step]
             given += len(data)
         try:
-            block = dec.process(data, output_buffer_limit=1)
+            block = dec.process(data, output_buffer_limit=1) if bounded else dec.process(data)
         except brotli.error:
             raise PlnError("BAD_COMPRESSION", "%s: invalid Brotli stream, or bytes after its end" % what)
         out.append(block)
@@ -394,7 +398,7 @@ def unbrotli(raw_size, stored, what):
         if not data and not block and not dec.is_finished():
             if given == len(stored):
                 raise PlnError("SIZE_MISMATCH", "%s: Brotli stream ends early" % what)
-            if not dec.can_accept_more_data():
+            if bounded and not dec.can_accept_more_data():
                 raise RuntimeError("Brotli decoder takes no input and gives no output")
     if given < len(stored):
         raise PlnError("BAD_COMPRESSION", "%s: %d bytes after the Brotli stream"

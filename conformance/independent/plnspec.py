@@ -10,8 +10,8 @@ prints {"error": "CODE"} and exits 1. It does not decode geometry ("geometry": n
 
 Version 4.0 (§6 compression method 2, Brotli; §8 transforms coded entry by entry; §10.1 a cOLR
 of one colour for every reference) was added from the 4.0 text of those sections and of §13 and
-Appendix A. Its Brotli payloads need the PyPI package `brotli` (1.2 or later, for the output
-bound of process()); it is imported only when a method 2 payload is met, so files of versions 1.0
+Appendix A. Its Brotli payloads need the PyPI package `brotli` (1.2 or later bounds the output
+per call; with 1.1 the stored bytes are fed one at a time); it is imported only when a method 2 payload is met, so files of versions 1.0
 to 3.4, and 4.0 files without Brotli payloads, are read without it.
 
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
@@ -195,16 +195,20 @@ def brotli_decompress(raw_size: int, stored: bytes) -> bytes:
     except ImportError:
         raise SystemExit("plnspec.py: compression method 2 (Brotli) needs the package 'brotli'")
     d = brotli.Decompressor()
+    # brotli 1.1 has no output bound: there the stored bytes go one at a time, and one byte
+    # yields at most about one meta-block, 16 MiB (§6)
+    bounded = hasattr(d, "can_accept_more_data")
+    piece = BROTLI_PIECE if bounded else 1
     out = bytearray()
     pos = 0
     while not d.is_finished():
-        if d.can_accept_more_data() and pos < len(stored):
-            data = stored[pos:pos + BROTLI_PIECE]
+        if (not bounded or d.can_accept_more_data()) and pos < len(stored):
+            data = stored[pos:pos + piece]
             pos += len(data)
         else:
             data = b""  # output still held back by the block bound, or the input is all given
         try:
-            block = d.process(data, output_buffer_limit=1)
+            block = d.process(data, output_buffer_limit=1) if bounded else d.process(data)
         except brotli.error:  # the binding also reports bytes after the stream's end so
             fail("BAD_COMPRESSION", "invalid Brotli stream, or bytes after its end")
         out += block
@@ -213,7 +217,7 @@ def brotli_decompress(raw_size: int, stored: bytes) -> bytes:
         if not data and not block and not d.is_finished():
             if pos == len(stored):
                 fail("SIZE_MISMATCH", "the stored bytes end inside the Brotli stream")
-            if not d.can_accept_more_data():
+            if bounded and not d.can_accept_more_data():
                 raise RuntimeError("the Brotli decoder neither gives output nor takes input")
     if pos < len(stored):  # the stream ended at the end of a piece, and more pieces follow
         fail("BAD_COMPRESSION", f"{len(stored) - pos} stored bytes after the Brotli stream")
