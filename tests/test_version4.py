@@ -108,3 +108,20 @@ def test_a_version_3_4_writer_still_writes_what_3_4_readers_read() -> None:
     assert schema.COMPRESSION_BROTLI not in _payload_methods(data)
     at = data.index(schema.COLR)
     assert int.from_bytes(data[at + 4:at + 8], "little") == 8 + 4 * 4
+
+
+def test_a_brotli_bomb_stops_at_its_declared_raw_size() -> None:
+    """77 stored bytes of 50 MB of zeros, declared as 1,000 bytes: refused after about one decoder block,
+    never decompressed whole (spec §6: at most raw size + 16 MiB held)."""
+    import brotli
+    import tracemalloc
+
+    stored = brotli.compress(bytes(50_000_000), quality=5)
+    tracemalloc.start()
+    try:
+        with pytest.raises(planefmt.FormatError) as err:
+            records.unpack(schema.COMPRESSION_BROTLI, stored, 1_000, records.Limits(max_compression_ratio=10 ** 9), 4)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert err.value.code == "SIZE_MISMATCH" and peak < 4_000_000

@@ -226,26 +226,25 @@ def unpack(method: int, stored: bytes, raw_size: int, limits: Limits, major: int
     return raw
 
 
-#: Stored bytes fed to the Brotli decoder at a time: one meta-block yields at most 16 MiB, so checking
-#: the output after each piece holds it to raw size + 16 MiB (spec §6).
-_BROTLI_PIECE = 64 * 1024
-
-
 def _unbrotli(stored: bytes, raw_size: int) -> bytes:
     """A Brotli stream (spec §6, method 2) that must decompress to exactly ``raw_size`` bytes and end
-    with the last stored byte."""
+    with the last stored byte. The decoder's output buffer is capped at raw size + 1 (it stops within
+    a block of its own, about 32 KiB, past the cap): a stream that would decompress to more is refused
+    before it does, whatever the ratio of its meta-blocks."""
     d = brotli.Decompressor()
     out: list[bytes] = []
     made = 0
+    pending = stored
     try:
-        for start in range(0, len(stored), _BROTLI_PIECE):
-            if d.is_finished():
-                raise FormatError("bytes after the end of the Brotli stream", code="BAD_COMPRESSION")
-            piece = d.process(stored[start:start + _BROTLI_PIECE])
+        while True:
+            piece = d.process(pending, output_buffer_limit=raw_size + 1 - made)
+            pending = b""
             made += len(piece)
             if made > raw_size:
                 raise FormatError(f"Brotli stream decompresses to more than {raw_size} bytes", code="SIZE_MISMATCH")
             out.append(piece)
+            if d.is_finished() or d.can_accept_more_data():
+                break
     except brotli.error as exc:
         raise FormatError(f"corrupt Brotli stream, or bytes after its end ({exc})", code="BAD_COMPRESSION") from None
     if not d.is_finished() or made != raw_size:
@@ -321,7 +320,8 @@ def _transform4(m: np.ndarray) -> dict:
     if not np.array_equal(m[3], [0.0, 0.0, 0.0, 1.0]):
         raise PlnError("a transform's last row must be 0 0 0 1", code="BAD_OBJECT")
     entries = m[:3].reshape(-1)
-    f32 = entries.astype(np.float32)
+    with np.errstate(over="ignore"):  # an entry beyond the f32 range is no f32: it takes code 3
+        f32 = entries.astype(np.float32)
     exact32 = f32.astype(np.float64) == entries
     zero = (entries == 0.0) & ~np.signbit(entries)
     codes = np.where(zero, 0, np.where(entries == 1.0, 1, np.where(exact32, 2, 3)))
