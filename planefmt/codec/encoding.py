@@ -309,4 +309,6 @@ def _scene_diagonal(scene: Scene, worlds: list[np.ndarray], meshes: list[int]) -
 
 def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True,
             verify: bool = True) -> Writer:
-    return Writer(target, header, compress=compress, index=index, verify=verify)
+    # A candidate measured for its size (verify off) is deflated only: Brotli's densest quality would
+    # triple King_geom.usd's encode (1.8 s to 5.9 s) for a ranking deflate gives as well.
+    return Writer(target, header, compress=compress, index=index, verify=verify, brotli=verify)

@@ -254,9 +254,9 @@ def _unbrotli(stored: bytes, raw_size: int) -> bytes:
 
 # spec §7 Plane table -------------------------------------------------------------------------
 
-def encode_planes(first: int, triplets: np.ndarray, header: Header, compress: bool) -> bytes:
+def encode_planes(first: int, triplets: np.ndarray, header: Header, compress: bool, brotli_allowed: bool = True) -> bytes:
     raw = quantize.encode_payload(triplets, header.coding, header.quantization)
-    method, stored = pack(raw, compress, brotli_allowed=header.version[0] >= 4)
+    method, stored = pack(raw, compress, brotli_allowed=brotli_allowed and header.version[0] >= 4)
     if header.version[0] >= 3:
         return schema.PlaneBlock3.build(dict(first=first, count=len(triplets), compression=method,
                                              raw_size=len(raw), data=stored))
@@ -377,7 +377,7 @@ def decode_object(payload: bytes, expected_index: int, major: int = 1) -> Object
 
 # spec §9 Part groups ------------------------------------------------------------------
 
-def encode_group(g: PartGroup, compress: bool, major: int = 1) -> bytes:
+def encode_group(g: PartGroup, compress: bool, major: int = 1, brotli_allowed: bool = True) -> bytes:
     """The GRUP payload; ``major`` 2 and 3 write the varint body of spec §9.2, 3 with the varint
     head of 3.0 (spec §9.1, §9.2; version 1's u32 body: Appendix A.1)."""
     if g.facets is not None and major < 3:
@@ -385,7 +385,8 @@ def encode_group(g: PartGroup, compress: bool, major: int = 1) -> bytes:
     if g.shell is not None and major < 3:
         raise PlnError("shell groups need version 3.2", code="UNKNOWN_GROUP_KIND")
     body = _compact_body(g) if major >= 2 else _body(g)
-    method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9, brotli_allowed=major >= 4)
+    method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9,
+                          brotli_allowed=brotli_allowed and major >= 4)
     if major >= 3:
         return schema.GroupHead3.build(dict(index=g.index, object=g.object, kind=int(g.kind), compression=method,
                                             raw_size=len(body), body=stored))

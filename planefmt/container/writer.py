@@ -49,16 +49,19 @@ class Writer:
     the file declares none. ``index``: write an ``iNDX`` chunk; None writes
     one when the file is :data:`INDEX_MIN_BYTES` or more before it. ``verify``: check that each
     shell group's body decodes to the shell given (spec §9.10, §9.11); the encoder turns it off only
-    to measure the size of a candidate it may not write. Use as a context manager: leaving the block
+    to measure the size of a candidate it may not write. ``brotli``: with ``compress``, in a version 4
+    file, each payload Brotli-compressed where that is smaller than deflate (spec §6); the encoder's size
+    trials turn it off (Brotli's densest quality takes about 1 s a megabyte). Use as a context manager: leaving the block
     by an exception discards a path target's temporary file.
     """
 
     def __init__(self, target: str | os.PathLike | BinaryIO, header: Header, *, compress: bool = False,
-                 index: bool | None = True, verify: bool = True) -> None:
+                 index: bool | None = True, verify: bool = True, brotli: bool = True) -> None:
         if int(header.coding) not in records.CODINGS.get(header.version[0], ()):
             raise PlnError(f"coding {int(header.coding)} cannot be written in a version {header.version[0]} file",
                            code="UNSUPPORTED_CODING")
         self._compress = compress
+        self._brotli = brotli
         self._index = index
         self._verify = verify
         self._path: Path | None = None
@@ -140,7 +143,7 @@ class Writer:
         first = self._planes
         for s in range(0, len(t), BLOCK_PLANES):
             block = t[s:s + BLOCK_PLANES]
-            self._emit(schema.PLNS, records.encode_planes(self._planes, block, self._header, self._compress),
+            self._emit(schema.PLNS, records.encode_planes(self._planes, block, self._header, self._compress, self._brotli),
                        self._planes)
             self._planes += len(block)
         return first
@@ -196,7 +199,7 @@ class Writer:
         group = PartGroup(index=index, object=obj, kind=int(kind), refs=refs.astype(np.uint32),
                           bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
                           facets=facets, shell=shell)
-        self._emit(schema.GRUP, records.encode_group(group, self._compress, self._major), index)
+        self._emit(schema.GRUP, records.encode_group(group, self._compress, self._major, self._brotli), index)
         self._groups.append(len(refs))
         return index
 
