@@ -188,9 +188,10 @@ def pack(data: bytes, compress: bool, level: int = 9, brotli_allowed: bool = Fal
     return best
 
 
-#: Brotli's quality 11 (its densest) by raw size: it takes about 1 s a megabyte, so that larger
-#: payloads drop to quality 9 (smooth_dense/bun_zipper.ply's 0.4 MB shell tree at draco-14's error).
-BROTLI_DENSEST_BYTES = 256 * 1024
+#: Largest payload compressed at Brotli's densest quality, 11, which takes about 2 s a megabyte
+#: (smooth_dense/bun_zipper.ply's 326 kB shell tree at 3e-5: 93.5 kB in 0.67 s; quality 9 gives
+#: 102.1 kB in 0.04 s, deflate 106.5 kB): larger ones take quality 9, so that no encode waits on it.
+BROTLI_DENSEST_BYTES = 1024 * 1024
 
 
 def _brotli_quality(size: int) -> int:
