@@ -75,13 +75,13 @@ def references(path: str | os.PathLike[str]) -> tuple[str, ...]:
 def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.glb`` file into ``(scene, dropped)``."""
     return read_scene(path, "glb", "binary glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS,
-                      reversed_siblings=True)
+                      reversed_siblings=True, primitives=True)
 
 
 def read_gltf(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.gltf`` file (and the buffers and images it refers to) into ``(scene, dropped)``."""
     return read_scene(path, "gltf", "glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS, reversed_siblings=True,
-                      resolver=_uri_resolver(path))
+                      resolver=_uri_resolver(path), primitives=True)
 
 
 def _uri_resolver(path: str | os.PathLike[str]) -> Any:

@@ -34,7 +34,7 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
           delta: float | None = None, tau: float | None = None, compress: bool = True,
-          compact: bool = True, watertight: bool = True, scheme: str = "shell") -> list[str]:
+          compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 4) -> list[str]:
     """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane.
 
     Returns what the encoder gave up (its :class:`PlnWarning` lines): with
@@ -46,7 +46,7 @@ def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PlnWarning)
         header = codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta,
-                                    tau=tau, compress=compress, compact=compact, watertight=watertight,
+                                    tau=tau, compress=compress, compact=compact, watertight=watertight, major=major,
                                     scheme=scheme)
     notes = [f"{dropped} zero-area triangle{'s' if dropped > 1 else ''} (no plane to store)"] if dropped else []
     instancing = instancing_note(scene)

@@ -12,6 +12,7 @@ formats that need it.
 from __future__ import annotations
 
 import os
+import re
 from collections.abc import Callable
 from dataclasses import replace
 from types import ModuleType
@@ -39,9 +40,15 @@ def require_trimesh(what: str) -> ModuleType:
     return trimesh
 
 
+#: The suffix trimesh's glTF loader gives the frame of each primitive of a mesh of several:
+#: ``util.unique_id(length=6)``, random hex.
+_PRIMITIVE_FRAME = re.compile(r"_[0-9a-f]{6}")
+
+
 def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
                units: Units = Units.UNSPECIFIED, up_axis: str | None = None,
-               reversed_siblings: bool = False, resolver: Any = None) -> tuple[Scene, list[str]]:
+               reversed_siblings: bool = False, resolver: Any = None,
+               primitives: bool = False) -> tuple[Scene, list[str]]:
     """Read ``path`` as ``file_type`` through trimesh into ``(scene, dropped)``.
 
     ``what`` names the format in messages ("binary glTF"); ``units`` and
@@ -49,7 +56,8 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
     failure becomes a :class:`ConversionError`; so does a file with no
     triangle. ``reversed_siblings``: trimesh's graph lists each node's
     children in reverse file order (see :func:`scene_from_trimesh`). ``resolver``:
-    how trimesh finds the files ``path`` refers to (default: by name beside it).
+    how trimesh finds the files ``path`` refers to (default: by name beside it). ``primitives``: see
+    :func:`scene_from_trimesh`.
     """
     tm = require_trimesh(what)
     file = os.fspath(path)
@@ -61,7 +69,7 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
         raise  # not a property of the file
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input
         raise ConversionError(f"cannot read as {what}: {describe(exc)}", file=file) from exc
-    scene, dropped = scene_from_trimesh(loaded, units, file, reversed_siblings)
+    scene, dropped = scene_from_trimesh(loaded, units, file, reversed_siblings, primitives)
     scene = replace(scene, up_axis=up_axis)
     if not any(node.mesh is not None for node in scene.nodes):
         raise ConversionError(f"no triangle mesh found in this {what} file", file=file)
@@ -69,7 +77,7 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
 
 
 def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
-                       reversed_siblings: bool = False) -> tuple[Scene, list[str]]:
+                       reversed_siblings: bool = False, primitives: bool = False) -> tuple[Scene, list[str]]:
     """Walk a trimesh scene graph into model nodes (depth first, parents first).
 
     Every graph node except trimesh's synthetic base frame becomes a node,
@@ -77,7 +85,10 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
     several nodes (instancing) becomes one shared :class:`Mesh`. With
     ``reversed_siblings`` each node's children are taken in reverse graph
     order: trimesh 5's glTF loader builds the graph popping a stack, which
-    reverses the file's sibling order (the round-trip tests watch this).
+    reverses the file's sibling order (the round-trip tests watch this). With ``primitives`` (glTF),
+    the frames trimesh makes for the primitives of a mesh of several, named after their node and a
+    random suffix (``d8_6cf88e``), are named ``<node>_<k>`` in order instead: a file converts to the
+    same bytes every time.
     """
     graph = loaded.graph
     children = graph.transforms.children
@@ -107,7 +118,12 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
                 degenerate += removed
             mesh = meshes[geometry_name]
         matrix = np.asarray(matrix, dtype=np.float64)
-        nodes.append(Node(name=str(name), parent=parent,
+        label = str(name)
+        if primitives and geometry_name is not None and parent is not None \
+                and _PRIMITIVE_FRAME.fullmatch(label[len(str(parent_name)):]) and label.startswith(str(parent_name)):
+            taken = sum(1 for node in nodes if node.parent == parent and node.name.startswith(f"{parent_name}_"))
+            label = f"{parent_name}_{taken}"
+        nodes.append(Node(name=label, parent=parent,
                           transform=None if np.array_equal(matrix, np.eye(4)) else matrix,
                           mesh=mesh))
         index = len(nodes) - 1

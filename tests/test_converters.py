@@ -537,3 +537,20 @@ def test_missing_dependency_fails_only_its_formats(tmp_path: Path,
     with pytest.raises(ConversionError, match="needs trimesh"):
         registry.read(tmp_path / "c.obj")
     assert registry.read(tmp_path / "c.usda")[0].nodes[0].mesh is not None
+
+
+def test_a_gltf_file_converts_to_the_same_bytes_every_time(tmp_path: Path) -> None:
+    """trimesh names the frames of a mesh's primitives with a random suffix (TestScene.gltf's two d8
+    meshes of two primitives each); the reader numbers them instead, so outputs are reproducible."""
+    from planefmt_converters.cli import main
+
+    src = CORPUS / "gltf_scene" / "TestScene.gltf"
+    outputs = []
+    for k in range(2):
+        assert main(["convert", str(src), str(tmp_path / f"{k}.pln"), "--tolerance", "1e-4"]) == 0
+        outputs.append((tmp_path / f"{k}.pln").read_bytes())
+    assert outputs[0] == outputs[1]
+    from planefmt_converters import registry
+
+    names = [node.name for node in registry.read(str(src))[0].nodes]
+    assert {"d8_0", "d8_1", "d8 (1)_0", "d8 (1)_1"} <= set(names)

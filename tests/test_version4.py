@@ -125,3 +125,35 @@ def test_a_brotli_bomb_stops_at_its_declared_raw_size() -> None:
     finally:
         tracemalloc.stop()
     assert err.value.code == "SIZE_MISMATCH" and peak < 4_000_000
+
+
+def test_major_3_writes_the_lowest_3x_version_for_readers_of_3x(tmp_path) -> None:
+    """``pln convert --major 3``: the same planes and surface as 4.0, in the file a 3.x reader reads."""
+    from planefmt_converters.cli import main
+
+    src = CORPUS / "gltf_scene" / "TestScene.gltf"
+    assert main(["convert", str(src), str(tmp_path / "v3.pln"), "--major", "3", "--tolerance", "1e-4"]) == 0
+    assert main(["convert", str(src), str(tmp_path / "v4.pln"), "--tolerance", "1e-4"]) == 0
+    v3, v4 = (tmp_path / "v3.pln").read_bytes(), (tmp_path / "v4.pln").read_bytes()
+    with planefmt.open(tmp_path / "v3.pln") as r:
+        header, kinds = r.header, {g.kind for g in r.part_groups()}
+    expected = 4 if GroupKind.SHELL_TREE_PARALLELOGRAM in kinds else 3 if GroupKind.SHELL_TREE in kinds else 2
+    assert header.version == (3, expected) and schema.COMPRESSION_BROTLI not in _payload_methods(v3)
+    assert len(v4) < len(v3)
+    a, b = (codec.decode_scene(tmp_path / name) for name in ("v3.pln", "v4.pln"))
+    for x, y in zip(a.nodes, b.nodes, strict=True):
+        assert x.name == y.name and (x.transform is None) == (y.transform is None)
+        assert x.transform is None or np.array_equal(x.transform, y.transform)
+        assert (x.mesh is None) == (y.mesh is None)
+        if x.mesh is not None:
+            assert np.array_equal(x.mesh.vertices, y.mesh.vertices) and np.array_equal(x.mesh.faces, y.mesh.faces)
+
+
+def test_an_unknown_major_is_refused_before_any_work(tmp_path) -> None:
+    import trimesh
+
+    box = trimesh.creation.box()
+    scene = Scene(nodes=(Node("box", mesh=Mesh(np.asarray(box.vertices), np.asarray(box.faces))),))
+    with pytest.raises(planefmt.PlnError) as err:
+        codec.encode_scene(scene, tmp_path / "x.pln", major=5)
+    assert err.value.code == "UNSUPPORTED_VERSION" and not (tmp_path / "x.pln").exists()

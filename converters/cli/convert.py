@@ -64,6 +64,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="write version 4.0 (spec/pln.md; the default): bit-packed or predicted plane codes, "
                         "whichever is smaller, varint group bodies and chunk heads, transforms entry by entry. "
                         "--no-compact writes version 1.0, for readers of 1.x only")
+    g.add_argument("--major", type=int, choices=[3, 4], default=4,
+                   help="4 (the default): version 4.0; 3: the lowest of versions 3.0 to 3.4 that holds the file, "
+                        "for readers of 3.x (deflate only, transforms as 16 doubles)")
     g.add_argument("--allow-open", action="store_true",
                    help="store a closed mesh that planes cannot close as an open surface (distance and area "
                         "kept, not watertight; marked lossy) instead of failing")
@@ -105,7 +108,7 @@ def _pln_options(args: argparse.Namespace) -> dict:
     from planefmt.model import Coding
 
     opts = {"tolerance": args.tolerance, "compress": args.compress, "compact": args.compact,
-            "watertight": not args.allow_open, "scheme": args.scheme}
+            "watertight": not args.allow_open, "scheme": args.scheme, "major": args.major}
     if args.bits is not None:
         opts["bits"] = args.bits
     if args.coding:

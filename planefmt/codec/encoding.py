@@ -18,7 +18,7 @@ import numpy as np
 from .. import progress
 from ..container import quantize, records
 from ..container.writer import BLOCK_PLANES, Writer
-from ..errors import GeometryError
+from ..errors import GeometryError, PlnError
 from ..geometry.planes import transform_points
 from ..groups.shells import reordered, reordered_tree
 from ..groups.solids import FLAT_STRATEGIES, STRATEGIES, Splitter
@@ -117,7 +117,7 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
 def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, tolerance: float = 1e-6,
                  coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
                  delta: float | None = None, tau: float | None = None, compress: bool = True,
-                 compact: bool = True, watertight: bool = True, scheme: str = "shell") -> Header:
+                 compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 4) -> Header:
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
     One object per node, keeping name, parent and transform; each node's
@@ -136,8 +136,13 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     and the predicted coding takes fewer bytes, group references, cells and trees as varints, chunk
     heads as varints, transforms entry by entry, a group's one colour once. The planes and the
     decoded surface are those of the version 1 file. A scene with sealed or shell groups is written
-    as version 4.0 whatever ``compact`` says: version 1.0 has no such kinds.
+    as version 4.0 whatever ``compact`` says: version 1.0 has no such kinds. ``major`` 3 writes, for
+    readers of 3.x, the lowest version 3.0 to 3.4 that holds the file (spec Appendix A.3): deflate
+    only, transforms as 16 doubles, a colour per reference.
     """
+    if major not in (3, 4):
+        raise PlnError(f"version {major}.x cannot be written: 3 or 4 (or 1.0 with compact=False)",
+                       code="UNSUPPORTED_VERSION")
     worlds = _world_transforms(scene.nodes)
     meshes = [i for i, n in enumerate(scene.nodes) if n.mesh is not None and len(n.mesh.faces)]
     forced = coding is not None or bits is not None
@@ -154,11 +159,11 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     def size(objects: list[_Object], choice: _Choice) -> int:
         buf = io.BytesIO()
         # A candidate measured for its size only: the file written is verified.
-        _write(scene, buf, meshes, objects, choice, tolerance, compress, compact, verify=False)
+        _write(scene, buf, meshes, objects, choice, tolerance, compress, compact, major, verify=False)
         return len(buf.getvalue())
 
     objects, choice = _encode_objects(prepare, len(meshes), tolerance, coding, bits, watertight, size, scheme)
-    return _write(scene, target, meshes, objects, choice, tolerance, compress, compact)
+    return _write(scene, target, meshes, objects, choice, tolerance, compress, compact, major)
 
 
 def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: float, coding: Coding | None,
@@ -208,7 +213,8 @@ def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: floa
 
 
 def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int], objects: list[_Object],
-           choice: _Choice, tolerance: float, compress: bool, compact: bool, verify: bool = True) -> Header:
+           choice: _Choice, tolerance: float, compress: bool, compact: bool, major: int = 4,
+           verify: bool = True) -> Header:
     """Write the scene's ``objects`` (those of nodes ``meshes``) in the chosen coding; its header."""
     sealed = any(g.kind == GroupKind.SEALED for o in objects for g in o.groups)
     shells = any(g.kind in SHELL_KINDS for o in objects for g in o.groups)
@@ -234,7 +240,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     if compact and stored.quantized:
         stored = min((Coding.QUANTIZED, Coding.PREDICTED), key=lambda c: _table_bytes(rows, c, choice.quantization,
                                                                                        compress))
-    header = Header(version=(4, 0) if compact else (1, 0), lossy=choice.lossy, coding=stored,
+    header = Header(version=_version(objects, major) if compact else (1, 0), lossy=choice.lossy, coding=stored,
                     quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
                     tolerance=float(tolerance), error_bound=choice.error_bound,
                     plane_count=len(rows), object_count=len(scene.nodes),
@@ -305,6 +311,15 @@ def _scene_diagonal(scene: Scene, worlds: list[np.ndarray], meshes: list[int]) -
         points.append(transform_points(v[np.unique(f)].astype(np.float64), worlds[i]))
     d = _diagonal(np.concatenate(points)) if points else 0.0
     return d if math.isfinite(d) else None
+
+
+def _version(objects: list[_Object], major: int) -> tuple[int, int]:
+    """4.0, or for ``major`` 3 the lowest minor version whose kinds hold every group (spec A.3)."""
+    if major == 4:
+        return (4, 0)
+    kinds = {g.kind for o in objects for g in o.groups}
+    minors = {GroupKind.SHELL_TREE_PARALLELOGRAM: 4, GroupKind.SHELL_TREE: 3, GroupKind.SHELL: 2, GroupKind.SEALED: 1}
+    return (3, max((minors.get(k, 0) for k in kinds), default=0))
 
 
 def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True,
