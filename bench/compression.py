@@ -26,7 +26,7 @@ from compare import CORPUS, load  # noqa: E402
 
 from planefmt import codec  # noqa: E402
 from planefmt.container import records, schema  # noqa: E402
-from planefmt.container.chunks import Limits  # noqa: E402
+from planefmt.container.chunks import ChunkStream, Limits  # noqa: E402
 from planefmt.model import TREE_KINDS  # noqa: E402
 
 MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf", ".usd", ".usda", ".usdz", ".usdc")
@@ -35,16 +35,16 @@ MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf", ".usd", ".usda
 def payload_bytes(data: bytes) -> tuple[int, int]:
     """(PLNS and GRUP payload bytes as stored, the same payloads deflated alone) of a version 4 file."""
     stored = deflated = 0
-    pos = len(schema.SIGNATURE)
-    while pos < len(data):
-        kind, size = data[pos:pos + 4], int.from_bytes(data[pos + 4:pos + 8], "little")
-        payload, pos = data[pos + 8:pos + 8 + size], pos + 12 + size
-        if kind == schema.GRUP:
-            head = schema.GroupHead3.parse(payload)
+    stream = ChunkStream(io.BytesIO(data), file=None, limits=Limits())
+    stream.read_signature()
+    while stream.offset < len(data):
+        chunk = stream.next_chunk()
+        if chunk.type == schema.GRUP:
+            head = schema.GroupHead3.parse(chunk.payload)
             body, level = bytes(head.body), records.SHELL_TREE_LEVEL if head.kind in TREE_KINDS else 9
             raw = records.unpack(head.compression, body, head.raw_size, Limits(), 4)
-        elif kind == schema.PLNS:
-            head = schema.PlaneBlock3.parse(payload)
+        elif chunk.type == schema.PLNS:
+            head = schema.PlaneBlock3.parse(chunk.payload)
             body, level = bytes(head.data), 9
             raw = records.unpack(head.compression, body, head.raw_size, Limits(), 4)
         else:

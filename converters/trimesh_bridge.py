@@ -96,6 +96,7 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
     degenerate = 0
     meshes: dict[str, Mesh | None] = {}
     nodes: list[Node] = []
+    numbered: dict[int, int] = {}  # primitive frames named so far under each node
 
     def pushed_order(node: str) -> list[str]:
         # the stack pops the last pushed first: push in reverse of the wanted order
@@ -118,11 +119,11 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
                 degenerate += removed
             mesh = meshes[geometry_name]
         matrix = np.asarray(matrix, dtype=np.float64)
-        label = str(name)
-        if primitives and geometry_name is not None and parent is not None \
-                and _PRIMITIVE_FRAME.fullmatch(label[len(str(parent_name)):]) and label.startswith(str(parent_name)):
-            taken = sum(1 for node in nodes if node.parent == parent and node.name.startswith(f"{parent_name}_"))
-            label = f"{parent_name}_{taken}"
+        label, stem = str(name), str(parent_name)
+        if (primitives and geometry_name is not None and parent is not None and label.startswith(stem)
+                and _PRIMITIVE_FRAME.fullmatch(label[len(stem):])):
+            numbered[parent] = numbered.get(parent, -1) + 1
+            label = f"{stem}_{numbered[parent]}"
         nodes.append(Node(name=label, parent=parent,
                           transform=None if np.array_equal(matrix, np.eye(4)) else matrix,
                           mesh=mesh))

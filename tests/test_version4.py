@@ -18,14 +18,17 @@ from corpus import CORPUS
 
 
 def _payload_methods(data: bytes) -> list[int]:
-    methods, pos = [], len(schema.SIGNATURE)
-    while pos < len(data):
-        kind, size = data[pos:pos + 4], int.from_bytes(data[pos + 4:pos + 8], "little")
-        payload, pos = data[pos + 8:pos + 8 + size], pos + 12 + size
-        if kind == schema.GRUP:
-            methods.append(schema.GroupHead3.parse(payload).compression)
-        elif kind == schema.PLNS:
-            methods.append(schema.PlaneBlock3.parse(payload).compression)
+    from planefmt.container.chunks import ChunkStream
+
+    stream = ChunkStream(io.BytesIO(data), file=None, limits=records.Limits())
+    stream.read_signature()
+    methods = []
+    while stream.offset < len(data):
+        chunk = stream.next_chunk()
+        if chunk.type == schema.GRUP:
+            methods.append(schema.GroupHead3.parse(chunk.payload).compression)
+        elif chunk.type == schema.PLNS:
+            methods.append(schema.PlaneBlock3.parse(chunk.payload).compression)
     return methods
 
 

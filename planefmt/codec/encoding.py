@@ -317,9 +317,7 @@ def _version(objects: list[_Object], major: int) -> tuple[int, int]:
     """4.0, or for ``major`` 3 the lowest minor version whose kinds hold every group (spec A.3)."""
     if major == 4:
         return (4, 0)
-    kinds = {g.kind for o in objects for g in o.groups}
-    minors = {GroupKind.SHELL_TREE_PARALLELOGRAM: 4, GroupKind.SHELL_TREE: 3, GroupKind.SHELL: 2, GroupKind.SEALED: 1}
-    return (3, max((minors.get(k, 0) for k in kinds), default=0))
+    return max((records.KIND_VERSION.get(int(g.kind), (3, 0)) for o in objects for g in o.groups), default=(3, 0))
 
 
 def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True,

@@ -144,7 +144,7 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
         plane_colours = np.zeros((len(order), 4), dtype=np.uint8)
         on = np.flatnonzero(face_plane >= 0)[::-1]
         mapped = index[face_plane[on]]
-        plane_colours[mapped[mapped >= 0]] = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[on][mapped >= 0]
+        plane_colours[mapped[mapped >= 0]] = colours[on][mapped >= 0]
         stored = index[np.maximum(face_plane, 0)]
         recoloured = int(((face_plane >= 0) & (stored >= 0)
                           & (plane_colours[np.maximum(stored, 0)] != colours).any(axis=1)).sum())
