@@ -303,9 +303,14 @@ def _predict(grid: np.ndarray, terms: np.ndarray) -> np.ndarray:
 
 
 def shell_kind_data(kind: GroupKind, shell: Shell) -> bytes:
-    """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11) or SHELL_TREE_PARALLELOGRAM (§9.12) group."""
+    """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11), SHELL_TREE_PARALLELOGRAM (§9.12) or
+    SHELL_WALK (§9.13) group."""
     if kind == GroupKind.SHELL:
         return _shell_body(shell)
+    if kind == GroupKind.SHELL_WALK:
+        from .shellwalk import shell_walk_body  # shellwalk builds on this module
+
+        return shell_walk_body(shell)
     return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
 
 
