@@ -335,7 +335,8 @@ def soup(rng, corners=12, count=40):
 
 
 GOLDEN_SHELLS = ["shell_tree_cube_v3_3", "shell_tree_mixed_v3_3", "shell_tree_apex_v3_3",
-                 "shell_tree_pyramid_v3_3", "shell_tree_box_v3_4", "shell_tree_pyramid_v3_4"]
+                 "shell_tree_pyramid_v3_3", "shell_tree_box_v3_4", "shell_tree_pyramid_v3_4",
+                 "shell_walk_cube_v4_1", "shell_walk_sphere_v4_1"]
 
 
 def golden_mesh(name):
