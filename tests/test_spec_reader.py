@@ -49,7 +49,8 @@ def test_spec_reader_conforms_at_container_level(case: Case):
 #: above covers every case; the whole suite by subprocess took 162 s on two loaded cores).
 BY_COMMAND = ["valid/cube_float32.pln", "valid/cube_v3.pln", "valid/shell_mixed_v3_2.pln",
               "valid/shell_tree_mixed_v3_3.pln", "invalid/xv3_shell_code_back.pln",
-              "invalid/xv3_tree_third_unnamed.pln", "invalid/xcrc_and_payload.pln"]
+              "invalid/xv3_tree_third_unnamed.pln", "invalid/xcrc_and_payload.pln",
+              "valid/shell_walk_sphere_v4_1.pln", "invalid/xv41_left_none.pln"]
 
 
 @pytest.mark.parametrize("path", BY_COMMAND)

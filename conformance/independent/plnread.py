@@ -8,7 +8,7 @@ the Python 3.11 standard library, and for the Brotli payloads of version
 4.0 (compression method 2) the PyPI package `brotli` (1.2 bounds the output
 of each call; with 1.1 the stored bytes are given one at a time), imported only when such a payload is met: files of versions 1.0 to 3.4, and
 4.0 files without Brotli payloads, need nothing else.  It reads versions
-1.0, 2.0, 3.0 to 3.4 and 4.0 (pln.md §13: files of major versions 1, 2, 3
+1.0, 2.0, 3.0 to 3.4, 4.0 and 4.1 (pln.md §13: files of major versions 1, 2, 3
 and 4, each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
 was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
@@ -49,7 +49,17 @@ each named corner's three local references, "grid": each explicit corner's
 integer coordinates (the zigzag steps summed), "origin" and "step" (null
 without explicit corners), "facets": each triangle as [face local reference
 or -1 for a free one, i0, i1, i2] with the corner codes resolved}; a shell
-tree (kind 7, version 3.3) the same object, its triangles in tree order.
+tree (kind 7, version 3.3; kind 8, 3.4) the same object, its triangles in tree
+order, and a shell walk (kind 9, version 4.1, pln.md §9.13) the same object,
+its triangles in walk order, an explicit corner's "grid" entry its integer
+coordinates (the values of the value tables, where the group has them, not
+the indices into them).  Kind 9 was added from the 4.1 text of pln.md §9.13
+and the sections it builds on, before any 4.1 golden file existed; its open
+edges are kept so that each triangle takes constant time (OpenEdges).  Adding
+it also moved the check of a shell tree's picks after the grid and the
+coordinates are read, where pln.md §9.11 puts it ("reads the picks, the grid
+and the coordinates, and checks the rest"); this reader had checked each pick
+as it read it.
 
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
@@ -89,8 +99,8 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0, 2.0, 3.4 and 4.0; pln.md §13: a reader of 4.0 reads major versions 1 to 4)
-READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 0}
+# (1.0, 2.0, 3.4 and 4.1; pln.md §13: a reader of 4.1 reads major versions 1 to 4)
+READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 1}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 
@@ -115,10 +125,12 @@ OBJ_HAS_TRANSFORM = 1  # §8.1
 KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
 # pln-3 §8.2: kind 5, the sealed surface (§8.8), exists in files of version 3.1
 # and later only, kind 6, the shell (§8.9), in files of version 3.2 and later,
-# kind 7, the shell tree (§8.10), in files of version 3.3 and later; in older
-# files each is a kind the file's version does not have
-SEALED_KIND, SHELL_KIND, SHELL_TREE_KIND, PARALLELOGRAM_KIND = 5, 6, 7, 8
-KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3), PARALLELOGRAM_KIND: (3, 4)}
+# kind 7, the shell tree (§8.10), in files of version 3.3 and later; pln.md
+# §9.3: kind 8 in 3.4 and later, kind 9, the shell walk (pln.md §9.13), in 4.1
+# and later; in older files each is a kind the file's version does not have
+SEALED_KIND, SHELL_KIND, SHELL_TREE_KIND, PARALLELOGRAM_KIND, WALK_KIND = 5, 6, 7, 8, 9
+KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3), PARALLELOGRAM_KIND: (3, 4),
+              WALK_KIND: (4, 1)}
 SHELL_COORD_LIMIT = 2**52  # pln-3 §8.9: each grid step and coordinate of magnitude at most 2^52
 SHELL_GRID_BYTES = 32  # pln-3 §8.9: origin x, y, z and step s, f64 each
 
@@ -407,6 +419,77 @@ def unbrotli(raw_size, stored, what):
         raise PlnError("SIZE_MISMATCH", "%s: Brotli stream decompresses to %d bytes, raw size %d"
                        % (what, total, raw_size))
     return b"".join(out)
+
+
+class OpenEdges:
+    """pln.md §9.13: the list of open directed edges of a shell walk, in
+    order of entry.  Each entry is a list [a, b, newer_out, older_out,
+    newer_in, older_in]: the links of the doubly linked lists of the
+    entries that start at a and that end at b, newest first (the head of
+    each list is in ``starts`` / ``ends``); ``stacks`` maps an edge (a, b)
+    to its entries, newest last.  Adding a triangle, and each left or right
+    answer, takes constant time."""
+
+    A, B, NEWER_OUT, OLDER_OUT, NEWER_IN, OLDER_IN = range(6)
+
+    def __init__(self):
+        self.stacks = {}
+        self.starts = {}  # corner -> newest entry starting there
+        self.ends = {}  # corner -> newest entry ending there
+
+    def add_triangle(self, corners):
+        """The edges (i0, i1), (i1, i2), (i2, i0) in that order: the newest
+        entry of an edge's reverse leaves the list (the edge is closed),
+        or else the edge enters it."""
+        for k in range(3):
+            a, b = corners[k], corners[(k + 1) % 3]
+            reverse = self.stacks.get((b, a))
+            if reverse:
+                self._remove(reverse.pop())
+            else:
+                self._insert(a, b)
+
+    def _insert(self, a, b):
+        entry = [a, b, None, self.starts.get(a), None, self.ends.get(b)]
+        if entry[self.OLDER_OUT] is not None:
+            entry[self.OLDER_OUT][self.NEWER_OUT] = entry
+        if entry[self.OLDER_IN] is not None:
+            entry[self.OLDER_IN][self.NEWER_IN] = entry
+        self.starts[a] = entry
+        self.ends[b] = entry
+        self.stacks.setdefault((a, b), []).append(entry)
+
+    def _remove(self, entry):
+        a, b, newer_out, older_out, newer_in, older_in = entry
+        if newer_out is None:
+            self.starts[a] = older_out
+        else:
+            newer_out[self.OLDER_OUT] = older_out
+        if older_out is not None:
+            older_out[self.NEWER_OUT] = newer_out
+        if newer_in is None:
+            self.ends[b] = older_in
+        else:
+            newer_in[self.OLDER_IN] = older_in
+        if older_in is not None:
+            older_in[self.NEWER_IN] = newer_in
+
+    def left(self, i1, opposite):
+        """Code 1: the start of the newest open edge ending at i1, or of the
+        second newest where that start is the parent's opposite corner;
+        None where there is no such edge."""
+        entry = self.ends.get(i1)
+        if entry is not None and entry[self.A] == opposite:
+            entry = entry[self.OLDER_IN]
+        return None if entry is None else entry[self.A]
+
+    def right(self, i0, opposite):
+        """Code 2: the end of the newest open edge starting at i0, or of the
+        second newest where that end is the parent's opposite corner."""
+        entry = self.starts.get(i0)
+        if entry is not None and entry[self.B] == opposite:
+            entry = entry[self.OLDER_OUT]
+        return None if entry is None else entry[self.B]
 
 
 # --------------------------------------------------------------------------
@@ -935,6 +1018,8 @@ class Reader:
             g["shell"] = self.read_shell(c, m, set(bounding))
         elif kind in (SHELL_TREE_KIND, PARALLELOGRAM_KIND):
             g["shell"] = self.read_shell_tree(c, m, set(bounding), kind == PARALLELOGRAM_KIND)
+        elif kind == WALK_KIND:
+            g["shell"] = self.read_shell_walk(c, m, set(bounding))
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.chunk_list.append((offset, b"GRUP", index))
@@ -1253,15 +1338,15 @@ class Reader:
         face_codes = [c.varint("face code %d" % j) for j in range(t)]
         flags = c.take((v + 7) // 8, "corner flags")
         check_bit_padding(flags, v, "GRUP shell tree corner flags")
-        explicit = [k for k in range(v) if (flags[k >> 3] >> (k & 7)) & 1]
-        is_explicit = set(explicit)
         # the triangles, in order: a parent comes before its children
         tris = []
+        parents = []  # (parent, edge) of each attached triangle, None for a root
         n = 0
         next_code = 0
         creator = {}  # corner -> the triangle whose code named it anew
         for j, link in enumerate(links):
             if link == 0:
+                parents.append(None)
                 corners = []
                 for _ in range(3):
                     code = codes[next_code]
@@ -1279,6 +1364,7 @@ class Reader:
                 d, e = (link - 1) // 3 + 1, (link - 1) % 3
                 if d > j:
                     raise PlnError("BAD_GROUP_STRUCTURE", "triangle %d: link %d, parent before the first" % (j, link))
+                parents.append((j - d, e))
                 q = tris[j - d]
                 corners = [q[(e + 1) % 3], q[e]]
                 code = codes[next_code]
@@ -1298,12 +1384,25 @@ class Reader:
             tris.append(corners)
         if n != v:
             raise PlnError("BAD_GROUP_STRUCTURE", "%d corners named anew, corner_count %d" % (n, v))
+        return self.read_shell_tree_rest(c, m, bounding, v, flags, face_codes, tris, parents, creator,
+                                         parallelogram)
+
+    def read_shell_tree_rest(self, c, m, bounding, v, flags, face_codes, tris, parents, creator,
+                             parallelogram=False, walk=False):
+        """What pln.md §9.11 and §9.13 have in common once the triangles,
+        each one's parent (or None) and the triangle that named each corner
+        anew are known: the faces (checked here, since they decide the
+        picks), the picks, the grid and the coordinates.  A shell walk
+        (``walk``, pln.md §9.13) has a mode byte before the grid (bit 0:
+        the parallelogram of §9.12; bit 1: per-axis value tables, read after
+        the grid, into which the predicted and resolved values index)."""
+        explicit = [k for k in range(v) if (flags[k >> 3] >> (k & 7)) & 1]
+        is_explicit = set(explicit)
         faces = []
         for j, code in enumerate(face_codes):
             if code == 0:
-                link = links[j]
-                if link:
-                    face = faces[j - ((link - 1) // 3 + 1)]
+                if parents[j] is not None:
+                    face = faces[parents[j][0]]
                 else:
                     face = faces[j - 1] if j else -1
             elif code == 1:
@@ -1326,39 +1425,61 @@ class Reader:
             if k in is_explicit:
                 continue
             planes = sorted(around[k])
-            if len(planes) < 3:
+            if len(planes) < 3:  # before the picks are read (SPEC_NOTES 18, 32)
                 raise PlnError("BAD_GROUP_STRUCTURE", "named corner %d on face planes %r" % (k, planes))
             named.append((k, planes))
-        vertex_planes = []
-        for k, planes in named:
-            if len(planes) == 3:
-                vertex_planes.append(planes)
-                continue
-            i, jj, ll = (c.varint("a pick of corner %d" % k) for _ in range(3))
-            if not i < jj < ll < len(planes):
-                raise PlnError("BAD_GROUP_STRUCTURE", "corner %d: picks %d %d %d of %d" % (k, i, jj, ll, len(planes)))
-            vertex_planes.append([planes[i], planes[jj], planes[ll]])
+        # the picks are read here and checked with the rest, after the grid
+        # and the coordinates are read (pln.md §9.11, §9.13: "reads the
+        # picks, the grid and the coordinates, and checks the rest")
+        picks = {k: [c.varint("a pick of corner %d" % k) for _ in range(3)]
+                 for k, planes in named if len(planes) > 3}
         origin = step = None
         grid = []
         if explicit:
+            e = len(explicit)
+            mode = c.u8("mode") if walk else 0
+            if walk:
+                parallelogram = bool(mode & 1)
             origin = c.f64s(3, "grid origin")
             step = c.f64s(1, "grid step")[0]
-            e = len(explicit)
+            tables = None
+            if mode & 2:
+                # pln.md §9.13: per axis a count C (1 <= C <= E, checked as
+                # it is read, pln.md §12.1 item 4, SPEC_NOTES 31), the first value as a
+                # zigzag varint, then C - 1 gaps g: next = previous + g + 1
+                tables = []
+                for axis in "xyz":
+                    count = c.varint("the %s table's count" % axis)
+                    if not 1 <= count <= e:
+                        raise PlnError("BAD_GROUP_STRUCTURE",
+                                       "the %s table's count %d, %d explicit corners" % (axis, count, e))
+                    values = [unzigzag(c.varint("the %s table's first value" % axis))]
+                    for _ in range(count - 1):
+                        values.append(values[-1] + c.varint("a gap of the %s table" % axis) + 1)
+                    tables.append(values)
             residuals = [[unzigzag(c.varint("a coordinate residual")) for _ in range(e)] for _ in range(3)]
             if c.remaining():
                 raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the coordinates" % c.remaining())
             if not all(math.isfinite(x) for x in origin) or not (math.isfinite(step) and step > 0):
                 raise PlnError("BAD_GROUP_STRUCTURE", "grid origin %r, step %r" % (origin, step))
-            xyz = {}
+            if mode > 3:  # with the rest (SPEC_NOTES 31)
+                raise PlnError("BAD_GROUP_STRUCTURE", "mode 0x%02X: a bit above bit 1 set" % mode)
+            if tables is not None:
+                for axis, values in zip("xyz", tables):
+                    for value in values:
+                        if abs(value) > SHELL_COORD_LIMIT:
+                            raise PlnError("BAD_GROUP_STRUCTURE",
+                                           "the %s table's value %d, beyond 2^52" % (axis, value))
+            xyz = {}  # with tables, each corner's indices into them; otherwise its coordinates
             previous = None
             for r, k in enumerate(explicit):  # corner order: every predictor comes first
                 j = creator[k]
                 first = tris[j][0]
-                pred = first if links[j] and first in is_explicit else previous
+                pred = first if parents[j] is not None and first in is_explicit else previous
                 base = [xyz[pred][a] if pred is not None else 0 for a in range(3)]
-                if parallelogram and links[j]:
-                    d, e = (links[j] - 1) // 3 + 1, (links[j] - 1) % 3
-                    second, opposite = tris[j][1], tris[j - d][(e + 2) % 3]
+                if parallelogram and parents[j] is not None:
+                    p, edge = parents[j]
+                    second, opposite = tris[j][1], tris[p][(edge + 2) % 3]
                     if first in is_explicit and second in is_explicit and opposite in is_explicit:
                         base = [xyz[first][a] + xyz[second][a] - xyz[opposite][a] for a in range(3)]
                 xyz[k] = []
@@ -1366,15 +1487,150 @@ class Reader:
                     value = residuals[a][r] + base[a]
                     if abs(residuals[a][r]) > SHELL_COORD_LIMIT or abs(value) > SHELL_COORD_LIMIT:
                         raise PlnError("BAD_GROUP_STRUCTURE",
-                                       "explicit corner %d: residual %d to coordinate %d, beyond 2^52"
-                                       % (k, residuals[a][r], value))
+                                       "explicit corner %d: residual %d to %s %d, beyond 2^52"
+                                       % (k, residuals[a][r], "index" if tables else "coordinate", value))
+                    if tables is not None and not 0 <= value < len(tables[a]):
+                        raise PlnError("BAD_GROUP_STRUCTURE",
+                                       "explicit corner %d: index %d outside the %s table of %d values"
+                                       % (k, value, "xyz"[a], len(tables[a])))
                     xyz[k].append(value)
                 previous = k
-            grid = [xyz[k] for k in explicit]
+            if tables is not None:
+                grid = [[tables[a][xyz[k][a]] for a in range(3)] for k in explicit]
+            else:
+                grid = [xyz[k] for k in explicit]
         elif c.remaining():
             raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the corner picks" % c.remaining())
+        vertex_planes = []
+        for k, planes in named:
+            if len(planes) == 3:
+                vertex_planes.append(planes)
+                continue
+            i, jj, ll = picks[k]
+            if not i < jj < ll < len(planes):
+                raise PlnError("BAD_GROUP_STRUCTURE", "corner %d: picks %d %d %d of %d" % (k, i, jj, ll, len(planes)))
+            vertex_planes.append([planes[i], planes[jj], planes[ll]])
         return {"explicit": explicit, "vertex_planes": vertex_planes, "grid": grid,
                 "origin": origin, "step": step, "facets": [[f] + k for f, k in zip(faces, tris)]}
+
+    # pln.md §9.13: the ordered lists of distinct free edges a symbol's c
+    # numbers, by length, then lexicographically by the edges' places among
+    # the triangle's free edges ((1, 2) attached, (0, 1, 2) a root)
+    WALK_CHILDREN_ATTACHED = ((), (1,), (2,), (1, 2), (2, 1))
+    WALK_CHILDREN_ROOT = ((), (0,), (1,), (2,), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1),
+                          (0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
+
+    def read_shell_walk(self, c, m, bounding):
+        """pln.md §9.13, kind 9: corner_count V, triangle_count T,
+        escape_count X (read, then checked against the bytes left after the
+        three); T symbols, X escapes, T face codes and the corner flags
+        (padding checked as read); then the walk: a stack of slots (triangle,
+        edge), a root where it is empty, otherwise a triangle attached to
+        the popped slot's edge; its symbol says across which of its free
+        edges it has children and, attached, how its third corner is coded
+        (0 new, 1 left, 2 right, 3 + an escape a zigzag step from i1); a
+        root's three corner codes are escapes.  Left and right name the
+        other end of an open edge at i1 or i0 (see OpenEdges).  After the
+        walk, the links it gives and everything after the escapes are those
+        of §9.11 (read_shell_tree_rest), with a mode byte and per-axis value
+        tables for the explicit corners.  Returned as a kind 7 group's
+        "shell", its triangles in walk order."""
+        v = c.varint("corner_count")
+        t = c.varint("triangle_count")
+        x = c.varint("escape_count")
+        left = c.remaining()
+        if not 3 <= v <= 8 * left:
+            raise PlnError("BAD_GROUP_STRUCTURE", "corner_count %d, %d bytes left" % (v, left))
+        if not 1 <= t <= left // 2:
+            raise PlnError("BAD_GROUP_STRUCTURE", "triangle_count %d, %d bytes left" % (t, left))
+        if x > left:
+            raise PlnError("BAD_GROUP_STRUCTURE", "escape_count %d, %d bytes left" % (x, left))
+        symbols = [c.varint("symbol %d" % j) for j in range(t)]
+        escapes = [c.varint("escape %d" % k) for k in range(x)]
+        face_codes = [c.varint("face code %d" % j) for j in range(t)]
+        flags = c.take((v + 7) // 8, "corner flags")
+        check_bit_padding(flags, v, "GRUP shell walk corner flags")
+
+        escape_iter = iter(escapes)
+
+        def next_escape(j):
+            value = next(escape_iter, None)
+            if value is None:
+                raise PlnError("BAD_GROUP_STRUCTURE",
+                               "triangle %d: the walk uses more than the %d escapes" % (j, x))
+            return value
+
+        stack = []
+        edges = OpenEdges()
+        tris, parents = [], []
+        creator = {}
+        n = 0
+        for j, symbol in enumerate(symbols):
+            if not stack:
+                if symbol >= 16:
+                    raise PlnError("BAD_GROUP_STRUCTURE", "root triangle %d: symbol %d" % (j, symbol))
+                children = self.WALK_CHILDREN_ROOT[symbol]
+                parents.append(None)
+                corners = []
+                for _ in range(3):
+                    code = next_escape(j)
+                    if code == 0:
+                        creator[n] = j
+                        corners.append(n)
+                        n += 1
+                    elif code > n:
+                        raise PlnError("BAD_GROUP_STRUCTURE",
+                                       "root triangle %d: corner code %d, %d corners named so far" % (j, code, n))
+                    else:
+                        corners.append(n - code)
+            else:
+                p, e = stack.pop()
+                if symbol >= 4 * len(self.WALK_CHILDREN_ATTACHED):
+                    raise PlnError("BAD_GROUP_STRUCTURE", "triangle %d: symbol %d" % (j, symbol))
+                children = self.WALK_CHILDREN_ATTACHED[symbol >> 2]
+                code = symbol & 3
+                if code == 3:
+                    code += next_escape(j)
+                parents.append((p, e))
+                q = tris[p]
+                i0, i1, opposite = q[(e + 1) % 3], q[e], q[(e + 2) % 3]
+                if code == 0:
+                    creator[n] = j
+                    third = n
+                    n += 1
+                elif code == 1:
+                    third = edges.left(i1, opposite)
+                    if third is None:
+                        raise PlnError("BAD_GROUP_STRUCTURE",
+                                       "triangle %d: a left code, no open edge ends at corner %d "
+                                       "(other than from %d)" % (j, i1, opposite))
+                elif code == 2:
+                    third = edges.right(i0, opposite)
+                    if third is None:
+                        raise PlnError("BAD_GROUP_STRUCTURE",
+                                       "triangle %d: a right code, no open edge starts at corner %d "
+                                       "(other than to %d)" % (j, i0, opposite))
+                else:
+                    third = i1 + unzigzag(code - 3)
+                    if not 0 <= third < n:
+                        raise PlnError("BAD_GROUP_STRUCTURE",
+                                       "triangle %d: third corner %d, %d corners named so far" % (j, third, n))
+                corners = [i0, i1, third]
+            if len(set(corners)) != 3:
+                raise PlnError("BAD_GROUP_STRUCTURE", "triangle %d: corners %r" % (j, corners))
+            tris.append(corners)
+            edges.add_triangle(corners)
+            for edge in children[::-1]:
+                stack.append((j, edge))
+        if stack:
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d slots on the stack after the last triangle" % len(stack))
+        unused = sum(1 for _ in escape_iter)
+        if unused:
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d escapes the walk does not use" % unused)
+        if n != v:
+            raise PlnError("BAD_GROUP_STRUCTURE", "%d corners named anew, corner_count %d" % (n, v))
+        return self.read_shell_tree_rest(c, m, bounding, v, flags, face_codes, tris, parents, creator,
+                                         walk=True)
 
     def check_tree(self, tokens, m):
         """§8.4: exactly one complete tree in preorder (tokens numbered as in §8.4)."""

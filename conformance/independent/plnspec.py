@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4 and 4.0), written from
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 and 4.1), written from
 spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
 
     python conformance/independent/plnspec.py FILE
@@ -13,6 +13,13 @@ of one colour for every reference) was added from the 4.0 text of those sections
 Appendix A. Its Brotli payloads need the PyPI package `brotli` (1.2 or later bounds the output
 per call; with 1.1 the stored bytes are fed one at a time); it is imported only when a method 2 payload is met, so files of versions 1.0
 to 3.4, and 4.0 files without Brotli payloads, are read without it.
+
+Version 4.1 (§9.13, kind 9, shell walks) was added from the 4.1 text of §9.13 and of the sections
+it builds on (§9.11, §9.12, §9.3, §5, §13), before any 4.1 golden file existed: the walk keeps
+its open edges in a map from each directed edge to the stack of its entries and, per corner,
+doubly linked lists of the entries starting and ending there, newest first (OpenEdges), so that
+each triangle takes constant time; what follows the escapes is read by the code of §9.11
+(shell_tree_rest), with §9.13's mode byte and value tables.
 
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
 comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
@@ -41,7 +48,7 @@ OBJECT_LIMIT = 1 << 24
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 # §10.3: the values of the keywords the spec defines
 META_VALUES = {"up_axis": ("Y", "Z")}
-NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 0}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.0"
+NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 1}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.1"
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
 PI_F32 = np.frombuffer(struct.pack("<I", 0x40490FDB), "<f4")[0]
@@ -144,6 +151,88 @@ def bit_string(data: bytes, nbits: int, what: str) -> list[int]:
 
 def none_if_nan(x: float):
     return None if math.isnan(x) else x
+
+
+# ---------------------------------------------------------------------------------------------
+# §9.13: the open edges of a shell walk
+
+class OpenEdges:
+    """The list of open directed edges (a, b) of §9.13, in order of entry, kept so that each
+    triangle takes constant time: a map from each directed edge to the stack of its entries, and
+    per corner two doubly linked lists of the entries starting and ending there, newest first.
+    Entries are numbered in order of entry; a closed entry is unlinked and never reused."""
+
+    def __init__(self):
+        self.by_edge: dict[tuple[int, int], list[int]] = {}  # (a, b) -> its entries, newest last
+        self.start: list[int] = []
+        self.end: list[int] = []
+        # the list of entries starting at a corner (out) and ending at it (in): next is older
+        self.out_next: list[int] = []
+        self.out_prev: list[int] = []
+        self.in_next: list[int] = []
+        self.in_prev: list[int] = []
+        self.out_head: dict[int, int] = {}  # corner -> its newest entry starting there
+        self.in_head: dict[int, int] = {}  # corner -> its newest entry ending there
+
+    def toggle(self, a: int, b: int):
+        """Edge (a, b) of a triangle: the newest entry (b, a) leaves the list where there is one
+        (the edge is closed), otherwise (a, b) enters it as the newest entry."""
+        reverse = self.by_edge.get((b, a))
+        if reverse:
+            self.unlink(reverse.pop())
+            if not reverse:
+                del self.by_edge[(b, a)]
+            return
+        k = len(self.start)
+        self.start.append(a)
+        self.end.append(b)
+        self.by_edge.setdefault((a, b), []).append(k)
+        old = self.out_head.get(a, -1)
+        self.out_next.append(old)
+        self.out_prev.append(-1)
+        if old >= 0:
+            self.out_prev[old] = k
+        self.out_head[a] = k
+        old = self.in_head.get(b, -1)
+        self.in_next.append(old)
+        self.in_prev.append(-1)
+        if old >= 0:
+            self.in_prev[old] = k
+        self.in_head[b] = k
+
+    def unlink(self, k: int):
+        a, b = self.start[k], self.end[k]
+        nxt, prv = self.out_next[k], self.out_prev[k]
+        if prv >= 0:
+            self.out_next[prv] = nxt
+        else:
+            self.out_head[a] = nxt
+        if nxt >= 0:
+            self.out_prev[nxt] = prv
+        nxt, prv = self.in_next[k], self.in_prev[k]
+        if prv >= 0:
+            self.in_next[prv] = nxt
+        else:
+            self.in_head[b] = nxt
+        if nxt >= 0:
+            self.in_prev[nxt] = prv
+
+    def starts_ending_at(self, c: int) -> list[int]:
+        """The starts of the newest and the second newest open edges that end at c (fewer where
+        there are fewer)."""
+        out, k = [], self.in_head.get(c, -1)
+        while k >= 0 and len(out) < 2:
+            out.append(self.start[k])
+            k = self.in_next[k]
+        return out
+
+    def ends_starting_at(self, c: int) -> list[int]:
+        """The ends of the newest and the second newest open edges that start at c."""
+        out, k = [], self.out_head.get(c, -1)
+        while k >= 0 and len(out) < 2:
+            out.append(self.end[k])
+            k = self.out_next[k]
+        return out
 
 
 # ---------------------------------------------------------------------------------------------
@@ -587,7 +676,7 @@ class Reader:
     # §9
     def kinds(self) -> set[int]:
         if self.major >= 4:
-            return set(range(9))  # §9.3: kinds 0-8 in 4.0
+            return set(range(9 + min(self.minor, 1)))  # §9.3: kinds 0-8 in 4.0, 0-9 in 4.1 (and later)
         if self.major == 3:
             return set(range(5 + min(self.minor, 4)))  # §9.3: 3.1 adds kind 5, 3.2 kind 6, 3.3 kind 7, 3.4 kind 8
         return set(range(5))
@@ -638,6 +727,8 @@ class Reader:
             group["shell"] = self.shell(b, refs, roles)
         elif kind in (7, 8):
             group["shell"] = self.shell_tree(b, refs, roles, parallelogram=kind == 8)
+        elif kind == 9:
+            group["shell"] = self.shell_walk(b, refs, roles)
         self.chunks.append((offset, b"GRUP", index))
         self.groups.append(group)
         self.group_refs.append(len(refs))
@@ -851,7 +942,6 @@ class Reader:
         with the same corners and triangles (conformance/README.md, kind 7). Kind 8 (§9.12,
         ``parallelogram``) predicts an explicit corner by the parallelogram of its attached
         triangle's shared edge and the parent's opposite corner, where all three are explicit."""
-        m = len(refs)
         # 1. the two counts, read, then checked against the bytes left after both (as §9.11 says;
         #    the same pattern as §9.10, SPEC_NOTES 15)
         v = b.varint("corner_count")
@@ -912,6 +1002,15 @@ class Reader:
             tris.append(tri)
         if n != v:  # with the corner codes, before the picks are read (SPEC_NOTES 18)
             fail("BAD_GROUP_STRUCTURE", f"{n} corners named, V = {v}")
+        return self.shell_tree_rest(b, len(refs), roles, v, flags, face_codes, parents, tris, named_by,
+                                    parallelogram=parallelogram)
+
+    def shell_tree_rest(self, b: Cursor, m: int, roles: list[int], v: int, flags: list[int],
+                        face_codes: list[int], parents: list, tris: list[list[int]], named_by: list[int],
+                        parallelogram: bool = False, walk: bool = False) -> dict:
+        """What §9.11 and §9.13 share after the triangles are known: the faces checked, the picks,
+        (kind 9: the mode byte), the grid, (kind 9: the value tables), the coordinates; then the
+        rest checked. ``parents`` holds (p, e) for an attached triangle, None for a root."""
         faces = []  # local reference of each triangle, -1 for a free one
         for j, fc in enumerate(face_codes):
             if fc == 0:
@@ -940,15 +1039,22 @@ class Reader:
         named = [c for c in range(v) if not flags[c]]
         pk = {c: sorted(planes_of[c]) for c in named}
         w = sum(1 for c in named if len(pk[c]) > 3)
-        # 4. the picks, the grid and the coordinates, read
+        # 4. the picks, (kind 9: the mode,) the grid, (kind 9: the tables,) the coordinates, read
         picks = b.varints(3 * w, "the picks")
         explicit = [c for c in range(v) if flags[c]]
         e_count = len(explicit)
         origin = step = None
         residuals = []
+        mode = 0
+        tables = None  # kind 9 with mode bit 1: the values of each axis, ascending
         if e_count:
+            if walk:
+                mode = b.u8("the mode")  # its bits 2-7 are checked with the rest (SPEC_NOTES 31)
+                parallelogram = bool(mode & 1)
             ox, oy, oz, step = struct.unpack("<4d", b.take(32, "the grid"))
             origin = [ox, oy, oz]
+            if mode & 2:
+                tables = [self.value_table(b, e_count, "xyz"[a]) for a in range(3)]
             residuals = b.varints(3 * e_count, "the coordinates")
         # 5. the rest, checked: bytes left first, as §9.10 step 4 and §12.1 item 6 (SPEC_NOTES 19)
         if b.left():
@@ -973,10 +1079,18 @@ class Reader:
         if e_count:
             if not (all(math.isfinite(x) for x in origin) and math.isfinite(step) and step > 0):
                 fail("BAD_GROUP_STRUCTURE", f"grid origin {origin}, step {step}")
+            lim = 1 << 52
+            if mode & ~3:
+                fail("BAD_GROUP_STRUCTURE", f"mode {mode:#04x}: a bit above 1 set")
+            if tables is not None:
+                for a, values in enumerate(tables):
+                    if any(abs(x) > lim for x in values):  # every table value (SPEC_NOTES 35)
+                        fail("BAD_GROUP_STRUCTURE", f"the {'xyz'[a]} table: a value beyond 2^52")
             # the predictor of each explicit corner: i0 of the attached triangle that names it anew,
             # where that i0 is explicit; otherwise the previous explicit corner (none for the first).
-            # The rule of the "Explicit corners" paragraph, not the overview's bullet (SPEC_NOTES 23)
-            lim = 1 << 52
+            # The rule of the "Explicit corners" paragraph, not the overview's bullet (SPEC_NOTES 23).
+            # Kind 9 with tables: the values predicted and resolved are indices into each axis's
+            # table, resolved the same way, each within [0, C) (§9.13).
             res = [[unzigzag(r) for r in residuals[a * e_count:(a + 1) * e_count]] for a in range(3)]
             xyz = {}
             for x, c in enumerate(explicit):
@@ -997,12 +1111,139 @@ class Reader:
                         base = [a + b_ - c_ for a, b_, c_ in zip(xyz[i0], xyz[i1], xyz[o])]
                 point = [a + s for a, s in zip(base, r)]
                 if any(abs(a) > lim for a in point):
-                    fail("BAD_GROUP_STRUCTURE", f"explicit corner {c}: coordinate {point} beyond 2^52")
+                    fail("BAD_GROUP_STRUCTURE", f"explicit corner {c}: "
+                                                f"{'index' if tables else 'coordinate'} {point} beyond 2^52")
+                if tables is not None:
+                    for a in range(3):
+                        if not 0 <= point[a] < len(tables[a]):
+                            fail("BAD_GROUP_STRUCTURE", f"explicit corner {c}: index {point[a]} outside "
+                                                        f"the {len(tables[a])} values of the {'xyz'[a]} table")
                 xyz[c] = point
-            grid = [xyz[c] for c in explicit]
+            if tables is not None:
+                grid = [[tables[a][xyz[c][a]] for a in range(3)] for c in explicit]
+            else:
+                grid = [xyz[c] for c in explicit]
         facets = [[f, *tri] for f, tri in zip(faces, tris)]
         return {"explicit": explicit, "vertex_planes": vertex_planes, "grid": grid,
                 "origin": origin, "step": step, "facets": facets}
+
+    @staticmethod
+    def value_table(b: Cursor, e_count: int, axis: str) -> list[int]:
+        """§9.13, one axis's table: a count C, 1 <= C <= E, checked when read (§12.1 item 4,
+        SPEC_NOTES 31); the first value, zigzag; C - 1 gaps g, each next value the previous + g + 1."""
+        count = b.varint(f"the {axis} table's count")
+        if count < 1 or count > e_count:
+            fail("BAD_GROUP_STRUCTURE", f"the {axis} table's count {count}, E = {e_count}")
+        value = unzigzag(b.varint(f"the {axis} table's first value"))
+        values = [value]
+        for _ in range(count - 1):
+            value += b.varint(f"the {axis} table's values") + 1
+            values.append(value)
+        return values
+
+    # §9.13 (added at version 4.1, from §9.13 and the sections it builds on)
+    # The ordered lists of distinct free edges a symbol's c numbers: by length, then in
+    # lexicographic order of the edges' places in the triangle's free edges.
+    ATTACHED_CHILDREN = [(), (1,), (2,), (1, 2), (2, 1)]
+    ROOT_CHILDREN = [(), (0,), (1,), (2,), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1),
+                     (0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
+
+    def shell_walk(self, b: Cursor, refs: list[int], roles: list[int]) -> dict:
+        """Kind 9, a shell tree coded as a depth-first walk: one symbol per triangle (its
+        children's edges and, attached, the kind of its third corner), escapes for what the
+        symbols cannot say, then what §9.11 stores after its corner codes, with a mode byte and
+        optional per-axis value tables before the coordinates. Reported as kinds 7 and 8 are."""
+        # 1. the three counts, read, then checked against the bytes left after all three
+        v = b.varint("corner_count")
+        t = b.varint("triangle_count")
+        x_count = b.varint("escape_count")
+        left = b.left()
+        if v < 3 or v > 8 * left or t < 1 or 2 * t > left or x_count > left:
+            fail("BAD_GROUP_STRUCTURE", f"counts V={v} T={t} X={x_count} with {left} bytes left")
+        # 2. the symbols, the escapes, the faces and the flags, read
+        symbols = b.varints(t, "the symbols")
+        escapes = b.varints(x_count, "the escapes")
+        face_codes = b.varints(t, "the faces")
+        flags = bit_string(b.take((v + 7) // 8, "the corner flags"), v, "the corner flags")
+        # 3. the walk
+        esc = 0
+
+        def escape(j: int) -> int:
+            nonlocal esc
+            if esc >= x_count:
+                fail("BAD_GROUP_STRUCTURE", f"triangle {j}: the walk needs more than the {x_count} escapes")
+            esc += 1
+            return escapes[esc - 1]
+
+        stack: list[tuple[int, int]] = []  # slots (triangle, edge), the top last
+        open_edges = OpenEdges()
+        n, tris, parents, named_by = 0, [], [], []
+        for j in range(t):
+            s = symbols[j]
+            if not stack:  # a root
+                if s >= 16:
+                    fail("BAD_GROUP_STRUCTURE", f"root triangle {j}: symbol {s} above 15")
+                children = self.ROOT_CHILDREN[s]
+                parents.append(None)
+                tri = []
+                for _ in range(3):  # the codes of §9.10
+                    code = escape(j)
+                    if code == 0:
+                        tri.append(n)
+                        named_by.append(j)
+                        n += 1
+                    elif n - code < 0:
+                        fail("BAD_GROUP_STRUCTURE", f"root triangle {j}: code {code} names a corner below 0")
+                    else:
+                        tri.append(n - code)
+            else:
+                p, e = stack.pop()
+                if s >= 20:
+                    fail("BAD_GROUP_STRUCTURE", f"triangle {j}: symbol {s}, c = {s // 4} above 4")
+                children = self.ATTACHED_CHILDREN[s // 4]
+                k = s % 4
+                if k == 3:
+                    k = 3 + escape(j)
+                parents.append((p, e))
+                q = tris[p]
+                i0, i1, x = q[(e + 1) % 3], q[e], q[(e + 2) % 3]
+                if k == 0:
+                    i2 = n
+                    named_by.append(j)  # the triangle whose code 0 names the corner (SPEC_NOTES 34)
+                    n += 1
+                elif k in (1, 2):
+                    # 1, left: the start of the newest open edge ending at i1 (the second newest
+                    # where that start is x); 2, right: the end of the newest open edge starting
+                    # at i0 (likewise); the second newest whatever its end (SPEC_NOTES 33)
+                    found = open_edges.starts_ending_at(i1) if k == 1 else open_edges.ends_starting_at(i0)
+                    if found and found[0] == x:
+                        found = found[1:]
+                    if not found:
+                        fail("BAD_GROUP_STRUCTURE", f"triangle {j}: a {'left' if k == 1 else 'right'} "
+                                                    f"code with no open edge to name")
+                    i2 = found[0]
+                else:
+                    i2 = i1 + unzigzag(k - 3)  # k = 3 names i1 itself (SPEC_NOTES 30)
+                    if not 0 <= i2 < n:
+                        fail("BAD_GROUP_STRUCTURE", f"triangle {j}: code {k} names corner {i2}, "
+                                                    f"{n} named before it")
+                tri = [i0, i1, i2]
+            if len(set(tri)) < 3:
+                fail("BAD_GROUP_STRUCTURE", f"triangle {j} names one corner twice: {tri}")
+            tris.append(tri)
+            for a in range(3):
+                open_edges.toggle(tri[a], tri[(a + 1) % 3])
+            for edge in reversed(children):  # the first list entry ends on top
+                stack.append((j, edge))
+        if stack:
+            fail("BAD_GROUP_STRUCTURE", f"{len(stack)} slots left on the stack after the last triangle")
+        if esc != x_count:
+            fail("BAD_GROUP_STRUCTURE", f"{x_count - esc} escapes left over")
+        if n != v:
+            fail("BAD_GROUP_STRUCTURE", f"{n} corners named, V = {v}")
+        # 4. the faces checked, then the picks and the rest, as §9.11 (with the links the walk gives)
+        return self.shell_tree_rest(b, len(refs), roles, v, flags, face_codes, parents, tris, named_by,
+                                    walk=True)
 
     # §10.1
     def colr(self, p: bytes):
