@@ -204,6 +204,12 @@ SHELL_GRID_BYTES = 32
 # data: corner and triangle counts, links, corner codes, face codes (varints), one flag bit per
 # corner, picks (varints), then where a corner is explicit the same ShellGrid and zigzag varint
 # residuals, every x, then every y, then every z (read in bulk by shellfields.py)
+# spec §9.13 Shell walk (kind 9, version 4.1) data: corner, triangle and escape counts, one symbol
+# per triangle (its children and its third corner's code), the escapes, face codes (varints), one
+# flag bit per corner, picks, then where a corner is explicit a mode byte (bit 0 parallelogram, bit 1
+# tables), the same ShellGrid, per axis a table of values where bit 1 says so (count, first, gaps),
+# and the zigzag varint residuals (the walk is sequential: shellwalk.py and _chains.c)
+SHELL_WALK_MODES = 0b11
 
 # spec §10.1 Face colours (cOLR, ancillary)
 Colours = cs.Struct(

@@ -525,7 +525,7 @@ def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, 
             tables, pos = _read_tables(raw, pos, e)
         deltas, used = varint.decode(raw[pos:], 3 * e, "shell tree corner coordinates")
         pos += used
-        if mode & ~3:
+        if mode & ~schema.SHELL_WALK_MODES:
             raise bad(f"coordinate mode {mode} has a bit above 1 set")
         steps = varint.unzigzag(deltas).reshape(3, -1).T
         if np.abs(steps).max(initial=0) > MAX_GRID:
