@@ -23,14 +23,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planefmt.container import records, schema, shellfields, varint
+from planefmt.container import records, schema, shellfields, shellwalk, varint
 from planefmt.container.chunks import chunk_bytes
 from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization, Units
 
 from . import reference
 from .build import CUBE, SPEC_HEADER, Layout, box, finish, frame, offsets
 from .cases_valid import (IN, L_CELLS, L_PLANES, L_TREE, OUT, SEALED_CUBE_FACETS, SEALED_CUBE_VERTICES, SHELL_CUBE,
-                          SHELL_MIXED, SHELL_PYRAMID, TREE_APEX, TREE_CUBE, TREE_MIXED, TREE_PYRAMID, tree_of)
+                          SHELL_MIXED, SHELL_PYRAMID, TREE_APEX, TREE_BOX, TREE_CUBE, TREE_MIXED, TREE_PYRAMID, tree_of)
 
 
 @dataclass(frozen=True)
@@ -1584,3 +1584,143 @@ def _uniform_in(major: int, colours: bytes) -> bytes:
       "group's 6 references")
 def _():
     return _uniform_in(4, schema.ColoursHead.build(dict(group=0, count=5)) + bytes([1, 2, 3, 255]))
+
+
+# -- shell walks (spec/pln.md §9.13, version 4.1) --------------------------------------------------
+
+def walk_file(fields: dict[str, bytes], version: tuple[int, int] = (4, 1)) -> bytes:
+    """The cube of spec/pln-1.md §12 in a version 4.1 file (or ``version``), float64, with a shell walk
+    (kind 9) of the kind data ``fields`` on its six planes, stored without compression."""
+    body = CUBE_REFS + b"".join(fields.values())
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=9, compression=0, raw_size=len(body), body=body))
+    layout = cube(PHDR=header(version=version, coding=Coding.FLOAT64),
+                  OBJT=records.encode_object(ObjectRecord(0, "cube", None, None), version[0]),
+                  PLNS=records.encode_planes(0, CUBE, dataclasses.replace(V4_F64, version=version), False), GRUP=group)
+    return frame(finish(layout, True, version[0]))
+
+
+def walk_fields(shell=TREE_CUBE, coding: int | None = None, **changed: bytes) -> dict[str, bytes]:
+    """The fields of ``shell``'s shell walk body by name (explicit corners in mode ``coding``),
+    ``changed`` ones replaced."""
+    return {**shellwalk.shell_walk_fields(shell, coding), **changed}
+
+
+def walk_values(name: str, shell=TREE_CUBE, mode: int | None = None) -> list[int]:
+    """The varints of field ``name`` of ``shell``'s walk body."""
+    return _all_varints(np.frombuffer(shellwalk.shell_walk_fields(shell, mode)[name], dtype=np.uint8))
+
+
+def _all_varints(data: np.ndarray) -> list[int]:
+    out, pos = [], 0
+    while pos < len(data):
+        (x,), used = varint.decode(data[pos:], 1, "field")
+        out.append(int(x))
+        pos += used
+    return out
+
+
+def _codes(values: list[int]) -> bytes:
+    return varint.encode(np.array(values, dtype=np.uint64))
+
+
+@case("xv41_walk_in_4_0", "UNKNOWN_GROUP_KIND", "a well-formed shell walk cube (kind 9) in a version 4.0 file, "
+      "whose version has no kind 9")
+def _():
+    return walk_file(walk_fields(), version=(4, 0))
+
+
+@case("xv41_root_symbol", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose root's symbol is 16: past "
+      "the 16 lists of a root's free edges")
+def _():
+    return walk_file(walk_fields(symbols=_codes([16] + walk_values("symbols")[1:])))
+
+
+@case("xv41_attached_symbol", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose second triangle's symbol "
+      "is 20: children list 5, past the 5 lists of an attached triangle's free edges")
+def _():
+    s = walk_values("symbols")
+    return walk_file(walk_fields(symbols=_codes(s[:1] + [20] + s[2:])))
+
+
+@case("xv41_stack_left", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose last triangle's symbol says "
+      "it has a child across its edge 1: the stack holds a slot after the last triangle")
+def _():
+    s = walk_values("symbols")
+    return walk_file(walk_fields(symbols=_codes(s[:-1] + [s[-1] + 4])))
+
+
+@case("xv41_escape_left", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube with one escape more than its walk "
+      "uses (escape_count 4, a last escape 0)")
+def _():
+    f = walk_fields()
+    (v, t, x) = _all_varints(np.frombuffer(f["counts"], dtype=np.uint8))
+    return walk_file({**f, "counts": _codes([v, t, x + 1]), "escapes": f["escapes"] + b"\x00"})
+
+
+@case("xv41_escape_short", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose escape_count is 2 and which "
+      "stores two escapes: its root needs three")
+def _():
+    f = walk_fields()
+    (v, t, x) = _all_varints(np.frombuffer(f["counts"], dtype=np.uint8))
+    return walk_file({**f, "counts": _codes([v, t, 2]), "escapes": f["escapes"][:2]})
+
+
+@case("xv41_left_none", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose second triangle's corner code "
+      "is 1, left: the only open edge ending at its corner i1 starts at its parent's opposite corner, so there is "
+      "none to name")
+def _():
+    s = walk_values("symbols")
+    return walk_file(walk_fields(symbols=_codes(s[:1] + [s[1] - s[1] % 4 + 1] + s[2:])))
+
+
+@case("xv41_corner_twice", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose second triangle's third "
+      "corner is coded as a step of -1 from its i1 (escape 1): corner i1 - 1, which is its i0")
+def _():
+    f = walk_fields()
+    s = walk_values("symbols")
+    (v, t, x) = _all_varints(np.frombuffer(f["counts"], dtype=np.uint8))
+    e = walk_values("escapes")
+    return walk_file({**f, "counts": _codes([v, t, x + 1]), "symbols": _codes(s[:1] + [s[1] - s[1] % 4 + 3] + s[2:]),
+                      "escapes": _codes(e[:3] + [1] + e[3:])})
+
+
+@case("xv41_unnamed_step", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose second triangle's third "
+      "corner is a step of +1 from its i1 (escape 2): corner 3, not yet named")
+def _():
+    f = walk_fields()
+    s = walk_values("symbols")
+    (v, t, x) = _all_varints(np.frombuffer(f["counts"], dtype=np.uint8))
+    e = walk_values("escapes")
+    return walk_file({**f, "counts": _codes([v, t, x + 1]), "symbols": _codes(s[:1] + [s[1] - s[1] % 4 + 3] + s[2:]),
+                      "escapes": _codes(e[:3] + [2] + e[3:])})
+
+
+@case("xv41_mode_bits", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk of the all-explicit cube whose coordinate "
+      "mode is 4: a bit above bit 1")
+def _():
+    return walk_file(walk_fields(TREE_BOX, 0, mode=b"\x04"))
+
+
+@case("xv41_table_empty", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk of the all-explicit cube in mode 2 "
+      "(tables) whose x table has a count of 0")
+def _():
+    f = walk_fields(TREE_BOX, 2)
+    return walk_file({**f, "tables": b"\x00" + f["tables"][1:]})
+
+
+@case("xv41_table_index", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk of the all-explicit cube in mode 2 whose "
+      "x table holds one value (0) where its corners' indices reach 1")
+def _():
+    f = walk_fields(TREE_BOX, 2)
+    t = _all_varints(np.frombuffer(f["tables"], dtype=np.uint8))
+    # t: count 2, first 0, gap 0 per axis: drop x's second value.
+    return walk_file({**f, "tables": _codes([1, t[1]] + t[3:])})
+
+
+@case("xv41_truncated", "BAD_PAYLOAD", "version 4.1 shell walk cube whose escape_count is 12 where it stores 3, "
+      "and which ends after its faces: the escapes read 9 bytes of the faces, and the body ends inside the faces")
+def _():
+    f = walk_fields()
+    (v, t, x) = _all_varints(np.frombuffer(f["counts"], dtype=np.uint8))
+    return walk_file({"counts": _codes([v, t, 12]), "symbols": f["symbols"], "escapes": f["escapes"],
+                      "faces": f["faces"]})

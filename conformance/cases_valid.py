@@ -459,6 +459,50 @@ TREE_BOX = tree_of([1] * 8, [], [(1, 0, 0), (1, 1, 0), (1, 1, 1), (1, 0, 1), (0,
                    TREE_CUBE.facets, TREE_CUBE.links)
 V34_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 4))
 V40_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 0))
+V41_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 1))
+
+
+def _sphere_walk() -> Shell:
+    """trimesh's icosphere of one subdivision (42 corners, 80 triangles) at 4 steps a unit, every
+    corner explicit, every triangle free, laid out along planefmt's depth-first walk: as a shell walk
+    (spec §9.13) it has branching triangles (two children, either order), left codes, a corner step in
+    an escape, and leaves."""
+    import trimesh
+
+    from planefmt.container.shellfields import first_use_order
+    from planefmt.groups.shells import shell_tree
+
+    m = trimesh.creation.icosphere(subdivisions=1)
+    rank = first_use_order(m.faces, len(m.vertices))
+    grid = np.empty((len(m.vertices), 3), dtype=np.int64)
+    grid[rank] = np.rint(m.vertices * 4).astype(np.int64)
+    flat = Shell(explicit=np.ones(len(grid), dtype=bool), vertex_planes=np.zeros((0, 3), dtype=np.int64), grid=grid,
+                 origin=np.zeros(3), step=0.25, facets=np.column_stack([np.full(len(m.faces), -1), rank[m.faces]]))
+    return shell_tree(flat)[0]
+
+
+WALK_SPHERE = _sphere_walk()
+
+
+def walk_mode(mode: int) -> Callable[[list], list]:
+    """An edit recoding every kind 9 GRUP body's explicit corners in coordinate ``mode`` (spec §9.13),
+    whichever a writer would pick: a reader must decode each."""
+    from planefmt.container import shellwalk, varint
+
+    def edit(layout: list) -> list:
+        out = []
+        for kind, payload in layout:
+            if kind == schema.GRUP and schema.GroupHead3.parse(payload).kind == GroupKind.SHELL_WALK:
+                head = schema.GroupHead3.parse(payload)
+                raw = np.frombuffer(bytes(head.body), dtype=np.uint8)
+                (count,), pos = varint.decode(raw, 1, "count")
+                _, used = varint.decode(raw[pos:], int(count), "refs")
+                pos += used + (int(count) + 7) // 8
+                body = raw[:pos].tobytes() + b"".join(shellwalk.shell_walk_fields(WALK_SPHERE, mode).values())
+                payload = schema.GroupHead3.build(dict(head, raw_size=len(body), body=body))
+            out.append((kind, payload))
+        return out
+    return edit
 #: A rotation by 30 degrees about z: cos and sin are not float32 values, so version 4 stores them as f64.
 ROT30 = np.array([[math.cos(math.pi / 6), -math.sin(math.pi / 6), 0.0], [math.sin(math.pi / 6), math.cos(math.pi / 6), 0.0],
                   [0.0, 0.0, 1.0]])
@@ -726,6 +770,15 @@ CASES = [
                Obj("pyramid", None, translation(2.0, 0.0, 0.0)),
                Group(1, GroupKind.SHELL_TREE_PARALLELOGRAM, (4,), shell=TREE_PYRAMID)),
               compress=True, decoded_bbox=True, assembled_only=True, edit=brotli_payloads),
+    ValidCase("shell_walk_cube_v4_1", "version 4.1: the shell tree cube of shell_tree_cube_v3_3 as a shell walk "
+              "(kind 9): a chain of triangles (children lists 1 and 2), its corners named by their face planes, the "
+              "corners it closes on coded as left (1) and right (2) over the open edges", V41_CUBE,
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE))),
+    ValidCase("shell_walk_sphere_v4_1", "version 4.1: an icosphere of 80 free triangles as a shell walk: triangles "
+              "with two children, leaves, left codes and a corner step in an escape; its 42 explicit corners in mode "
+              "3, indices into each axis's table of values predicted by parallelograms", V41_CUBE,
+              (Obj("sphere"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_WALK, (0,), shell=WALK_SPHERE)),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(3)),
     ValidCase("scene_transforms_v4_0", "version 4.0: three cubes under a root, with transforms coded entry by entry "
               "(spec §8): a translation by (2.5, -1, 0.125) (codes 1, 0 and f32), a rotation by 30 degrees about z "
               "with a translation by 0.1 (f64 entries), and a mirror with -0.0 (an f32); a cOLR of one colour for "

@@ -51,7 +51,8 @@ class Units(IntEnum):
 
 class GroupKind(IntEnum):
     """Part group kinds: 0-4 of version 1.0 (spec §9), 5 of version 3.1 (spec §9.9), 6 of
-    version 3.2 (spec §9.10), 7 of version 3.3 (spec §9.11)."""
+    version 3.2 (spec §9.10), 7 of version 3.3 (spec §9.11), 8 of version 3.4 (spec §9.12), 9 of
+    version 4.1 (spec §9.13)."""
 
     CONVEX = 0
     CELLS = 1
@@ -62,10 +63,12 @@ class GroupKind(IntEnum):
     SHELL = 6
     SHELL_TREE = 7
     SHELL_TREE_PARALLELOGRAM = 8
+    SHELL_WALK = 9
 
 
-#: The shell trees (spec §9.11): kind 7, and kind 8 whose explicit corners parallelograms predict (§9.12).
-TREE_KINDS = (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM)
+#: The shell trees (spec §9.11): kind 7, kind 8 whose explicit corners parallelograms predict (§9.12),
+#: and kind 9 whose tree and corners are coded as a walk (§9.13).
+TREE_KINDS = (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM, GroupKind.SHELL_WALK)
 
 
 #: BSP tree leaf tokens in version 1.0's numbering (spec Appendix A.1), which the model uses for every

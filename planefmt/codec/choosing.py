@@ -19,7 +19,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .. import progress
-from ..container import quantize, records, shellfields
+from ..container import quantize, records, shellfields, shellwalk
 from ..errors import GeometryError, PlnError, PlnWarning
 from ..geometry.hausdorff import DEFAULT_MAX_PIECES
 from ..geometry.planes import from_triplets, transform_points
@@ -343,6 +343,8 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         if trees:
             tree, source = shell_tree(shell, plan.walk)
             bodies = shellfields.shell_tree_bodies(tree)
+            if GroupKind.SHELL_WALK in trees:
+                bodies[GroupKind.SHELL_WALK] = shellwalk.shell_walk_body(tree)
             options += [(layout, tree, plan.points[source], bodies[layout]) for layout in trees]
         if GroupKind.SHELL in SHELL_LAYOUTS and (not trees or 2 * int((tree.links == 0).sum()) >= len(tree.links)):
             options.append((GroupKind.SHELL, shell, plan.points, shellfields.shell_kind_data(GroupKind.SHELL, shell)))

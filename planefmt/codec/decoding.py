@@ -158,6 +158,7 @@ DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], Deco
     GroupKind.SHELL: decode_shell_group,
     GroupKind.SHELL_TREE: decode_shell_group,
     GroupKind.SHELL_TREE_PARALLELOGRAM: decode_shell_group,
+    GroupKind.SHELL_WALK: decode_shell_group,
 }
 #: The kinds of shell groups, which the encoder chooses between by size once their corners are known
 #: (:data:`planefmt.codec.choosing.SHELL_LAYOUTS`).

@@ -9,6 +9,7 @@ import io
 import math
 import os
 import warnings
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import BinaryIO
@@ -16,7 +17,7 @@ from typing import BinaryIO
 import numpy as np
 
 from .. import progress
-from ..container import quantize, records
+from ..container import quantize, records, shellfields
 from ..container.writer import BLOCK_PLANES, Writer
 from ..errors import GeometryError, PlnError
 from ..geometry.planes import transform_points
@@ -216,6 +217,8 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
            choice: _Choice, tolerance: float, compress: bool, compact: bool, major: int = 4,
            verify: bool = True) -> Header:
     """Write the scene's ``objects`` (those of nodes ``meshes``) in the chosen coding; its header."""
+    if major == 3:
+        objects = [replace(o, groups=tuple(_as_tree(g) for g in o.groups)) for o in objects]
     sealed = any(g.kind == GroupKind.SEALED for o in objects for g in o.groups)
     shells = any(g.kind in SHELL_KINDS for o in objects for g in o.groups)
     compact = compact or sealed or shells
@@ -313,11 +316,20 @@ def _scene_diagonal(scene: Scene, worlds: list[np.ndarray], meshes: list[int]) -
     return d if math.isfinite(d) else None
 
 
+def _as_tree(g: GroupSpec) -> GroupSpec:
+    """``g``, a shell walk (version 4.1) written as the shell tree it is for readers of 3.x: kind 7 or
+    8, whichever deflates smaller."""
+    if g.kind != GroupKind.SHELL_WALK:
+        return g
+    bodies = shellfields.shell_tree_bodies(g.shell)
+    return replace(g, kind=min(bodies, key=lambda k: len(zlib.compress(bodies[k], 9))))
+
+
 def _version(objects: list[_Object], major: int) -> tuple[int, int]:
-    """4.0, or for ``major`` 3 the lowest minor version whose kinds hold every group (spec A.3)."""
-    if major == 4:
-        return (4, 0)
-    return max((records.KIND_VERSION.get(int(g.kind), (3, 0)) for o in objects for g in o.groups), default=(3, 0))
+    """The lowest minor version of ``major`` (4, or 3 for readers of 3.x: spec A.3) whose kinds hold
+    every group (spec §11)."""
+    return max((records.KIND_VERSION.get(int(g.kind), (major, 0)) for o in objects for g in o.groups
+                if records.KIND_VERSION.get(int(g.kind), (0, 0))[0] == major), default=(major, 0))
 
 
 def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True,

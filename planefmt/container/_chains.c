@@ -11,6 +11,8 @@
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 #include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
 
 static int
 int64_view(PyObject *obj, Py_buffer *view, int writable, const char *name)
@@ -93,11 +95,331 @@ done:
     Py_RETURN_NONE;
 }
 
+
+/* A shell walk's open edges (spec/pln.md §9.13): directed edges of the decoded surface that no
+ * second triangle has closed yet.  Each entry sits on a stack of its directed edge (a hash map
+ * from edge to the newest entry) and on two doubly linked lists, of the entries starting and of
+ * those ending at a corner, newest first: entering, closing, and the left and right queries take
+ * constant time, so a walk is linear in its triangles whatever a file holds. */
+typedef struct {
+    int64_t corners, used, mask;
+    int64_t *start, *end, *below, *in_next, *in_prev, *out_next, *out_prev, *in_head, *out_head;
+    int64_t *keys, *keys_b, *tops;
+} Open;
+
+static void
+open_free(Open *o)
+{
+    free(o->start);
+    free(o->keys);
+    free(o->in_head);
+}
+
+static int
+open_init(Open *o, int64_t triangles, int64_t corners)
+{
+    int64_t records = 3 * triangles, size = 16;
+    while (size < 2 * records)
+        size *= 2;
+    memset(o, 0, sizeof(*o));
+    o->corners = corners;
+    o->mask = size - 1;
+    o->start = malloc(sizeof(int64_t) * 7 * (size_t)(records > 0 ? records : 1));
+    o->keys = malloc(sizeof(int64_t) * 3 * (size_t)size);
+    o->in_head = malloc(sizeof(int64_t) * 2 * (size_t)corners);
+    if (!o->start || !o->keys || !o->in_head) {
+        open_free(o);
+        return -1;
+    }
+    o->end = o->start + records;
+    o->below = o->end + records;
+    o->in_next = o->below + records;
+    o->in_prev = o->in_next + records;
+    o->out_next = o->in_prev + records;
+    o->out_prev = o->out_next + records;
+    o->keys_b = o->keys + size;
+    o->tops = o->keys_b + size;
+    o->out_head = o->in_head + corners;
+    for (int64_t k = 0; k < size; k++)
+        o->keys[k] = -1;
+    for (int64_t k = 0; k < 2 * corners; k++)
+        o->in_head[k] = -1;
+    return 0;
+}
+
+/* The slot of directed edge (a, b) in the map: its own, or the empty one where it would go. */
+static int64_t
+open_slot(const Open *o, int64_t a, int64_t b)
+{
+    uint64_t h = ((uint64_t)a * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)b * 0xC2B2AE3D27D4EB4FULL);
+    int64_t k = (int64_t)(h >> 24) & o->mask;
+    while (o->keys[k] >= 0 && (o->keys[k] != a || o->keys_b[k] != b))
+        k = (k + 1) & o->mask;
+    return k;
+}
+
+static void
+open_edge(Open *o, int64_t a, int64_t b)
+{
+    int64_t k = open_slot(o, b, a);
+    if (o->keys[k] >= 0 && o->tops[k] >= 0) {
+        int64_t r = o->tops[k];
+        o->tops[k] = o->below[r];
+        if (o->out_prev[r] >= 0) o->out_next[o->out_prev[r]] = o->out_next[r]; else o->out_head[b] = o->out_next[r];
+        if (o->out_next[r] >= 0) o->out_prev[o->out_next[r]] = o->out_prev[r];
+        if (o->in_prev[r] >= 0) o->in_next[o->in_prev[r]] = o->in_next[r]; else o->in_head[a] = o->in_next[r];
+        if (o->in_next[r] >= 0) o->in_prev[o->in_next[r]] = o->in_prev[r];
+        return;
+    }
+    int64_t r = o->used++;
+    o->start[r] = a;
+    o->end[r] = b;
+    o->out_prev[r] = -1;
+    o->out_next[r] = o->out_head[a];
+    if (o->out_head[a] >= 0) o->out_prev[o->out_head[a]] = r;
+    o->out_head[a] = r;
+    o->in_prev[r] = -1;
+    o->in_next[r] = o->in_head[b];
+    if (o->in_head[b] >= 0) o->in_prev[o->in_head[b]] = r;
+    o->in_head[b] = r;
+    k = open_slot(o, a, b);
+    if (o->keys[k] < 0) {
+        o->keys[k] = a;
+        o->keys_b[k] = b;
+        o->tops[k] = -1;
+    }
+    o->below[r] = o->tops[k];
+    o->tops[k] = r;
+}
+
+/* Left: the start of the newest open edge ending at i1, the second newest where that start is x. */
+static int64_t
+open_left(const Open *o, int64_t i1, int64_t x)
+{
+    int64_t r = o->in_head[i1];
+    if (r >= 0 && o->start[r] == x)
+        r = o->in_next[r];
+    return r >= 0 ? o->start[r] : -1;
+}
+
+/* Right: the end of the newest open edge starting at i0, the second newest where that end is x. */
+static int64_t
+open_right(const Open *o, int64_t i0, int64_t x)
+{
+    int64_t r = o->out_head[i0];
+    if (r >= 0 && o->end[r] == x)
+        r = o->out_next[r];
+    return r >= 0 ? o->end[r] : -1;
+}
+
+static void
+open_triangle(Open *o, const int64_t *t)
+{
+    open_edge(o, t[0], t[1]);
+    open_edge(o, t[1], t[2]);
+    open_edge(o, t[2], t[0]);
+}
+
+/* The ordered lists of a root's and of an attached triangle's free edges (places in them), by length
+ * then lexicographically: length, then the places. */
+static const int8_t CHILDREN[16][4] = {
+    {0}, {1, 0}, {1, 1}, {1, 2}, {2, 0, 1}, {2, 0, 2}, {2, 1, 0}, {2, 1, 2}, {2, 2, 0}, {2, 2, 1},
+    {3, 0, 1, 2}, {3, 0, 2, 1}, {3, 1, 0, 2}, {3, 1, 2, 0}, {3, 2, 0, 1}, {3, 2, 1, 0},
+};
+static const int8_t ATTACHED[5][3] = {{0}, {1, 0}, {1, 1}, {2, 0, 1}, {2, 1, 0}};
+
+static uint64_t
+zigzag(int64_t v)
+{
+    return ((uint64_t)v << 1) ^ (uint64_t)(v >> 63);
+}
+
+static int64_t
+unzigzag(uint64_t u)
+{
+    return (int64_t)(u >> 1) ^ -(int64_t)(u & 1);
+}
+
+static int
+uint64_view(PyObject *obj, Py_buffer *view, int writable, const char *name)
+{
+    int flags = PyBUF_C_CONTIGUOUS | PyBUF_FORMAT | (writable ? PyBUF_WRITABLE : 0);
+    if (PyObject_GetBuffer(obj, view, flags) < 0)
+        return -1;
+    if (view->itemsize != 8) {
+        PyErr_Format(PyExc_TypeError, "%s: expected a contiguous 64-bit array", name);
+        PyBuffer_Release(view);
+        return -1;
+    }
+    return 0;
+}
+
+/* Reasons a walk fails (spec §9.13), as walk() returns them. */
+enum { WALK_OK, WALK_SYMBOL, WALK_ESCAPES, WALK_CORNER, WALK_OPEN, WALK_TWICE, WALK_STACK, WALK_LEFT_OVER,
+       WALK_CORNERS, WALK_MEMORY };
+
+static PyObject *
+walk(PyObject *self, PyObject *args)
+{
+    /* symbols (T, uint64), escapes (X, uint64), corners V, triangles out (3T int64), links out (T int64):
+     * decodes the walk in place and returns (reason, triangle), reason 0 for none. */
+    PyObject *objs[4];
+    long long corners;
+    Py_buffer views[4];
+    int held = 0, reason = WALK_OK;
+    int64_t at = -1;
+    if (!PyArg_ParseTuple(args, "OOLOO", &objs[0], &objs[1], &corners, &objs[2], &objs[3]))
+        return NULL;
+    for (; held < 4; held++)
+        if (uint64_view(objs[held], &views[held], held >= 2, "walk") < 0)
+            goto done;
+    int64_t t = views[0].len / 8, x = views[1].len / 8;
+    if (views[2].len / 8 != 3 * t || views[3].len / 8 != t || corners < 0) {
+        PyErr_SetString(PyExc_ValueError, "walk: the arrays do not match the triangles");
+        goto done;
+    }
+    const uint64_t *sym = views[0].buf, *esc = views[1].buf;
+    int64_t *tri = views[2].buf, *links = views[3].buf;
+    Open o;
+    int64_t *stack = malloc(sizeof(int64_t) * (size_t)(3 * t + 1));
+    if (!stack || open_init(&o, t, corners) < 0) {
+        free(stack);
+        reason = WALK_MEMORY;
+        goto done;
+    }
+    Py_BEGIN_ALLOW_THREADS
+    int64_t top = 0, n = 0, e_at = 0;
+    for (int64_t j = 0; j < t && reason == WALK_OK; j++) {
+        int64_t *c = tri + 3 * j;
+        const int8_t *list;
+        int first;
+        at = j;
+        if (top == 0) {
+            if (sym[j] >= 16) { reason = WALK_SYMBOL; break; }
+            if (e_at + 3 > x) { reason = WALK_ESCAPES; break; }
+            for (int k = 0; k < 3; k++) {
+                uint64_t code = esc[e_at++];
+                if (code == 0 && n >= corners) { reason = WALK_CORNERS; break; }
+                if (code == 0) c[k] = n++;
+                else if (code > (uint64_t)n) { reason = WALK_CORNER; break; }
+                else c[k] = n - (int64_t)code;
+            }
+            if (reason) break;
+            links[j] = 0;
+            list = CHILDREN[sym[j]];
+            first = 0;
+        } else {
+            int64_t slot = stack[--top], p = slot / 3, e = slot % 3;
+            const int64_t *q = tri + 3 * p;
+            if (sym[j] >= 20) { reason = WALK_SYMBOL; break; }
+            uint64_t code = sym[j] % 4;
+            c[0] = q[(e + 1) % 3];
+            c[1] = q[e];
+            int64_t opp = q[(e + 2) % 3];
+            if (code == 3) {
+                if (e_at >= x) { reason = WALK_ESCAPES; break; }
+                /* Corners are fewer than 2^61: a larger step names none, and is not added (overflow). */
+                if (esc[e_at] >> 62) { reason = WALK_CORNER; break; }
+                int64_t w = c[1] + unzigzag(esc[e_at++]);
+                if (w < 0 || w >= n) { reason = WALK_CORNER; break; }
+                c[2] = w;
+            } else if (code == 0) {
+                if (n >= corners) { reason = WALK_CORNERS; break; }
+                c[2] = n++;
+            } else {
+                c[2] = code == 1 ? open_left(&o, c[1], opp) : open_right(&o, c[0], opp);
+                if (c[2] < 0) { reason = WALK_OPEN; break; }
+            }
+            links[j] = 3 * (j - p - 1) + e + 1;
+            list = ATTACHED[sym[j] / 4];
+            first = 1;
+        }
+        if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) { reason = WALK_TWICE; break; }
+        open_triangle(&o, c);
+        for (int k = list[0]; k >= 1; k--)
+            stack[top++] = 3 * j + list[k] + first;
+    }
+    if (reason == WALK_OK) {
+        at = t;
+        if (top != 0) reason = WALK_STACK;
+        else if (e_at != x) reason = WALK_LEFT_OVER;
+        else if (n != corners) reason = WALK_CORNERS;
+    }
+    Py_END_ALLOW_THREADS
+    free(stack);
+    open_free(&o);
+done:
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&views[i]);
+    if (PyErr_Occurred())
+        return NULL;
+    return Py_BuildValue("(iL)", reason, (long long)at);
+}
+
+static PyObject *
+walk_codes(PyObject *self, PyObject *args)
+{
+    /* triangles (3T int64, a shell tree's, corners numbered by first use), links (T int64), corners V,
+     * codes out (T int64): each attached triangle's corner code of spec §9.13 (0 new, 1 left, 2 right,
+     * 3 + zigzag(i2 - i1) otherwise); roots' entries are left as they are. */
+    PyObject *objs[3];
+    long long corners;
+    Py_buffer views[3];
+    int held = 0;
+    if (!PyArg_ParseTuple(args, "OOLO", &objs[0], &objs[1], &corners, &objs[2]))
+        return NULL;
+    for (; held < 3; held++)
+        if (uint64_view(objs[held], &views[held], held == 2, "walk_codes") < 0)
+            goto done;
+    int64_t t = views[1].len / 8;
+    if (views[0].len / 8 != 3 * t || views[2].len / 8 != t) {
+        PyErr_SetString(PyExc_ValueError, "walk_codes: the arrays do not match the triangles");
+        goto done;
+    }
+    const int64_t *tri = views[0].buf, *links = views[1].buf;
+    int64_t *codes = views[2].buf;
+    Open o;
+    if (open_init(&o, t, corners) < 0) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    Py_BEGIN_ALLOW_THREADS
+    int64_t n = 0;
+    for (int64_t j = 0; j < t; j++) {
+        const int64_t *c = tri + 3 * j;
+        if (links[j] == 0) {
+            for (int k = 0; k < 3; k++)
+                n += c[k] == n;
+        } else {
+            int64_t p = j - (links[j] - 1) / 3 - 1, e = (links[j] - 1) % 3;
+            int64_t opp = tri[3 * p + (e + 2) % 3];
+            if (c[2] == n) { codes[j] = 0; n++; }
+            else if (open_left(&o, c[1], opp) == c[2]) codes[j] = 1;
+            else if (open_right(&o, c[0], opp) == c[2]) codes[j] = 2;
+            else codes[j] = 3 + (int64_t)zigzag(c[2] - c[1]);
+        }
+        open_triangle(&o, c);
+    }
+    Py_END_ALLOW_THREADS
+    open_free(&o);
+done:
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&views[i]);
+    if (PyErr_Occurred())
+        return NULL;
+    Py_RETURN_NONE;
+}
+
 static PyMethodDef methods[] = {
     {"resolve", resolve, METH_VARARGS,
      "resolve(value, pointer, offset[, plus, minus[, limit]]): in place, value[k] = offset[k] + "
      "value[pointer[k]] (+ value[plus[k]] - value[minus[k]] where those are >= 0) wherever pointer[k] >= 0, "
      "in entry order (int64 arrays; every pointer must go to an earlier entry; OverflowError past limit)."},
+    {"walk", walk, METH_VARARGS,
+     "walk(symbols, escapes, corners, triangles, links): decode a shell walk (spec §9.13) into triangles "
+     "(3T int64) and links (T int64) in place; returns (reason, triangle), reason 0 where the walk is valid."},
+    {"walk_codes", walk_codes, METH_VARARGS,
+     "walk_codes(triangles, links, corners, codes): each attached triangle's corner code of spec §9.13."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -21,15 +21,16 @@ from ..errors import FormatError, LimitError, PlnError, VersionError
 from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, TREE_KINDS, UP_AXES, UP_AXIS, Coding, Colours,
                     GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
 from .shellfields import _decode_shell, _decode_shell_tree, _shell_body, _shell_tree_body
+from .shellwalk import decode_shell_walk, shell_walk_body
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 4, 4: 0}
+VERSIONS = {1: 0, 2: 0, 3: 4, 4: 1}
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
 KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3),
-                int(GroupKind.SHELL_TREE_PARALLELOGRAM): (3, 4)}
+                int(GroupKind.SHELL_TREE_PARALLELOGRAM): (3, 4), int(GroupKind.SHELL_WALK): (4, 1)}
 
 
 def _kind(value: int) -> GroupKind | int:
@@ -425,6 +426,8 @@ def _compact_body(g: PartGroup) -> bytes:
                 varint.encode(np.column_stack([gaps, facets[:, 1:]]).astype(np.uint64))]
     elif g.kind == GroupKind.SHELL and g.shell is not None:
         out.append(_shell_body(g.shell))
+    elif g.kind == GroupKind.SHELL_WALK and g.shell is not None:
+        out.append(shell_walk_body(g.shell))
     elif g.kind in TREE_KINDS and g.shell is not None:
         out.append(_shell_tree_body(g.shell, g.kind == GroupKind.SHELL_TREE_PARALLELOGRAM))
     else:
@@ -531,6 +534,8 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
         extra = rest.tobytes()
     elif head.kind == GroupKind.SHELL:
         shell = _decode_shell(rest, bounding)
+    elif head.kind == GroupKind.SHELL_WALK:
+        shell = decode_shell_walk(rest, bounding)
     elif head.kind in TREE_KINDS:
         shell = _decode_shell_tree(rest, bounding, head.kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
     elif head.kind == GroupKind.CELLS:

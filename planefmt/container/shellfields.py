@@ -228,6 +228,30 @@ def _jump(value: np.ndarray, pointer: np.ndarray, offset: np.ndarray) -> np.ndar
     return value
 
 
+def _read_tables(raw: np.ndarray, pos: int, explicit: int) -> tuple[list[np.ndarray], int]:
+    """A shell walk's three value tables (spec §9.13) at ``pos``, each checked as it is read (its
+    count decides how much follows), and the position after them."""
+    tables = []
+    for axis in "xyz":
+        (count,), used = varint.decode(raw[pos:], 1, f"shell walk {axis} table count")
+        pos += used
+        if not 1 <= int(count) <= explicit:
+            raise FormatError(f"shell walk: a {axis} table of {int(count)} values for {explicit} explicit corners",
+                              code="BAD_GROUP_STRUCTURE")
+        values, used = varint.decode(raw[pos:], int(count), f"shell walk {axis} table")
+        pos += used
+        first, gaps = varint.unzigzag(values[:1])[0], values[1:]
+        # Every value within 2^52 keeps the last minus the first within 2^53, the gaps' sum with it:
+        # checked in floating point before the integer sum could wrap.
+        if abs(int(first)) > MAX_GRID or float(gaps.astype(np.float64).sum()) + len(gaps) > 2.0 * MAX_GRID + 1:
+            raise FormatError(f"shell walk: a {axis} table value is beyond 2^52", code="BAD_GROUP_STRUCTURE")
+        table = int(first) + np.cumsum(np.r_[0, gaps.astype(np.int64) + 1])
+        if np.abs(table).max() > MAX_GRID:
+            raise FormatError(f"shell walk: a {axis} table value is beyond 2^52", code="BAD_GROUP_STRUCTURE")
+        tables.append(table)
+    return tables, pos
+
+
 def incident_planes(triangles: np.ndarray, face: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The distinct face references of the planar triangles at each of ``count`` corners, ascending:
     (references, start and count of each corner's run in them)."""
@@ -324,6 +348,16 @@ def shell_tree_bodies(shell: Shell) -> dict[GroupKind, bytes]:
             for kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM)}
 
 
+def code_stream(tri: np.ndarray, root: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The stream of corners a shell tree codes (a root's three, an attached triangle's third; spec
+    §9.11), which of them name a corner anew, and how many corners were named before each."""
+    slots = np.where(root[:, None], tri, np.column_stack([np.full((len(tri), 2), -1), tri[:, 2]]))
+    stream = slots.reshape(-1)
+    stream = stream[stream >= 0]
+    new = np.r_[True, stream[1:] > np.maximum.accumulate(stream)[:-1]]
+    return stream, new, np.cumsum(new) - new
+
+
 def _tree_fields(shell: Shell):
     """The fields of a shell tree's body up to the picks, and a function of ``parallelogram`` giving
     the grid and the coordinates (none without explicit corners)."""
@@ -333,14 +367,9 @@ def _tree_fields(shell: Shell):
     root, parent, edge = _tree_parents(links)
     face, tri = fc[:, 0], fc[:, 1:]
     t, v = len(fc), len(explicit)
-    # The stream of corner codes: a root's three corners, an attached triangle's third.
-    slots = np.where(root[:, None], tri, np.column_stack([np.full((t, 2), -1), tri[:, 2]]))
-    stream = slots.reshape(-1)
-    stream = stream[stream >= 0]
+    stream, new, before = code_stream(tri, root)
     is_root = np.repeat(root, np.where(root, 3, 1))
     c1 = np.repeat(tri[:, 1], np.where(root, 3, 1))
-    new = np.r_[True, stream[1:] > np.maximum.accumulate(stream)[:-1]]
-    before = np.cumsum(new) - new
     codes = np.where(new, 0, np.where(is_root, before - stream,
                                       varint.zigzag(stream - c1).astype(np.int64) + 1))
     same = np.where(root, np.r_[FREE, face[:-1]], face[np.maximum(parent, 0)]) == face
@@ -429,6 +458,20 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: boo
         raise bad(f"{int(new.sum())} corners are named anew, not {v}")
     if ((tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 0] == tri[:, 2])).any():
         raise bad("a triangle names one corner twice")
+    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, parallelogram)
+
+
+def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, links: np.ndarray,
+              faces: np.ndarray, explicit: np.ndarray, new: np.ndarray, parallelogram: bool | None) -> Shell:
+    """A shell tree's body from its faces' checks on (spec §9.11 and §9.12; §9.13 with
+    ``parallelogram`` None, whose mode byte and tables come before the coordinates): ``tri`` and
+    ``links`` as decoded, ``faces`` the face codes and ``explicit`` the flags as read, ``new`` which of
+    the corner code stream's entries (3 per root, 1 per attached triangle) name a corner anew."""
+    def bad(reason: str) -> FormatError:
+        return FormatError(f"shell tree: {reason}", code="BAD_GROUP_STRUCTURE")
+    t, v = len(tri), len(explicit)
+    root, parent, _ = _tree_parents(links)
+    per = np.where(root, 3, 1)
     m = len(bounding)
     if faces.max() > np.uint64(m + 1):
         raise bad("a face reference is past the group's references")
@@ -460,7 +503,25 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: boo
     e = int(explicit.sum())
     origin, step, grid = np.zeros(3), 0.0, np.zeros((0, 3), dtype=np.int64)
     if e:
-        origin, step, deltas, pos = _read_grid(raw, pos, e, "shell tree", "shell tree corner coordinates")
+        mode = 0
+        if parallelogram is None:
+            if pos >= len(raw):
+                raise FormatError("shell walk: the body ends inside its mode", code="BAD_PAYLOAD")
+            mode = int(raw[pos])
+            pos += 1
+            parallelogram = bool(mode & 1)
+        if len(raw) < pos + schema.SHELL_GRID_BYTES:
+            raise FormatError("shell tree: the body ends inside its grid", code="BAD_PAYLOAD")
+        g = schema.ShellGrid.parse(raw[pos:pos + schema.SHELL_GRID_BYTES].tobytes())
+        origin, step = np.array(g.origin, dtype=np.float64), float(g.step)
+        pos += schema.SHELL_GRID_BYTES
+        tables = None
+        if mode & 2:
+            tables, pos = _read_tables(raw, pos, e)
+        deltas, used = varint.decode(raw[pos:], 3 * e, "shell tree corner coordinates")
+        pos += used
+        if mode & ~3:
+            raise bad(f"coordinate mode {mode} has a bit above 1 set")
         steps = varint.unzigzag(deltas).reshape(3, -1).T
         if np.abs(steps).max(initial=0) > MAX_GRID:
             raise bad("a grid residual is beyond 2^52")
@@ -475,6 +536,11 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: boo
         grid = chained.reshape(3, v).T[ex]
         if np.abs(grid).max(initial=0) > MAX_GRID:
             raise bad("a grid coordinate is beyond 2^52")
+        if tables is not None:
+            for axis, table in enumerate(tables):
+                if ((grid[:, axis] < 0) | (grid[:, axis] >= len(table))).any():
+                    raise bad(f"a corner's index is outside the {'xyz'[axis]} table")
+                grid[:, axis] = table[grid[:, axis]]
     if pos != len(raw):
         raise bad("the corners do not fill the body")
     shell = Shell(explicit=explicit, vertex_planes=vertex_planes, grid=grid, origin=origin, step=step,

@@ -17,7 +17,7 @@ from typing import BinaryIO
 
 import numpy as np
 
-from . import records, schema, shellfields
+from . import records, schema, shellfields, shellwalk
 from .chunks import chunk_bytes, is_ancillary, valid_type
 from ..errors import PlnError
 from ..model import (TREE_KINDS, Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record,
@@ -191,7 +191,10 @@ class Writer:
             if shell is None:
                 raise PlnError("a shell tree needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
             if self._verify:
-                shellfields.check_shell_tree(shell, bounding, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
+                if kind == GroupKind.SHELL_WALK:
+                    shellwalk.check_shell_walk(shell, bounding)
+                else:
+                    shellfields.check_shell_tree(shell, bounding, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
         elif shell is not None:
             raise PlnError(f"shell groups need version 3.2 (shell trees 3.3), not {self._version[0]}."
                            f"{self._version[1]}", code="UNKNOWN_GROUP_KIND")

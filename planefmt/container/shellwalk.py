@@ -1,0 +1,301 @@
+"""Shell walks (kind 9, spec §9.13): a shell tree whose tree is a depth-first walk (each triangle
+names the free edges its children hang on) and whose third corners named before are mostly "left"
+or "right", the other end of an open edge at the triangle's first two corners; one symbol per
+triangle carries both. Explicit corners may be coded as indices into each axis's sorted values.
+
+The walk is sequential (each answer depends on every triangle before it): ``_chains.c`` runs it in
+C, in time linear in the triangles; without the extension :class:`OpenEdges` runs the same rules in
+Python, slowly.
+"""
+
+from __future__ import annotations
+
+import itertools
+import zlib
+
+import numpy as np
+
+from ..errors import FormatError
+from ..model import Shell
+from . import schema, varint
+from .shellfields import _predict, _tree_fields, _tree_parents, _tree_predictors, code_stream, tree_rest
+
+try:
+    from ._chains import walk as _walk_c, walk_codes as _walk_codes_c
+except ImportError:  # built without a C compiler
+    _walk_c = _walk_codes_c = None
+
+#: The ordered lists of a triangle's free edges (places in its free edges), by length then
+#: lexicographically: a root's symbol is the index of its list in ROOT_CHILDREN, an attached
+#: triangle's symbol // 4 that in ATTACHED_CHILDREN (spec §9.13).
+ROOT_CHILDREN = tuple(p for n in range(4) for p in itertools.permutations(range(3), n))
+ATTACHED_CHILDREN = tuple(p for n in range(3) for p in itertools.permutations(range(2), n))
+
+#: Coordinate mode bits (spec §9.13).
+MODE_PARALLELOGRAM, MODE_TABLES = 1, 2
+
+_REASONS = {1: "a symbol is past its range", 2: "the walk needs more escapes than the body holds",
+            3: "a corner code names a corner below 0 or not named before",
+            4: "a left or right code has no open edge to name", 5: "a triangle names one corner twice",
+            6: "the walk promises children after the last triangle", 7: "escapes are left after the walk",
+            8: "the walk names a number of corners other than the count"}
+
+
+class OpenEdges:
+    """The open edges of spec §9.13 in Python: per directed edge a stack of its entries, per corner
+    the entries starting and ending there, newest first (lists with lazy removal would be quadratic
+    on a hostile file; these dicts of insertion-ordered entries are not)."""
+
+    def __init__(self) -> None:
+        self._stacks: dict[tuple[int, int], list[int]] = {}
+        self._ins: dict[int, dict[int, int]] = {}
+        self._outs: dict[int, dict[int, int]] = {}
+        self._ends: list[tuple[int, int]] = []
+
+    def triangle(self, a: int, b: int, c: int) -> None:
+        for s, e in ((a, b), (b, c), (c, a)):
+            stack = self._stacks.get((e, s))
+            if stack:
+                r = stack.pop()
+                del self._outs[e][r], self._ins[s][r]
+                continue
+            r = len(self._ends)
+            self._ends.append((s, e))
+            self._stacks.setdefault((s, e), []).append(r)
+            self._outs.setdefault(s, {})[r] = e
+            self._ins.setdefault(e, {})[r] = s
+
+    @staticmethod
+    def _newest(entries: dict[int, int] | None, skip: int) -> int:
+        if not entries:
+            return -1
+        it = reversed(entries.values())
+        w = next(it)
+        return next(it, -1) if w == skip else w
+
+    def left(self, i1: int, x: int) -> int:
+        """The start of the newest open edge ending at ``i1`` (the second newest where that is ``x``)."""
+        return self._newest(self._ins.get(i1), x)
+
+    def right(self, i0: int, x: int) -> int:
+        """The end of the newest open edge starting at ``i0`` (the second newest where that is ``x``)."""
+        return self._newest(self._outs.get(i0), x)
+
+
+def _codes(tri: np.ndarray, links: np.ndarray, v: int) -> np.ndarray:
+    """Each attached triangle's corner code (0 new, 1 left, 2 right, 3 + zigzag(i2 - i1)); 0 for roots."""
+    codes = np.zeros(len(links), dtype=np.int64)
+    tri = np.ascontiguousarray(tri, dtype=np.int64)
+    links = np.ascontiguousarray(links, dtype=np.int64)
+    if _walk_codes_c is not None:
+        _walk_codes_c(tri.reshape(-1), links, v, codes)
+        return codes
+    edges, n = OpenEdges(), 0
+    for j, (a, b, c) in enumerate(tri.tolist()):
+        if links[j] == 0:
+            n += sum(1 for x in (a, b, c) if x >= n)
+        else:
+            p, e = j - (int(links[j]) - 1) // 3 - 1, (int(links[j]) - 1) % 3
+            x = int(tri[p, (e + 2) % 3])
+            if c == n:
+                n += 1
+            elif edges.left(b, x) == c:
+                codes[j] = 1
+            elif edges.right(a, x) == c:
+                codes[j] = 2
+            else:
+                codes[j] = 3 + int(varint.zigzag(np.array([c - b]))[0])
+        edges.triangle(a, b, c)
+    return codes
+
+
+def _lut(lists: tuple[tuple[int, ...], ...]) -> np.ndarray:
+    """Index of each list of ``lists`` by the key count * 64 + places (3 for none) in base 4."""
+    lut = np.full(4 * 64, -1, dtype=np.int64)
+    for i, lst in enumerate(lists):
+        q = list(lst) + [3] * (3 - len(lst))
+        lut[len(lst) * 64 + q[0] * 16 + q[1] * 4 + q[2]] = i
+    return lut
+
+
+_ROOT_LUT, _ATTACHED_LUT = _lut(ROOT_CHILDREN), _lut(ATTACHED_CHILDREN)
+
+
+def _children(links: np.ndarray) -> np.ndarray:
+    """Each triangle's list of children (its index in ROOT_CHILDREN for a root, in ATTACHED_CHILDREN
+    otherwise), from the links of a depth-first walk: a parent's children in walk order."""
+    t = len(links)
+    root, parent, edge = _tree_parents(links)
+    att = np.flatnonzero(~root)
+    order = att[np.argsort(parent[att], kind="stable")]
+    p = parent[order]
+    rank = np.arange(len(order)) - np.searchsorted(p, p)
+    places = np.full((t, 3), 3, dtype=np.int64)
+    places[p, rank] = np.where(root[p], edge[order], edge[order] - 1)
+    key = np.bincount(p, minlength=t) * 64 + places[:, 0] * 16 + places[:, 1] * 4 + places[:, 2]
+    return np.where(root, _ROOT_LUT[key], _ATTACHED_LUT[key])
+
+
+def _walk_python(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray, np.ndarray, int, int]:
+    """:func:`_walk` without the C extension: (triangles, links, reason, triangle) as ``_chains.walk``."""
+    t, x = len(symbols), len(escapes)
+    tri = np.zeros((t, 3), dtype=np.int64)
+    links = np.zeros(t, dtype=np.int64)
+    sym, esc = symbols.tolist(), escapes.tolist()
+    edges, stack, n, k = OpenEdges(), [], 0, 0
+    rows = tri.tolist()
+    for j in range(t):
+        if not stack:
+            if sym[j] >= len(ROOT_CHILDREN):
+                return tri, links, 1, j
+            if k + 3 > x:
+                return tri, links, 2, j
+            c = []
+            for code in esc[k:k + 3]:
+                if code == 0 and n >= v:
+                    return tri, links, 8, j
+                if code > n:
+                    return tri, links, 3, j
+                c.append(n if code == 0 else n - code)
+                n += code == 0
+            k += 3
+            lists, first = ROOT_CHILDREN[sym[j]], 0
+        else:
+            p, e = stack.pop()
+            if sym[j] >= 4 * len(ATTACHED_CHILDREN):
+                return tri, links, 1, j
+            q, code = rows[p], sym[j] % 4
+            x_, c = q[(e + 2) % 3], [q[(e + 1) % 3], q[e], -1]
+            if code == 3:
+                if k >= x:
+                    return tri, links, 2, j
+                w = c[1] + int(varint.unzigzag(np.array([esc[k]], dtype=np.uint64))[0])
+                k += 1
+                if not 0 <= w < n:
+                    return tri, links, 3, j
+                c[2] = w
+            elif code == 0:
+                if n >= v:
+                    return tri, links, 8, j
+                c[2], n = n, n + 1
+            else:
+                c[2] = edges.left(c[1], x_) if code == 1 else edges.right(c[0], x_)
+                if c[2] < 0:
+                    return tri, links, 4, j
+            links[j] = 3 * (j - p - 1) + e + 1
+            lists, first = ATTACHED_CHILDREN[sym[j] // 4], 1
+        if len(set(c)) < 3:
+            return tri, links, 5, j
+        rows[j] = c
+        tri[j] = c
+        edges.triangle(*c)
+        stack.extend((j, place + first) for place in reversed(lists))
+    reason = 6 if stack else 7 if k != x else 8 if n != v else 0
+    return tri, links, reason, t
+
+
+def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray, np.ndarray]:
+    """The triangles (T, 3) and links (T,) of a walk's ``symbols`` and ``escapes`` over ``v`` corners,
+    checked (``BAD_GROUP_STRUCTURE``)."""
+    t = len(symbols)
+    if _walk_c is not None:
+        tri = np.zeros(3 * t, dtype=np.int64)
+        links = np.zeros(t, dtype=np.int64)
+        reason, at = _walk_c(np.ascontiguousarray(symbols, dtype=np.uint64),
+                             np.ascontiguousarray(escapes, dtype=np.uint64), v, tri, links)
+        tri = tri.reshape(-1, 3)
+    else:
+        tri, links, reason, at = _walk_python(symbols, escapes, v)
+    if reason == 9:
+        raise MemoryError(f"a shell walk of {t} triangles")
+    if reason:
+        raise FormatError(f"shell walk: triangle {at}: {_REASONS[reason]}", code="BAD_GROUP_STRUCTURE")
+    return tri, links
+
+
+def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray) -> Shell:
+    """The corners and triangles of a SHELL_WALK body (spec §9.13), checked."""
+    (v, t, x), pos = varint.decode(raw, 3, "shell walk counts")
+    v, t, x = int(v), int(t), int(x)
+    left = len(raw) - pos
+    if not (3 <= v <= 8 * left and 1 <= t <= left // 2 and x <= left):
+        raise FormatError(f"shell walk: {v} corners, {t} triangles, {x} escapes: outside the ranges the body "
+                          f"allows", code="BAD_GROUP_STRUCTURE")
+    symbols, used = varint.decode(raw[pos:], t, "shell walk symbols")
+    pos += used
+    escapes, used = varint.decode(raw[pos:], x, "shell walk escapes")
+    pos += used
+    faces, used = varint.decode(raw[pos:], t, "shell walk faces")
+    pos += used
+    explicit, pos = varint.bit_field(raw, pos, v, "shell walk: the body", "corner flags")
+    tri, links = _walk(symbols, escapes, v)
+    _, new, _ = code_stream(tri, links == 0)
+    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None)
+
+
+def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray, mode: int) -> dict[str, bytes]:
+    """The mode, grid, tables and coordinates of a walk's explicit corners coded in ``mode``."""
+    explicit = np.asarray(shell.explicit, dtype=bool)
+    values = np.zeros((len(explicit), 3), dtype=np.int64)
+    values[explicit] = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
+    tables = []
+    if mode & MODE_TABLES:
+        for axis in range(3):
+            table, values[explicit, axis] = np.unique(values[explicit, axis], return_inverse=True)
+            tables += [varint.encode([len(table)]), varint.encode(varint.zigzag(table[:1])),
+                       varint.encode(np.diff(table) - 1)]
+    root = links == 0
+    terms = _tree_predictors(links, tri, explicit, np.where(root, 3, 1), new, bool(mode & MODE_PARALLELOGRAM))
+    residual = (values - _predict(values, terms))[explicit]
+    return {"mode": bytes([mode]),
+            "grid": schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step))),
+            "tables": b"".join(tables), "coordinates": varint.encode(varint.zigzag(residual.T))}
+
+
+def shell_walk_fields(shell: Shell, mode: int | None = None) -> dict[str, bytes]:
+    """The fields of ``shell`` (a shell tree whose links are a depth-first walk, as
+    ``groups.shells.spanning_walk`` makes them) as a SHELL_WALK body (spec §9.13), by name in body
+    order; its explicit corners in ``mode``, or in whichever of the four deflates smallest."""
+    common, _ = _tree_fields(shell)
+    explicit = np.asarray(shell.explicit, dtype=bool)
+    fc = np.asarray(shell.facets, dtype=np.int64)
+    tri, links = fc[:, 1:], np.asarray(shell.links, dtype=np.int64)
+    root = links == 0
+    stream, new, before = code_stream(tri, root)
+    codes = _codes(tri, links, len(explicit))
+    children = _children(links)
+    symbols = np.where(root, children, 4 * children + np.minimum(codes, 3))
+    # Escapes in triangle order: a root's three codes (spec §9.10's), an attached triangle's step.
+    root_codes = np.where(new, 0, before - stream)[np.repeat(root, np.where(root, 3, 1))].reshape(-1, 3)
+    count = np.where(root, 3, codes >= 3)
+    escapes = np.zeros(int(count.sum()), dtype=np.int64)
+    at = np.cumsum(count) - count
+    escapes[(at[root, None] + np.arange(3)).reshape(-1)] = root_codes.reshape(-1)
+    step = ~root & (codes >= 3)
+    escapes[at[step]] = codes[step] - 3
+    out = {"counts": varint.encode([len(explicit), len(links), len(escapes)]), "symbols": varint.encode(symbols),
+           "escapes": varint.encode(escapes), "faces": common["faces"], "flags": common["flags"],
+           "picks": common["picks"]}
+    if explicit.any():
+        modes = range(4) if mode is None else [mode]
+        out.update(min((_coordinates(shell, tri, links, new, m) for m in modes),
+                       key=lambda f: len(zlib.compress(b"".join(f.values()), 9))))
+    return out
+
+
+def shell_walk_body(shell: Shell) -> bytes:
+    """The kind data of ``shell`` as a SHELL_WALK group (spec §9.13)."""
+    return b"".join(shell_walk_fields(shell).values())
+
+
+def check_shell_walk(shell: Shell, bounding: np.ndarray) -> None:
+    """``FormatError`` (``BAD_GROUP_STRUCTURE``) unless ``shell``'s body as a shell walk decodes to it."""
+    if shell.links is None or len(shell.links) != len(shell.facets):
+        raise FormatError("shell walk: one link per triangle", code="BAD_GROUP_STRUCTURE")
+    back = decode_shell_walk(np.frombuffer(shell_walk_body(shell), dtype=np.uint8), np.asarray(bounding, bool))
+    fields = ("explicit", "vertex_planes", "grid", "facets", "links")
+    if not all(np.array_equal(np.asarray(getattr(back, f)).reshape(-1), np.asarray(getattr(shell, f)).reshape(-1))
+               for f in fields):
+        raise FormatError("shell walk: its body does not decode to it (links not a depth-first walk, corners "
+                          "not numbered by first use, or named corners not three of their face planes in "
+                          "ascending order)", code="BAD_GROUP_STRUCTURE")
