@@ -67,54 +67,57 @@ export class OpenEdges {
     return h & this.mask;
   }
 
-  /** The slot holding edge (a, b), or -1. @param {number} a @param {number} b */
-  slotOf(a, b) {
-    const { slots, start, end, mask } = this;
-    for (let i = this.hash(a, b); ; i = (i + 1) & mask) {
-      const e = slots[i];
-      if (e < 0) return -1;
-      if (start[e] === a && end[e] === b) return i;
-    }
-  }
-
   /**
    * Edge (a, b) of a triangle: closes the newest entry (b, a) where there is one, else enters (a, b)
    * as the newest entry.
    * @param {number} a @param {number} b
    */
   edge(a, b) {
-    const i = this.slotOf(b, a);
-    if (i >= 0) {
-      const e = this.slots[i];
-      const under = this.below[e];
-      if (under >= 0) this.slots[i] = under;
-      else this.removeSlot(i);
-      this.unlink(e);
-      return;
+    const { slots, start, end, mask } = this;
+    for (let i = this.hash(b, a); ; i = (i + 1) & mask) {
+      const e = slots[i];
+      if (e < 0) break;
+      if (start[e] === b && end[e] === a) {
+        const under = this.below[e];
+        if (under >= 0) slots[i] = under;
+        else this.removeSlot(i);
+        this.unlink(e);
+        return;
+      }
     }
     const e = this.entries++;
-    this.start[e] = a;
-    this.end[e] = b;
-    const j = this.slotOf(a, b);
-    if (j >= 0) {
-      this.below[e] = this.slots[j];
-      this.slots[j] = e;
+    start[e] = a;
+    end[e] = b;
+    // the slot of (a, b): its stack's, or the empty slot that ends its probe run
+    let i = this.hash(a, b);
+    for (; ; i = (i + 1) & mask) {
+      const top = slots[i];
+      if (top < 0 || (start[top] === a && end[top] === b)) break;
+    }
+    if (slots[i] >= 0) {
+      this.below[e] = slots[i];
+      slots[i] = e;
+    } else if (2 * (this.keys + 1) <= slots.length) {
+      this.below[e] = -1;
+      slots[i] = e;
+      this.keys++;
     } else {
       this.below[e] = -1;
-      if (2 * (this.keys + 1) > this.slots.length) this.grow();
+      this.grow();
       let s = this.hash(a, b);
       while (this.slots[s] >= 0) s = (s + 1) & this.mask;
       this.slots[s] = e;
       this.keys++;
     }
+    const { outHead, inHead } = this;
     this.outPrev[e] = -1;
-    this.outNext[e] = this.outHead[a];
-    if (this.outHead[a] >= 0) this.outPrev[this.outHead[a]] = e;
-    this.outHead[a] = e;
+    this.outNext[e] = outHead[a];
+    if (outHead[a] >= 0) this.outPrev[outHead[a]] = e;
+    outHead[a] = e;
     this.inPrev[e] = -1;
-    this.inNext[e] = this.inHead[b];
-    if (this.inHead[b] >= 0) this.inPrev[this.inHead[b]] = e;
-    this.inHead[b] = e;
+    this.inNext[e] = inHead[b];
+    if (inHead[b] >= 0) this.inPrev[inHead[b]] = e;
+    inHead[b] = e;
   }
 
   /** Takes entry e out of its corners' lists. @param {number} e */
