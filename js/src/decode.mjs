@@ -1,4 +1,4 @@
-/** Geometry of part groups (spec §9.4-§9.11): each group to an indexed triangle mesh. */
+/** Geometry of part groups (spec §9.4-§9.13): each group to an indexed triangle mesh. */
 import { fail } from './errors.mjs';
 import { intersectHalfSpaces, WORK_LIMIT, EXACT } from './convex.mjs';
 import { cellsSurface, treeSurface, halfSpace } from './union.mjs';
@@ -136,7 +136,7 @@ function polytopeFaces(group, planes, emit, budget, coding) {
 }
 
 /**
- * Corners and triangles of a sealed group, shell or shell tree (§9.9-§9.11). A named corner is
+ * Corners and triangles of a sealed group, shell, shell tree or shell walk (§9.9-§9.13). A named corner is
  * where its three planes meet (BAD_VERTEX where their normals are nearly dependent), an explicit
  * one origin + step × its integer coordinates.
  * @param {import('./shells.mjs').Shell} shell @param {Float64Array} planes

@@ -4,12 +4,11 @@ import { checkSignature, readChunk } from './chunks.mjs';
 import { parseHeader } from './header.mjs';
 import { PlaneTable, readPlanes } from './planes.mjs';
 import { readObject } from './objects.mjs';
-import { readGroup } from './groups.mjs';
+import { readGroup, NEWEST_MINOR } from './groups.mjs';
 import { readColours, checkIndex, readMetadata } from './ancillary.mjs';
 import { DEFAULT_LIMITS } from './compression.mjs';
 
 const KNOWN = new Set(['PHDR', 'OBJT', 'PLNS', 'GRUP', 'cOLR', 'iNDX', 'mETA', 'PEND']);
-const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 0 };
 
 /**
  * @typedef {object} Container

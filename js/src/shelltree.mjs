@@ -6,6 +6,9 @@
  * pointer jumping; planefmt jumps pointers because numpy has no fast loop. Here one pass in
  * triangle order does the same work in linear time, which is what a loop in JavaScript is good
  * at (the corners each triangle takes from its parent are known when the loop reaches it).
+ *
+ * shellTreeRest, everything after the corner codes, is shared with shell walks (kind 9, §9.13,
+ * shellwalk.mjs), whose links and corners come from a walk instead.
  */
 import { fail } from './errors.mjs';
 import { unzigzag, readBits } from './varint.mjs';
@@ -91,6 +94,31 @@ export function readShellTree(b, roles, parallelogram = false) {
   }
   if (n !== V) fail('BAD_GROUP_STRUCTURE', `${n} corners named, ${V} declared`);
 
+  return shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram });
+}
+
+/**
+ * What a shell tree (§9.11, §9.12) or a shell walk (§9.13) holds after its corner codes, once its
+ * triangles are known: the faces (read before, checked here), named corners and their picks, and
+ * the explicit corners (for a walk: after its mode byte, with per-axis value tables where the mode
+ * says so).
+ * @param {import('./varint.mjs').Cursor} b
+ * @param {Uint8Array} roles
+ * @param {object} s the triangles
+ * @param {number} s.V corners
+ * @param {number} s.T triangles
+ * @param {Uint8Array} s.explicit 1 where a corner is explicit
+ * @param {Uint32Array} s.tri 3 corners per triangle
+ * @param {Int32Array} s.namer the attached triangle whose code names each corner anew, -1 for a root
+ * @param {Int32Array} s.parent per triangle, -1 for a root
+ * @param {Int32Array} s.opposite per triangle, the parent's corner off the shared edge, -1 for a root
+ * @param {Float64Array} s.faceCodes per triangle, as read
+ * @param {{parallelogram: boolean, walk?: boolean}} how kind 8 (parallelogram), kind 9 (walk: a
+ *   mode byte decides both)
+ * @returns {import('./shells.mjs').Shell}
+ */
+export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, walk = false }) {
+  const m = roles.length;
   // faces: 0 the parent's (the previous triangle's for a root), 1 free, r + 2 reference r
   const face = new Int32Array(T);
   for (let j = 0; j < T; j++) {
@@ -144,7 +172,22 @@ export function readShellTree(b, roles, parallelogram = false) {
   const picks = readVarints(b, 3 * W);
   let E = 0;
   for (let k = 0; k < V; k++) E += explicit[k];
+  // a walk's mode (§9.13): bit 0 parallelogram, bit 1 tables; bits 2-7 checked with the rest
+  const mode = walk && E > 0 ? b.u8() : 0;
+  if (walk) parallelogram = (mode & 1) !== 0;
   const grid = E > 0 ? readGrid(b) : null;
+  /** @type {{first: number, gaps: Float64Array}[] | null} per axis, as read */
+  let tablesRead = null;
+  if (walk && E > 0 && mode & 2) {
+    tablesRead = [];
+    for (let a = 0; a < 3; a++) {
+      // a count, checked as it is read, before the values it counts (§12.1)
+      const C = b.varint();
+      if (C < 1 || C > E) fail('BAD_GROUP_STRUCTURE', `a table of ${C} values for ${E} explicit corners`);
+      const first = b.varint();
+      tablesRead.push({ first, gaps: readVarints(b, C - 1) });
+    }
+  }
   const residuals = readVarints(b, 3 * E);
   if (b.left > 0) fail('BAD_GROUP_STRUCTURE', `${b.left} bytes after the last field`);
 
@@ -164,12 +207,30 @@ export function readShellTree(b, roles, parallelogram = false) {
     cornerPlanes[3 * k + 1] = planesOf[at + j];
     cornerPlanes[3 * k + 2] = planesOf[at + l];
   }
+  if (mode > 3) fail('BAD_GROUP_STRUCTURE', `mode ${mode}: a bit above 1 set`);
   if (grid) checkGrid(grid);
+  // the tables' values: the first, then each the previous plus g + 1, all within 2^52
+  const tables = tablesRead && tablesRead.map(({ first, gaps }) => {
+    const values = new Float64Array(gaps.length + 1);
+    let v = unzigzag(first);
+    if (v > MAX_COORD || v < -MAX_COORD) fail('BAD_GROUP_STRUCTURE', 'a table value beyond 2^52');
+    values[0] = v;
+    for (let i = 0; i < gaps.length; i++) {
+      // v + g + 1 ≤ 2^52 as g ≤ 2^52 - 1 - v, both sides exact (g is exact up to 2^53, and saturated above it)
+      if (gaps[i] > MAX_COORD - 1 - v) fail('BAD_GROUP_STRUCTURE', 'a table value beyond 2^52');
+      v += gaps[i] + 1;
+      values[i + 1] = v;
+    }
+    return values;
+  });
 
   // explicit corners: predicted from the naming triangle's first corner, else the previous explicit
-  // one; kind 8: by the parallelogram i0 + i1 - opposite where all three are explicit. Every term is
-  // within 2^52 (checked as made), so each sum is exact in binary64.
-  const coords = new Float64Array(3 * V);
+  // one; kind 8 (a walk's parallelogram bit): by the parallelogram i0 + i1 - opposite where all three
+  // are explicit. What is predicted and resolved is the integer coordinates, or with a walk's tables
+  // the indices into each axis's table. Every term is within 2^52 (checked as made), so each sum is
+  // exact in binary64.
+  const values = new Float64Array(3 * V);
+  const coords = tables ? new Float64Array(3 * V) : values;
   let previous = -1;
   for (let k = 0, e = 0; k < V; k++) {
     if (!explicit[k]) continue;
@@ -181,18 +242,23 @@ export function readShellTree(b, roles, parallelogram = false) {
       // zigzag in integer arithmetic where it fits (nearly always), else in floating point
       const r = zz < 0x7fffffff ? (zz & 1 ? -((zz + 1) >>> 1) : zz >>> 1) : unzigzag(zz);
       const base = gram
-        ? coords[3 * tri[3 * t] + a] + coords[3 * tri[3 * t + 1] + a] - coords[3 * opposite[t] + a]
-        : pred >= 0 ? coords[3 * pred + a] : 0;
+        ? values[3 * tri[3 * t] + a] + values[3 * tri[3 * t + 1] + a] - values[3 * opposite[t] + a]
+        : pred >= 0 ? values[3 * pred + a] : 0;
       let v = base + r;
       if (gram && (base > MAX_COORD || base < -MAX_COORD)) {
         // a parallelogram past 2^52 may have been rounded: the sum again in exact integers
-        const exact = BigInt(coords[3 * tri[3 * t] + a]) + BigInt(coords[3 * tri[3 * t + 1] + a])
-          - BigInt(coords[3 * opposite[t] + a]) + BigInt(r);
+        const exact = BigInt(values[3 * tri[3 * t] + a]) + BigInt(values[3 * tri[3 * t + 1] + a])
+          - BigInt(values[3 * opposite[t] + a]) + BigInt(r);
         const limit = BigInt(MAX_COORD);
         v = exact > limit || exact < -limit ? Infinity : Number(exact);
       }
       if (r > MAX_COORD || r < -MAX_COORD || v > MAX_COORD || v < -MAX_COORD) fail('BAD_GROUP_STRUCTURE', 'coordinate beyond 2^52');
-      coords[3 * k + a] = v;
+      values[3 * k + a] = v;
+      if (tables) {
+        const table = tables[a];
+        if (v < 0 || v >= table.length) fail('BAD_GROUP_STRUCTURE', `corner ${k}: index ${v} outside a table of ${table.length}`);
+        coords[3 * k + a] = table[v];
+      }
     }
     previous = k;
     e++;

@@ -43,6 +43,7 @@ before(async () => {
   extra['up_z.pln'] = path.join(ROOT, 'conformance/valid/cube_meta_up_z.pln');
   extra['brotli.pln'] = path.join(ROOT, 'conformance/valid/brotli_shell_tree_v4_0.pln');
   extra['scene4.pln'] = path.join(ROOT, 'conformance/valid/scene_transforms_v4_0.pln');
+  extra['walk.pln'] = path.join(ROOT, 'conformance/valid/shell_walk_sphere_v4_1.pln');
   const bad = fs.readFileSync(extra['box.pln']).subarray(0, 100);
   tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'pln-viewer-'));
   extra['truncated.pln'] = path.join(tmp, 'truncated.pln');
@@ -168,6 +169,18 @@ test('viewer: version 4.0, Brotli payloads decoded in the page (brotli-dec-wasm)
     t.diagnostic(`${name}: canvas ${px.width}x${px.height}: ${(100 * px.off).toFixed(1)} % drawn, ${px.colours} colours`);
     assert.ok(px.off > 0.05, `${name}: ${(100 * px.off).toFixed(1)} % of the canvas drawn`);
   }
+  assert.deepEqual(chrome.consoleErrors, []);
+});
+
+test('viewer: version 4.1, a shell walk (kind 9) decoded in the page', { skip: why ?? false, timeout: 60000 }, async (t) => {
+  const stats = await open('walk.pln');
+  const want = await checkPanel('walk.pln');
+  assert.equal(want.version, '4.1');
+  assert.equal(stats.triangles, want.triangles);
+  assert.equal(stats.groupTable[0].kindName, 'shell walk');
+  const px = await canvasPixels();
+  t.diagnostic(`walk.pln: canvas ${px.width}x${px.height}: ${(100 * px.off).toFixed(1)} % drawn, ${px.colours} colours`);
+  assert.ok(px.off > 0.05, `${(100 * px.off).toFixed(1)} % of the canvas drawn`);
   assert.deepEqual(chrome.consoleErrors, []);
 });
 
