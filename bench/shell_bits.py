@@ -1,17 +1,19 @@
-"""Where a shell's bytes go on the corpus: version 3.2's layout (§8.9) against the shell tree of
-version 3.3 (§9.11) and 3.4's (§9.12, the default choice since), at draco-14's error, with draco-14 measured in the same run (issues 30, 31).
+"""Where a shell's bytes go on the corpus: version 3.2's layout (§9.10) against the shell trees of
+versions 3.3 and 3.4 (§9.11, §9.12) and 4.1's shell walk (§9.13, the default choice since), at
+draco-14's error, with draco-14 measured in the same run (issues 30, 31).
 
 For each mesh, at draco-14's measured error on it (``D14_ERROR``: the
 certified measure of ``bench/compare.py``, as docs/benchmarks.md records it,
 to two digits), the default encoder (``codec.encode_scene``, shell scheme,
-deflate) writes the file twice: with version 3.2's shell layout only
+deflate) writes the file three times: with version 3.2's shell layout only
 (``planefmt.codec.choosing.SHELL_LAYOUTS = (GroupKind.SHELL,)``, what the encoder wrote before
-3.3) and with its default choice (a shell tree of kind 7 or 8 where smaller, labelled 3.4). Printed per
+3.3), with kinds 6 to 8 (a shell tree of kind 7 or 8 where smaller, labelled 3.4) and with its
+default choice (a shell walk of kind 9 where smaller, labelled 4.1). Printed per
 mesh: triangles; draco-14's bytes (DracoPy, quantization 14, compression
 level 10); each file's bytes, its ratio to draco-14 and its plane table's
 bytes; bits per triangle of each field of the shell body, each field
-deflated alone (so the fields add up to a little more than the body, which
-is deflated whole):
+compressed alone by Brotli at quality 11 (so the fields add up to a little
+more than the body, which is compressed whole):
 
 * 3.2: ``flags`` (explicit bits), ``planes`` (three references per named
   corner), ``grid`` (explicit corners as steps from the previous one),
@@ -19,6 +21,10 @@ is deflated whole):
 * 3.4 (kinds 7 and 8 alike): ``links`` (each triangle's parent and edge), ``codes`` (a root's
   three corners, an attached triangle's third), ``faces`` (0 on the
   parent's plane), ``flags``, ``picks``, ``coordinates`` (residuals);
+* 4.1 (kind 9): ``symbols`` (each triangle's children and third corner's code), ``escapes`` (a
+  root's codes, corner steps), ``faces``, ``flags``, ``picks``, ``mode``, ``grid``, ``tables``,
+  ``coordinates``; its connectivity (``symbols`` + ``escapes``) against 3.4's (``links`` +
+  ``codes``) is printed in bits per triangle;
 
 named corners of all corners; the tree's depth (its longest chain of
 parents) and the pointer-jumping rounds that take a reader through it; and
@@ -36,7 +42,8 @@ import os
 import statistics
 import sys
 import time
-import zlib
+
+import brotli
 
 import numpy as np
 
@@ -46,7 +53,7 @@ from compare import CORPUS, load, pln_parts  # noqa: E402
 import planefmt  # noqa: E402
 from planefmt import codec  # noqa: E402
 from planefmt.codec import choosing  # noqa: E402
-from planefmt.container import shellfields, varint  # noqa: E402
+from planefmt.container import shellfields, shellwalk, varint  # noqa: E402
 from planefmt.model import FREE, GroupKind  # noqa: E402
 from planefmt.container.shellfields import corner_codes  # noqa: E402
 
@@ -61,8 +68,10 @@ D14_ERROR = {
 
 
 def shell_fields(group) -> dict[str, bytes]:
-    """The fields of a shell group's kind data by name: spec §9.10's, §9.11's or §9.12's."""
+    """The fields of a shell group's kind data by name: spec §9.10's, §9.11's, §9.12's or §9.13's."""
     shell = group.shell
+    if group.kind == GroupKind.SHELL_WALK:
+        return shellwalk.shell_walk_fields(shell)
     if group.kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM):
         return shellfields.shell_tree_fields(shell, group.kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
     fc = np.asarray(shell.facets, dtype=np.int64)
@@ -104,8 +113,9 @@ def describe(data: bytes, triangles: int) -> dict:
     bits: dict[str, float] = {}
     for g in groups:
         for name, field in shell_fields(g).items():
-            bits[name] = bits.get(name, 0.0) + 8.0 * (len(zlib.compress(field, 9)) if field else 0) / triangles
-    trees = [g.shell.links for g in groups if g.kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM)]
+            bits[name] = bits.get(name, 0.0) + 8.0 * (len(brotli.compress(field, quality=11)) if field else 0) / triangles
+    trees = [g.shell.links for g in groups if g.kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM,
+                                                         GroupKind.SHELL_WALK)]
     depth = max(map(tree_depth, trees), default=0)
     return dict(bytes=len(data), planes=pln_parts(data)["planes"], bits=bits,
                 named=sum(int((~np.asarray(g.shell.explicit)).sum()) for g in groups),
@@ -119,7 +129,7 @@ def measure(rel: str) -> dict:
     scene, v, f = load(os.path.join(CORPUS, rel))
     draco = len(DracoPy.encode(v, f, quantization_bits=14, compression_level=10))
     row = dict(mesh=rel, triangles=len(f), draco=draco)
-    for name, layouts in (("3.2", (GroupKind.SHELL,)), ("3.4", codec.SHELL_KINDS)):
+    for name, layouts in (("3.2", (GroupKind.SHELL,)), ("3.4", codec.SHELL_KINDS[:-1]), ("4.1", codec.SHELL_KINDS)):
         data, enc, dec = encoded(scene, D14_ERROR[rel], layouts)
         row[name] = dict(describe(data, len(f)), encode=enc, decode=dec)
     return row
@@ -131,16 +141,18 @@ def main(argv: list[str]) -> int:
         r = measure(rel)
         rows.append(r)
         print(f"{r['mesh']}: {r['triangles']} triangles, draco-14 {r['draco']} B", flush=True)
-        for name in ("3.2", "3.4"):
+        for name in ("3.2", "3.4", "4.1"):
             x = r[name]
             fields = " ".join(f"{k} {b:.1f}" for k, b in x["bits"].items())
+            b = x["bits"]
+            fields += f"; connectivity {b.get('symbols', 0) + b.get('escapes', 0) + b.get('links', 0) + b.get('codes', 0):.1f}"
             print(f"  {name}: {x['bytes']} B ({x['bytes'] / r['draco']:.2f}x draco-14; planes {x['planes']} B); "
                   f"bits/triangle {fields}; named {x['named']}/{x['corners']}; depth {x['depth']} "
                   f"({x['rounds']} rounds); encode {x['encode']:.1f} s, decode {x['decode']:.3f} s", flush=True)
     cad = [r for r in rows if r["mesh"].startswith("cad/")]
     if cad:
         print("CAD median pln@d14 / draco-14: " + ", ".join(
-            f"{name} {statistics.median(r[name]['bytes'] / r['draco'] for r in cad):.2f}" for name in ("3.2", "3.4")))
+            f"{name} {statistics.median(r[name]['bytes'] / r['draco'] for r in cad):.2f}" for name in ("3.2", "3.4", "4.1")))
     return 0
 
 

@@ -268,7 +268,7 @@ def test_shell_tree_is_chosen_where_smaller_and_its_bound_holds(path, tolerance,
     # (CAD at draco-14's error: 1.5; at 1e-6 the coordinates are most of either).
     flat = reordered(dataclasses.replace(group.shell, links=None), np.arange(len(group.refs)))
     assert len(zlib.compress(shellfields._shell_body(flat), 9)) > gain * len(zlib.compress(
-        shellfields.shell_kind_data(group.kind, group.shell), 9))
+        shellwalk.shell_kind_data(group.kind, group.shell), 9))
     assert len(decoded.faces) == len(f)
     if is_closed_manifold(f, len(v)):
         assert is_closed_manifold(decoded.faces, len(decoded.vertices))

@@ -347,7 +347,7 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
                 bodies[GroupKind.SHELL_WALK] = shellwalk.shell_walk_body(tree)
             options += [(layout, tree, plan.points[source], bodies[layout]) for layout in trees]
         if GroupKind.SHELL in SHELL_LAYOUTS and (not trees or 2 * int((tree.links == 0).sum()) >= len(tree.links)):
-            options.append((GroupKind.SHELL, shell, plan.points, shellfields.shell_kind_data(GroupKind.SHELL, shell)))
+            options.append((GroupKind.SHELL, shell, plan.points, shellwalk.shell_kind_data(GroupKind.SHELL, shell)))
         kind, shell, points, _ = min(options, key=lambda c: len(records.pack(c[3], True, records.SHELL_TREE_LEVEL)[1]))
         # A tree's named corners are solved with their planes in ascending order of reference, which the
         # writer renumbers (``reordered_tree``): every order of the three is measured, so the bound

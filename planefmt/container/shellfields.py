@@ -302,18 +302,6 @@ def _predict(grid: np.ndarray, terms: np.ndarray) -> np.ndarray:
     return at(terms[:, 0]) + at(terms[:, 1]) - at(terms[:, 2])
 
 
-def shell_kind_data(kind: GroupKind, shell: Shell) -> bytes:
-    """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11), SHELL_TREE_PARALLELOGRAM (§9.12) or
-    SHELL_WALK (§9.13) group."""
-    if kind == GroupKind.SHELL:
-        return _shell_body(shell)
-    if kind == GroupKind.SHELL_WALK:
-        from .shellwalk import shell_walk_body  # shellwalk builds on this module
-
-        return shell_walk_body(shell)
-    return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
-
-
 def check_shell_tree(shell: Shell, bounding: np.ndarray, parallelogram: bool = False) -> None:
     """``FormatError`` (``BAD_GROUP_STRUCTURE``) unless ``shell`` is a shell tree of spec §9.11 (§9.12
     with ``parallelogram``) for a group whose references have roles ``bounding``: what its body decodes

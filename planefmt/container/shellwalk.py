@@ -16,9 +16,10 @@ import zlib
 import numpy as np
 
 from ..errors import FormatError
-from ..model import Shell
+from ..model import GroupKind, Shell
 from . import schema, varint
-from .shellfields import _predict, _tree_fields, _tree_parents, _tree_predictors, code_stream, tree_rest
+from .shellfields import (_predict, _shell_body, _shell_tree_body, _tree_fields, _tree_parents, _tree_predictors,
+                          code_stream, tree_rest)
 
 try:
     from ._chains import walk as _walk_c, walk_codes as _walk_codes_c
@@ -281,6 +282,16 @@ def shell_walk_fields(shell: Shell, mode: int | None = None) -> dict[str, bytes]
         out.update(min((_coordinates(shell, tri, links, new, m) for m in modes),
                        key=lambda f: len(zlib.compress(b"".join(f.values()), 9))))
     return out
+
+
+def shell_kind_data(kind: GroupKind, shell: Shell) -> bytes:
+    """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11), SHELL_TREE_PARALLELOGRAM (§9.12) or
+    SHELL_WALK (§9.13) group."""
+    if kind == GroupKind.SHELL:
+        return _shell_body(shell)
+    if kind == GroupKind.SHELL_WALK:
+        return shell_walk_body(shell)
+    return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
 
 
 def shell_walk_body(shell: Shell) -> bytes:
