@@ -338,17 +338,22 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         # from a neighbour flat CAD faces (box.STL 7.5 kB against 10.0 kB). Kind 6 is packed only for a
         # soup (a root for every other triangle or more, each paying a link and three codes): on every
         # connected corpus mesh a tree is the smaller (bench/shell_bits.py).
+        # A shell walk (kind 9) is a tree whose coordinates are kind 7's or kind 8's (or indices into
+        # tables) and whose connectivity took 45-60 % of theirs on every corpus mesh measured
+        # (bench/shell_bits.py): where it may be written, the trees are not made to be outbid.
         options = []
         trees = [layout for layout in TREE_KINDS if layout in SHELL_LAYOUTS]
+        if GroupKind.SHELL_WALK in trees:
+            trees = [GroupKind.SHELL_WALK]
         if trees:
             tree, source = shell_tree(shell, plan.walk)
-            bodies = shellfields.shell_tree_bodies(tree)
-            if GroupKind.SHELL_WALK in trees:
-                bodies[GroupKind.SHELL_WALK] = shellwalk.shell_walk_body(tree)
+            bodies = {GroupKind.SHELL_WALK: shellwalk.shell_walk_body(tree)} if trees == [GroupKind.SHELL_WALK] \
+                else shellfields.shell_tree_bodies(tree)
             options += [(layout, tree, plan.points[source], bodies[layout]) for layout in trees]
         if GroupKind.SHELL in SHELL_LAYOUTS and (not trees or 2 * int((tree.links == 0).sum()) >= len(tree.links)):
             options.append((GroupKind.SHELL, shell, plan.points, shellwalk.shell_kind_data(GroupKind.SHELL, shell)))
-        kind, shell, points, _ = min(options, key=lambda c: len(records.pack(c[3], True, records.SHELL_TREE_LEVEL)[1]))
+        kind, shell, points, _ = options[0] if len(options) == 1 else \
+            min(options, key=lambda c: len(records.pack(c[3], True, records.SHELL_TREE_LEVEL)[1]))
         # A tree's named corners are solved with their planes in ascending order of reference, which the
         # writer renumbers (``reordered_tree``): every order of the three is measured, so the bound
         # holds for the one written.

@@ -351,6 +351,28 @@ def code_stream(tri: np.ndarray, root: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return stream, new, np.cumsum(new) - new
 
 
+def surface_fields(shell: Shell) -> dict[str, bytes]:
+    """A shell tree's faces, corner flags and picks (spec §9.11; §9.13 the same), by name."""
+    explicit = np.asarray(shell.explicit, dtype=bool)
+    fc = np.asarray(shell.facets, dtype=np.int64)
+    root, parent, _ = _tree_parents(np.asarray(shell.links, dtype=np.int64))
+    face, tri, v = fc[:, 0], fc[:, 1:], len(explicit)
+    same = np.where(root, np.r_[FREE, face[:-1]], face[np.maximum(parent, 0)]) == face
+    out = {"faces": varint.encode(np.where(same, 0, np.where(face == FREE, 1, face + 2))),
+           "flags": np.packbits(explicit, bitorder="little").tobytes(), "picks": b""}
+    named = np.flatnonzero(~explicit)
+    if len(named):
+        refs, start, runs = incident_planes(tri, face, v)
+        vp = np.asarray(shell.vertex_planes, dtype=np.int64).reshape(-1, 3)
+        wide = runs[named] > 3
+        # Each plane's place in its corner's run: one search over (corner, reference) keys.
+        span = max(int(refs.max(initial=0)), int(vp.max(initial=0))) + 1
+        key = np.repeat(np.arange(v), runs) * span + refs
+        out["picks"] = varint.encode(np.searchsorted(key, named[wide, None] * span + vp[wide])
+                                     - start[named[wide], None])
+    return out
+
+
 def _tree_fields(shell: Shell):
     """The fields of a shell tree's body up to the picks, and a function of ``parallelogram`` giving
     the grid and the coordinates (none without explicit corners)."""
@@ -365,20 +387,8 @@ def _tree_fields(shell: Shell):
     c1 = np.repeat(tri[:, 1], np.where(root, 3, 1))
     codes = np.where(new, 0, np.where(is_root, before - stream,
                                       varint.zigzag(stream - c1).astype(np.int64) + 1))
-    same = np.where(root, np.r_[FREE, face[:-1]], face[np.maximum(parent, 0)]) == face
-    faces = np.where(same, 0, np.where(face == FREE, 1, face + 2))
     out = {"counts": varint.encode([v, t]), "links": varint.encode(links), "codes": varint.encode(codes),
-           "faces": varint.encode(faces), "flags": np.packbits(explicit, bitorder="little").tobytes(), "picks": b""}
-    named = np.flatnonzero(~explicit)
-    if len(named):
-        refs, start, runs = incident_planes(tri, face, v)
-        vp = np.asarray(shell.vertex_planes, dtype=np.int64).reshape(-1, 3)
-        wide = runs[named] > 3
-        # Each plane's place in its corner's run: one search over (corner, reference) keys.
-        span = max(int(refs.max(initial=0)), int(vp.max(initial=0))) + 1
-        key = np.repeat(np.arange(v), runs) * span + refs
-        out["picks"] = varint.encode(np.searchsorted(key, named[wide, None] * span + vp[wide])
-                                     - start[named[wide], None])
+           **surface_fields(shell)}
 
     def coordinates(parallelogram: bool) -> dict[str, bytes]:
         if not explicit.any():

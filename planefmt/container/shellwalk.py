@@ -10,6 +10,7 @@ Python, slowly.
 
 from __future__ import annotations
 
+import collections
 import itertools
 import zlib
 
@@ -18,8 +19,8 @@ import numpy as np
 from ..errors import FormatError
 from ..model import GroupKind, Shell
 from . import schema, varint
-from .shellfields import (_predict, _shell_body, _shell_tree_body, _tree_fields, _tree_parents, _tree_predictors,
-                          code_stream, tree_rest)
+from .shellfields import (_predict, _shell_body, _shell_tree_body, _tree_parents, _tree_predictors, code_stream,
+                          surface_fields, tree_rest)
 
 try:
     from ._chains import walk as _walk_c, walk_codes as _walk_codes_c
@@ -234,30 +235,41 @@ def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray) -> Shell:
     return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None)
 
 
-def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray, mode: int) -> dict[str, bytes]:
-    """The mode, grid, tables and coordinates of a walk's explicit corners coded in ``mode``."""
+def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray,
+                 modes: tuple[int, ...]) -> dict[str, bytes]:
+    """The mode, grid, tables and coordinates of a walk's explicit corners in whichever of ``modes``
+    deflates smallest (at level 1: a ranking of residual streams, which level 9 orders alike)."""
     explicit = np.asarray(shell.explicit, dtype=bool)
     values = np.zeros((len(explicit), 3), dtype=np.int64)
     values[explicit] = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
-    tables = []
-    if mode & MODE_TABLES:
+    indices, tables = values, b""
+    if any(m & MODE_TABLES for m in modes):
+        indices = values.copy()
+        parts = []
         for axis in range(3):
-            table, values[explicit, axis] = np.unique(values[explicit, axis], return_inverse=True)
-            tables += [varint.encode([len(table)]), varint.encode(varint.zigzag(table[:1])),
-                       varint.encode(np.diff(table) - 1)]
-    root = links == 0
-    terms = _tree_predictors(links, tri, explicit, np.where(root, 3, 1), new, bool(mode & MODE_PARALLELOGRAM))
-    residual = (values - _predict(values, terms))[explicit]
-    return {"mode": bytes([mode]),
-            "grid": schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step))),
-            "tables": b"".join(tables), "coordinates": varint.encode(varint.zigzag(residual.T))}
+            table, indices[explicit, axis] = np.unique(values[explicit, axis], return_inverse=True)
+            parts += [varint.encode([len(table)]), varint.encode(varint.zigzag(table[:1])),
+                      varint.encode(np.diff(table) - 1)]
+        tables = b"".join(parts)
+    per = np.where(links == 0, 3, 1)
+    terms = {p: _tree_predictors(links, tri, explicit, per, new, p) for p in {bool(m & MODE_PARALLELOGRAM) for m in modes}}
+    grid = schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step)))
+    options = []
+    for m in modes:
+        v = indices if m & MODE_TABLES else values
+        residual = (v - _predict(v, terms[bool(m & MODE_PARALLELOGRAM)]))[explicit]
+        options.append({"mode": bytes([m]), "grid": grid, "tables": tables if m & MODE_TABLES else b"",
+                        "coordinates": varint.encode(varint.zigzag(residual.T))})
+    if len(options) == 1:
+        return options[0]
+    return min(options, key=lambda f: len(zlib.compress(f["tables"] + f["coordinates"], 1)))
 
 
 def shell_walk_fields(shell: Shell, mode: int | None = None) -> dict[str, bytes]:
     """The fields of ``shell`` (a shell tree whose links are a depth-first walk, as
     ``groups.shells.spanning_walk`` makes them) as a SHELL_WALK body (spec §9.13), by name in body
     order; its explicit corners in ``mode``, or in whichever of the four deflates smallest."""
-    common, _ = _tree_fields(shell)
+    common = surface_fields(shell)
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
     tri, links = fc[:, 1:], np.asarray(shell.links, dtype=np.int64)
@@ -278,9 +290,7 @@ def shell_walk_fields(shell: Shell, mode: int | None = None) -> dict[str, bytes]
            "escapes": varint.encode(escapes), "faces": common["faces"], "flags": common["flags"],
            "picks": common["picks"]}
     if explicit.any():
-        modes = range(4) if mode is None else [mode]
-        out.update(min((_coordinates(shell, tri, links, new, m) for m in modes),
-                       key=lambda f: len(zlib.compress(b"".join(f.values()), 9))))
+        out.update(_coordinates(shell, tri, links, new, (0, 1, 2, 3) if mode is None else (mode,)))
     return out
 
 
@@ -294,9 +304,23 @@ def shell_kind_data(kind: GroupKind, shell: Shell) -> bytes:
     return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
 
 
+#: The last few bodies made, by the shell they were made of (kept alive here, so an id is not
+#: reused while its entry stands): an encode sizes, writes and verifies one shell several times.
+_BODIES: collections.OrderedDict[int, tuple[Shell, bytes]] = collections.OrderedDict()
+
+
 def shell_walk_body(shell: Shell) -> bytes:
-    """The kind data of ``shell`` as a SHELL_WALK group (spec §9.13)."""
-    return b"".join(shell_walk_fields(shell).values())
+    """The kind data of ``shell`` as a SHELL_WALK group (spec §9.13). Shells are frozen and their
+    arrays never written to, so a body made once for a shell object is its body."""
+    held = _BODIES.get(id(shell))
+    if held is not None and held[0] is shell:
+        _BODIES.move_to_end(id(shell))
+        return held[1]
+    body = b"".join(shell_walk_fields(shell).values())
+    _BODIES[id(shell)] = (shell, body)
+    while len(_BODIES) > 8:
+        _BODIES.popitem(last=False)
+    return body
 
 
 def check_shell_walk(shell: Shell, bounding: np.ndarray) -> None:

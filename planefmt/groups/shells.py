@@ -282,7 +282,10 @@ def shell_tree(shell: Shell, walk: tuple[np.ndarray, np.ndarray, np.ndarray] | N
 def reordered_tree(shell: Shell, local: np.ndarray) -> Shell:
     """A shell tree once its group's references are renumbered, reference ``j`` becoming
     ``local[j]``: the same triangles in the same order, each named corner's references ascending
-    again (the same three planes, solved in another order, which the encoder measured too)."""
+    again (the same three planes, solved in another order, which the encoder measured too); the
+    shell itself where nothing is renumbered (its body, made once, is then reused)."""
+    if np.array_equal(local, np.arange(len(local))):
+        return shell
     fc = np.asarray(shell.facets, dtype=np.int64).copy()
     planar = fc[:, 0] != FREE
     fc[planar, 0] = local[fc[planar, 0]]
