@@ -339,7 +339,7 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         # soup (a root for every other triangle or more, each paying a link and three codes): on every
         # connected corpus mesh a tree is the smaller (bench/shell_bits.py).
         # A shell walk (kind 9) is a tree whose coordinates are kind 7's or kind 8's (or indices into
-        # tables) and whose connectivity took 40-69 % of theirs, the file 0.74-0.97 of theirs, on the
+        # tables) and whose connectivity took 40-69 % of theirs, the file 0.58-0.97 of theirs, on the
         # twelve corpus meshes of bench/shell_bits.py: where it may be written, no tree is made to
         # be outbid.
         options = []
