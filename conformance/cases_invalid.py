@@ -1673,26 +1673,27 @@ def _():
     return walk_file(walk_fields(symbols=_codes(s[:1] + [s[1] - s[1] % 4 + 1] + s[2:])))
 
 
-@case("xv41_corner_twice", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose second triangle's third "
-      "corner is coded as a step of -1 from its i1 (escape 1): corner i1 - 1, which is its i0")
-def _():
+def _second_step(escape: int) -> bytes:
+    """The shell walk cube with its second triangle's third corner coded as a step: symbol code 3
+    and ``escape`` after the root's three."""
     f = walk_fields()
     s = walk_values("symbols")
     (v, t, x) = _all_varints(np.frombuffer(f["counts"], dtype=np.uint8))
     e = walk_values("escapes")
     return walk_file({**f, "counts": _codes([v, t, x + 1]), "symbols": _codes(s[:1] + [s[1] - s[1] % 4 + 3] + s[2:]),
-                      "escapes": _codes(e[:3] + [1] + e[3:])})
+                      "escapes": _codes(e[:3] + [escape] + e[3:])})
+
+
+@case("xv41_corner_twice", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose second triangle's third "
+      "corner is coded as a step of -1 from its i1 (escape 1): corner i1 - 1, which is its i0")
+def _():
+    return _second_step(1)
 
 
 @case("xv41_unnamed_step", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk cube whose second triangle's third "
       "corner is a step of +1 from its i1 (escape 2): corner 3, not yet named")
 def _():
-    f = walk_fields()
-    s = walk_values("symbols")
-    (v, t, x) = _all_varints(np.frombuffer(f["counts"], dtype=np.uint8))
-    e = walk_values("escapes")
-    return walk_file({**f, "counts": _codes([v, t, x + 1]), "symbols": _codes(s[:1] + [s[1] - s[1] % 4 + 3] + s[2:]),
-                      "escapes": _codes(e[:3] + [2] + e[3:])})
+    return _second_step(2)
 
 
 @case("xv41_mode_bits", "BAD_GROUP_STRUCTURE", "version 4.1 shell walk of the all-explicit cube whose coordinate "
