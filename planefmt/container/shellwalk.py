@@ -16,7 +16,7 @@ import zlib
 
 import numpy as np
 
-from ..errors import FormatError
+from ..errors import FormatError, LimitError
 from ..model import GroupKind, Shell
 from . import schema, varint
 from .shellfields import (_predict, _shell_body, _shell_tree_body, _tree_parents, _tree_predictors, code_stream,
@@ -209,7 +209,8 @@ def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray,
     else:
         tri, links, reason, at = _walk_python(symbols, escapes, v)
     if reason == 9:
-        raise MemoryError(f"a shell walk of {t} triangles")
+        raise LimitError(f"shell walk: {t} triangles over {v} corners need more memory than there is",
+                         code="MEMORY_LIMIT")
     if reason:
         raise FormatError(f"shell walk: triangle {at}: {_REASONS[reason]}", code="BAD_GROUP_STRUCTURE")
     return tri, links
