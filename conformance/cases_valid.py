@@ -462,31 +462,67 @@ V40_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 0))
 V41_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 1))
 
 
-def _sphere_walk() -> Shell:
-    """trimesh's icosphere of one subdivision (42 corners, 80 triangles) at 4 steps a unit, every
-    corner explicit, every triangle free, laid out along planefmt's depth-first walk: as a shell walk
-    (spec §9.13) it has branching triangles (two children, either order), left codes, a corner step in
-    an escape, and leaves."""
-    import trimesh
-
+def _explicit_walk(mesh, edge_two_first: bool = False) -> Shell:
+    """``mesh`` (a trimesh) at 4 steps a unit, every corner explicit, every triangle free, as a
+    shell tree along planefmt's depth-first walk, or along one that walks each triangle's neighbour
+    across its edge 2 before the one across its edge 1 (a writer's choice a reader must follow)."""
     from planefmt.container.shellfields import first_use_order
     from planefmt.groups.shells import shell_tree
 
-    m = trimesh.creation.icosphere(subdivisions=1)
-    rank = first_use_order(m.faces, len(m.vertices))
-    grid = np.empty((len(m.vertices), 3), dtype=np.int64)
-    grid[rank] = np.rint(m.vertices * 4).astype(np.int64)
+    rank = first_use_order(mesh.faces, len(mesh.vertices))
+    grid = np.empty((len(mesh.vertices), 3), dtype=np.int64)
+    grid[rank] = np.rint(mesh.vertices * 4).astype(np.int64)
+    tri = rank[mesh.faces]
     flat = Shell(explicit=np.ones(len(grid), dtype=bool), vertex_planes=np.zeros((0, 3), dtype=np.int64), grid=grid,
-                 origin=np.zeros(3), step=0.25, facets=np.column_stack([np.full(len(m.faces), -1), rank[m.faces]]))
-    return shell_tree(flat)[0]
+                 origin=np.zeros(3), step=0.25, facets=np.column_stack([np.full(len(tri), -1), tri]))
+    return shell_tree(flat, _edge_two_first(tri) if edge_two_first else None)[0]
 
 
-WALK_SPHERE = _sphere_walk()
+def _edge_two_first(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A depth-first walk of ``tri`` across shared edges, the neighbour across a triangle's edge 2
+    before the one across its edge 1: (triangles in walk order, their corners rotated so that the
+    edge shared with the parent comes first, links of spec §9.11)."""
+    across = {(int(a), int(b)): (j, k) for j, t in enumerate(tri) for k, (a, b) in
+              enumerate(((t[0], t[1]), (t[1], t[2]), (t[2], t[0]))) }
+    seen, walk, rows, links, place = set(), [], [], [], {}
+    for start in range(len(tri)):
+        stack = [(start, 0, -1, 0)]
+        while stack:
+            j, r, p, e = stack.pop()
+            if j in seen:
+                continue
+            seen.add(j)
+            place[j] = len(walk)
+            row = [int(tri[j][(r + i) % 3]) for i in range(3)]
+            links.append(0 if p < 0 else 3 * (len(walk) - p - 1) + e + 1)
+            walk.append(j)
+            rows.append(row)
+            # Pushed edge 1's first, so that edge 2's is popped (walked) first; a root's edge 0 too.
+            for k in ((0, 1, 2) if p < 0 else (1, 2)):
+                w = across.get((row[(k + 1) % 3], row[k]))
+                if w is not None and w[0] not in seen:
+                    stack.append((w[0], w[1], place[j], k))
+    return np.array(walk), np.array(rows, dtype=np.int64), np.array(links, dtype=np.int64)
 
 
-def walk_mode(mode: int) -> Callable[[list], list]:
-    """An edit recoding every kind 9 GRUP body's explicit corners in coordinate ``mode`` (spec §9.13),
-    whichever a writer would pick: a reader must decode each."""
+def _trimesh(name: str, **kwargs):
+    import trimesh
+
+    return getattr(trimesh.creation, name)(**kwargs)
+
+
+#: trimesh's icosphere of one subdivision (42 corners, 80 triangles) along planefmt's walk: as a shell
+#: walk (spec §9.13) it has a branching triangle, left codes, a corner step in an escape and leaves.
+WALK_SPHERE = _explicit_walk(_trimesh("icosphere", subdivisions=1))
+#: trimesh's torus of 6 by 4 sections (24 corners, 48 triangles) walked edge 2 first: right codes,
+#: children in the order (2, 1), corner steps in escapes.
+WALK_TORUS = _explicit_walk(_trimesh("torus", major_radius=1.0, minor_radius=0.4, major_sections=6, minor_sections=4),
+                            edge_two_first=True)
+
+
+def walk_mode(shell: Shell, mode: int) -> Callable[[list], list]:
+    """An edit replacing every kind 9 GRUP body's kind data by ``shell``'s with its explicit corners
+    in coordinate ``mode`` (spec §9.13), whichever a writer would pick: a reader must decode each."""
     from planefmt.container import shellwalk, varint
 
     def edit(layout: list) -> list:
@@ -498,11 +534,13 @@ def walk_mode(mode: int) -> Callable[[list], list]:
                 (count,), pos = varint.decode(raw, 1, "count")
                 _, used = varint.decode(raw[pos:], int(count), "refs")
                 pos += used + (int(count) + 7) // 8
-                body = raw[:pos].tobytes() + b"".join(shellwalk.shell_walk_fields(WALK_SPHERE, mode).values())
+                body = raw[:pos].tobytes() + b"".join(shellwalk.shell_walk_fields(shell, mode).values())
                 payload = schema.GroupHead3.build(dict(head, raw_size=len(body), body=body))
             out.append((kind, payload))
         return out
     return edit
+
+
 #: A rotation by 30 degrees about z: cos and sin are not float32 values, so version 4 stores them as f64.
 ROT30 = np.array([[math.cos(math.pi / 6), -math.sin(math.pi / 6), 0.0], [math.sin(math.pi / 6), math.cos(math.pi / 6), 0.0],
                   [0.0, 0.0, 1.0]])
@@ -772,13 +810,19 @@ CASES = [
               compress=True, decoded_bbox=True, assembled_only=True, edit=brotli_payloads),
     ValidCase("shell_walk_cube_v4_1", "version 4.1: the shell tree cube of shell_tree_cube_v3_3 as a shell walk "
               "(kind 9): a chain of triangles (children lists 1 and 2), its corners named by their face planes, the "
-              "corners it closes on coded as left (1) and right (2) over the open edges", V41_CUBE,
+              "corners it closes on coded as left (1) over the open edges", V41_CUBE,
               (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE))),
     ValidCase("shell_walk_sphere_v4_1", "version 4.1: an icosphere of 80 free triangles as a shell walk: triangles "
               "with two children, leaves, left codes and a corner step in an escape; its 42 explicit corners in mode "
               "3, indices into each axis's table of values predicted by parallelograms", V41_CUBE,
               (Obj("sphere"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_WALK, (0,), shell=WALK_SPHERE)),
-              decoded_bbox=True, assembled_only=True, edit=walk_mode(3)),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_SPHERE, 3)),
+    ValidCase("shell_walk_torus_v4_1", "version 4.1: a torus of 48 free triangles walked with each triangle's "
+              "neighbour across edge 2 before the one across edge 1: right codes, children in the order (2, 1), "
+              "corner steps in escapes; its 24 explicit corners in mode 2, indices into each axis's table of "
+              "values predicted by the first corner of the triangle naming them", V41_CUBE,
+              (Obj("torus"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_WALK, (0,), shell=WALK_TORUS)),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_TORUS, 2)),
     ValidCase("scene_transforms_v4_0", "version 4.0: three cubes under a root, with transforms coded entry by entry "
               "(spec §8): a translation by (2.5, -1, 0.125) (codes 1, 0 and f32), a rotation by 30 degrees about z "
               "with a translation by 0.1 (f64 entries), and a mirror with -0.0 (an f32); a cOLR of one colour for "
