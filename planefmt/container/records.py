@@ -20,8 +20,8 @@ from .chunks import Limits
 from ..errors import FormatError, LimitError, PlnError, VersionError
 from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, TREE_KINDS, UP_AXES, UP_AXIS, Coding, Colours,
                     GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
-from .shellfields import _decode_shell, _decode_shell_tree, _shell_body, _shell_tree_body
-from .shellwalk import decode_shell_walk, shell_walk_body
+from .shellfields import _decode_shell, _decode_shell_tree
+from .shellwalk import decode_shell_walk, shell_kind_data
 
 #: Major versions read, each with the newest minor version this reader knows.
 VERSIONS = {1: 0, 2: 0, 3: 4, 4: 1}
@@ -424,12 +424,8 @@ def _compact_body(g: PartGroup) -> bytes:
         out += [varint.encode([len(g.vertex_planes)]), varint.encode(np.asarray(g.vertex_planes, dtype=np.uint64)),
                 varint.encode([len(facets)]),
                 varint.encode(np.column_stack([gaps, facets[:, 1:]]).astype(np.uint64))]
-    elif g.kind == GroupKind.SHELL and g.shell is not None:
-        out.append(_shell_body(g.shell))
-    elif g.kind == GroupKind.SHELL_WALK and g.shell is not None:
-        out.append(shell_walk_body(g.shell))
-    elif g.kind in TREE_KINDS and g.shell is not None:
-        out.append(_shell_tree_body(g.shell, g.kind == GroupKind.SHELL_TREE_PARALLELOGRAM))
+    elif g.kind in (GroupKind.SHELL, *TREE_KINDS) and g.shell is not None:
+        out.append(shell_kind_data(g.kind, g.shell))
     else:
         out.append(g.extra)
     return b"".join(out)

@@ -302,6 +302,14 @@ def _predict(grid: np.ndarray, terms: np.ndarray) -> np.ndarray:
     return at(terms[:, 0]) + at(terms[:, 1]) - at(terms[:, 2])
 
 
+def same_tree(back: Shell, shell: Shell) -> bool:
+    """Whether ``back``, a tree's body as decoded, is ``shell``: corners, triangles, links and grid."""
+    fields = ("explicit", "vertex_planes", "grid", "facets", "links")
+    return all(np.array_equal(np.asarray(getattr(back, f)).reshape(-1), np.asarray(getattr(shell, f)).reshape(-1))
+               for f in fields) and not (back.grid.size and (not np.array_equal(back.origin, shell.origin)
+                                                             or back.step != shell.step))
+
+
 def check_shell_tree(shell: Shell, bounding: np.ndarray, parallelogram: bool = False) -> None:
     """``FormatError`` (``BAD_GROUP_STRUCTURE``) unless ``shell`` is a shell tree of spec §9.11 (§9.12
     with ``parallelogram``) for a group whose references have roles ``bounding``: what its body decodes
@@ -310,10 +318,7 @@ def check_shell_tree(shell: Shell, bounding: np.ndarray, parallelogram: bool = F
         raise FormatError("shell tree: one link per triangle", code="BAD_GROUP_STRUCTURE")
     back = _decode_shell_tree(np.frombuffer(_shell_tree_body(shell, parallelogram), dtype=np.uint8),
                               np.asarray(bounding, bool), parallelogram)
-    fields = ("explicit", "vertex_planes", "grid", "facets", "links")
-    if not all(np.array_equal(np.asarray(getattr(back, f)).reshape(-1), np.asarray(getattr(shell, f)).reshape(-1))
-               for f in fields) or (back.grid.size and (not np.array_equal(back.origin, shell.origin)
-                                                         or back.step != shell.step)):
+    if not same_tree(back, shell):
         raise FormatError("shell tree: its body does not decode to it (triangles not attached at their first "
                           "edge, corners not numbered by first use, or named corners not three of their face "
                           "planes in ascending order)", code="BAD_GROUP_STRUCTURE")

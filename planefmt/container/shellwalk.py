@@ -20,7 +20,7 @@ from ..errors import FormatError, LimitError
 from ..model import GroupKind, Shell
 from . import schema, varint
 from .shellfields import (_predict, _shell_body, _shell_tree_body, _tree_parents, _tree_predictors, code_stream,
-                          surface_fields, tree_rest)
+                          same_tree, surface_fields, tree_rest)
 
 try:
     from ._chains import walk as _walk_c, walk_codes as _walk_codes_c
@@ -329,9 +329,7 @@ def check_shell_walk(shell: Shell, bounding: np.ndarray) -> None:
     if shell.links is None or len(shell.links) != len(shell.facets):
         raise FormatError("shell walk: one link per triangle", code="BAD_GROUP_STRUCTURE")
     back = decode_shell_walk(np.frombuffer(shell_walk_body(shell), dtype=np.uint8), np.asarray(bounding, bool))
-    fields = ("explicit", "vertex_planes", "grid", "facets", "links")
-    if not all(np.array_equal(np.asarray(getattr(back, f)).reshape(-1), np.asarray(getattr(shell, f)).reshape(-1))
-               for f in fields):
+    if not same_tree(back, shell):
         raise FormatError("shell walk: its body does not decode to it (links not a depth-first walk, corners "
                           "not numbered by first use, or named corners not three of their face planes in "
                           "ascending order)", code="BAD_GROUP_STRUCTURE")
