@@ -182,21 +182,11 @@ def pack(data: bytes, compress: bool, level: int = 9, brotli_allowed: bool = Fal
     if compress:
         candidates = [(schema.COMPRESSION_ZLIB, zlib.compress(data, level))]
         if brotli_allowed:
-            candidates.append((schema.COMPRESSION_BROTLI, brotli.compress(data, quality=_brotli_quality(len(data)))))
+            candidates.append((schema.COMPRESSION_BROTLI, brotli.compress(data, quality=schema.brotli_quality(len(data)))))
         for method, stored in candidates:
             if len(stored) < len(best[1]) and len(data) <= schema.MAX_WRITTEN_RATIO * len(stored):
                 best = (method, stored)
     return best
-
-
-#: Largest payload compressed at Brotli's densest quality, 11, which takes about 2 s a megabyte
-#: (smooth_dense/bun_zipper.ply's 326 kB shell tree at 3e-5: 93.5 kB in 0.67 s; quality 9 gives
-#: 102.1 kB in 0.04 s, deflate 106.5 kB): larger ones take quality 9, so that no encode waits on it.
-BROTLI_DENSEST_BYTES = 1024 * 1024
-
-
-def _brotli_quality(size: int) -> int:
-    return 11 if size <= BROTLI_DENSEST_BYTES else 9
 
 
 def unpack(method: int, stored: bytes, raw_size: int, limits: Limits, major: int = 3) -> bytes:

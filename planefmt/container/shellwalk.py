@@ -14,6 +14,7 @@ import collections
 import itertools
 import zlib
 
+import brotli
 import numpy as np
 
 from ..errors import FormatError, LimitError
@@ -35,6 +36,7 @@ ATTACHED_CHILDREN = tuple(p for n in range(3) for p in itertools.permutations(ra
 
 #: Coordinate mode bits (spec §9.13).
 MODE_PARALLELOGRAM, MODE_TABLES = 1, 2
+MODES = (0, MODE_PARALLELOGRAM, MODE_TABLES, MODE_PARALLELOGRAM | MODE_TABLES)
 
 _REASONS = {1: "a symbol is past its range", 2: "the walk needs more escapes than the body holds",
             3: "a corner code names a corner below 0 or not named before",
@@ -239,7 +241,7 @@ def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray) -> Shell:
 def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray,
                  modes: tuple[int, ...]) -> dict[str, bytes]:
     """The mode, grid, tables and coordinates of a walk's explicit corners in whichever of ``modes``
-    deflates smallest (at level 1: a ranking of residual streams, which level 9 orders alike)."""
+    compresses smallest (:func:`_smallest`)."""
     explicit = np.asarray(shell.explicit, dtype=bool)
     values = np.zeros((len(explicit), 3), dtype=np.int64)
     values[explicit] = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
@@ -261,9 +263,29 @@ def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarr
         residual = (v - _predict(v, terms[bool(m & MODE_PARALLELOGRAM)]))[explicit]
         options.append({"mode": bytes([m]), "grid": grid, "tables": tables if m & MODE_TABLES else b"",
                         "coordinates": varint.encode(varint.zigzag(residual.T))})
+    return _smallest(options)
+
+
+#: Deflate level that ranks coordinate modes, and how close (a ratio) the two best may come before the
+#: file's own coder decides between them: over the corpus at Draco-14's error, deflate at level 1
+#: ranked modes 1,065 bytes worse than Brotli at quality 11 would (425 on
+#: nonconvex_watertight/quadknot.obj, 552 on open/capsule.obj), level 6 521, level 6 with Brotli
+#: deciding the closest two 36, for 0.2 s of Brotli over the whole corpus (bench/walk_modes.py).
+RANK_LEVEL, RANK_CLOSE = 6, 1.05
+
+
+def _smallest(options: list[dict[str, bytes]]) -> dict[str, bytes]:
+    """Of candidate coordinate fields, the one whose body compresses smallest, as deflate ranks them,
+    with Brotli (the writer's coder) deciding between the best two where deflate finds them within
+    ``RANK_CLOSE`` of each other."""
     if len(options) == 1:
         return options[0]
-    return min(options, key=lambda f: len(zlib.compress(f["tables"] + f["coordinates"], 1)))
+    sizes = [len(zlib.compress(f["tables"] + f["coordinates"], RANK_LEVEL)) for f in options]
+    first, second = np.argsort(sizes, kind="stable")[:2]
+    if sizes[second] > RANK_CLOSE * sizes[first]:
+        return options[first]
+    return min((options[first], options[second]), key=lambda f: len(brotli.compress(
+        f["tables"] + f["coordinates"], quality=schema.brotli_quality(len(f["tables"]) + len(f["coordinates"])))))
 
 
 def shell_walk_fields(shell: Shell, mode: int | None = None) -> dict[str, bytes]:
@@ -291,7 +313,7 @@ def shell_walk_fields(shell: Shell, mode: int | None = None) -> dict[str, bytes]
            "escapes": varint.encode(escapes), "faces": common["faces"], "flags": common["flags"],
            "picks": common["picks"]}
     if explicit.any():
-        out.update(_coordinates(shell, tri, links, new, (0, 1, 2, 3) if mode is None else (mode,)))
+        out.update(_coordinates(shell, tri, links, new, MODES if mode is None else (mode,)))
     return out
 
 
