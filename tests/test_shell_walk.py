@@ -89,7 +89,7 @@ def test_parallelograms_are_the_first_four_of_spec_order(name):
     start, terms = shellfields.parallelograms(tri, explicit)
     want = spec_parallelograms(tri, explicit)
     assert [terms[start[k]:start[k + 1]].tolist() for k in range(len(explicit))] == [[list(x) for x in w] for w in want]
-    assert max(map(len, want)) >= 3 and sum(len(w) >= 2 for w in want) > len(want) // 4
+    assert max(map(len, want)) >= 3 and sum(len(w) >= 2 for w in want) >= 10
 
 
 @pytest.mark.skipif(shellfields._average is None, reason="the C extension was not built")
