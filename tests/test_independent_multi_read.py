@@ -453,7 +453,7 @@ def test_soups_round_trip(mode):
 
 GOLDENS = ["shell_tree_cube_v3_3", "shell_tree_mixed_v3_3", "shell_tree_apex_v3_3", "shell_tree_pyramid_v3_3",
            "shell_tree_box_v3_4", "shell_tree_pyramid_v3_4", "shell_walk_cube_v4_1", "shell_walk_sphere_v4_1",
-           "shell_walk_torus_v4_1"]
+           "shell_walk_torus_v4_1", "shell_walk_multi_sphere_v4_2", "shell_walk_multi_tables_v4_2"]
 
 
 def golden(name):
