@@ -65,6 +65,7 @@ class GroupKind(IntEnum):
     SHELL_TREE_PARALLELOGRAM = 8
     SHELL_WALK = 9
     SHELL_WALK_MULTI = 10
+    COPY = 11
 
 
 #: The shell trees (spec §9.11): kind 7, kind 8 whose explicit corners parallelograms predict (§9.12),
@@ -217,6 +218,8 @@ class PartGroup:
     facets: np.ndarray | None = None  # (T, 4) uint32, SEALED groups
     shell: Shell | None = None  # SHELL groups
     planes: np.ndarray | None = field(default=None, compare=False)
+    #: A copy's source group (spec §9.15): a reader gives a copy its source's kind and surface, and this.
+    source: int | None = None
 
     def __repr__(self) -> str:
         kind = self.kind.name if isinstance(self.kind, GroupKind) else self.kind

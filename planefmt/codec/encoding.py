@@ -23,7 +23,8 @@ from ..errors import GeometryError, PlnError
 from ..geometry.planes import transform_points
 from ..groups.shells import reordered, reordered_tree
 from ..groups.solids import FLAT_STRATEGIES, STRATEGIES, Splitter
-from ..model import BSP_MAX_SPLIT, TREE_KINDS, UP_AXIS, Coding, GroupKind, Header, Mesh, Node, Quantization, Scene, Units
+from ..model import (BSP_MAX_SPLIT, TREE_KINDS, UP_AXIS, Coding, GroupKind, Header, Mesh, Node, PartGroup, Quantization,
+                     Scene, Units)
 from .choosing import _Choice, _choose, _choose_shells
 from .decoding import SHELL_KINDS
 from .preparing import LOSSLESS_TOLERANCE, _Object, _diagonal, _prepare, _world_transforms
@@ -243,12 +244,16 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     if compact and stored.quantized:
         stored = min((Coding.QUANTIZED, Coding.PREDICTED), key=lambda c: _table_bytes(rows, c, choice.quantization,
                                                                                        compress))
-    header = Header(version=_version(objects, major) if compact else (1, 0), lossy=choice.lossy, coding=stored,
+    by_node = {i: (o, a) for i, o, a in zip(meshes, objects, offsets)}
+    placed = {i: _placed(o, global_index[a:a + len(o.triplets)], compact) for i, (o, a) in by_node.items()}
+    version = _version(objects, major) if compact else (1, 0)
+    if version[0] == 4 and _repeats([p for groups in placed.values() for p in groups]):
+        version = max(version, records.KIND_VERSION[int(GroupKind.COPY)])
+    header = Header(version=version, lossy=choice.lossy, coding=stored,
                     quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
                     tolerance=float(tolerance), error_bound=choice.error_bound,
                     plane_count=len(rows), object_count=len(scene.nodes),
                     group_count=sum(len(o.groups) for o in objects))
-    by_node = {i: (o, a) for i, o, a in zip(meshes, objects, offsets)}
     # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
     index = True if not compact else None
     with _writer(target, header, compress, index, verify) as w:
@@ -262,14 +267,38 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
             refs = global_index[a:a + len(o.triplets)]
             if refs.max() >= w.plane_count:
                 w.add_planes(rows[w.plane_count:refs.max() + 1])
-            for g in o.groups:
-                perm = np.argsort(refs[g.refs], kind="stable") if compact else np.arange(len(g.refs))
-                p = _permuted(g, perm)
-                k = w.add_group(obj_index, g.kind, refs[g.refs[perm]], g.bounding[perm], cells=p.cells, tree=p.tree,
+            for p, group_refs, bounding, local in placed[i]:
+                k = w.add_group(obj_index, p.kind, group_refs, bounding, cells=p.cells, tree=p.tree,
                                 vertex_planes=p.vertex_planes, facets=p.facets, shell=p.shell)
                 if o.plane_colours is not None:
-                    w.add_colours(k, o.plane_colours[g.refs[perm]])
+                    w.add_colours(k, o.plane_colours[local])
     return header
+
+
+def _placed(o: _Object, refs: np.ndarray, compact: bool) -> list[tuple[GroupSpec, np.ndarray, np.ndarray, np.ndarray]]:
+    """``o``'s groups as written, its planes at table indices ``refs``: each group with its references
+    in increasing order where ``compact`` (version 2 and later), its references in the table, its role
+    bits and its local references in that order."""
+    out = []
+    for g in o.groups:
+        perm = np.argsort(refs[g.refs], kind="stable") if compact else np.arange(len(g.refs))
+        out.append((_permuted(g, perm), refs[g.refs[perm]], g.bounding[perm], g.refs[perm]))
+    return out
+
+
+def _repeats(placed: list[tuple[GroupSpec, np.ndarray, np.ndarray, np.ndarray]]) -> bool:
+    """Whether two of the groups ``placed`` (group, references, role bits, local references) have one
+    kind, one common body and one kind data: the writer of version 4.2 writes the later a copy (spec
+    §9.15)."""
+    seen = set()
+    for p, refs, bounding, _ in placed:
+        body = records.group_body(PartGroup(index=0, object=0, kind=int(p.kind), refs=refs, bounding=bounding,
+                                            cells=p.cells, tree=p.tree, vertex_planes=p.vertex_planes,
+                                            facets=p.facets, shell=p.shell))
+        if (int(p.kind), body) in seen:
+            return True
+        seen.add((int(p.kind), body))
+    return False
 
 
 def _table_bytes(rows: np.ndarray, coding: Coding, q: Quantization, compress: bool) -> int:

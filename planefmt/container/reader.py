@@ -22,7 +22,7 @@ import numpy as np
 from . import records, schema
 from .chunks import ChunkStream, Limits, RawChunk, chunk_bytes, is_ancillary
 from ..errors import FormatError, PlnError
-from ..model import UP_AXIS, ObjectRecord, PartGroup, Record, UnknownChunk
+from ..model import UP_AXIS, GroupKind, ObjectRecord, PartGroup, Record, UnknownChunk
 
 
 class Reader:
@@ -50,6 +50,10 @@ class Reader:
         self._table = np.empty((0, 3), dtype=np.float64)
         self._plane_count = 0
         self._group_refs: dict[int, int] = {}
+        # Version 4.2's copies (spec §9.15) name earlier groups: their stored payloads, and the sources
+        # decoded so far.
+        self._payloads: dict[int, bytes] = {}
+        self._sources: dict[int, PartGroup] = {}
         self._group_count = 0
         self._done = False
         self._started = False
@@ -180,6 +184,10 @@ class Reader:
             self._listed.append((raw.offset, t, group.index))
             self._group_refs[group.index] = len(group.refs)
             self._group_count += 1
+            if int(GroupKind.COPY) in records.kinds_of(*self.header.version):
+                self._payloads[group.index] = bytes(raw.payload)
+            if group.kind == GroupKind.COPY:
+                group = self._copied(group)
             if self.retain_planes:
                 group = _with_planes(group, self._table[group.refs])
             return group
@@ -207,6 +215,28 @@ class Reader:
             self.findings.append(("UNKNOWN_ANCILLARY_CHUNK", f"skipped chunk {raw.name} at byte {raw.offset}"))
             return UnknownChunk(type=t, payload=bytes(raw.payload), offset=raw.offset)
         raise FormatError(f"unknown critical chunk {raw.name}", code="UNKNOWN_CRITICAL_CHUNK")
+
+    def _copied(self, copy: PartGroup) -> PartGroup:
+        """A copy (spec §9.15) as its source group: the source's kind and surface, the copy's index and
+        object, ``source`` set; the source read again from its stored payload, or through the index."""
+        s = copy.source
+        source = self._sources.get(s)
+        if source is None:
+            if s in self._payloads:
+                source, _ = records.decode_group(
+                    self._payloads[s], expected_index=s, objects=len(self.objects), planes=self._plane_count,
+                    minor=self.header.version[1], limits=self.limits, major=self.header.version[0])
+            else:
+                source = self.group(s)
+            self._sources[s] = source = dataclasses.replace(source, planes=None)
+        if source.kind == GroupKind.COPY:
+            raise FormatError(f"group {copy.index} copies group {s}, itself a copy", code="BAD_GROUP_STRUCTURE")
+        if not (np.array_equal(source.refs, copy.refs) and np.array_equal(source.bounding, copy.bounding)):
+            raise FormatError(f"group {copy.index} copies group {s} with other references or role bits",
+                              code="BAD_GROUP_STRUCTURE")
+        if not isinstance(source.kind, GroupKind):
+            self.findings.append(("SKIPPED_GROUP_KIND", f"group {copy.index} copies group {s}, of a kind skipped"))
+        return dataclasses.replace(source, index=copy.index, object=copy.object, source=s)
 
     def _check_index(self, entries: np.ndarray) -> None:
         """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §10.2)."""
@@ -299,6 +329,7 @@ class Reader:
         # A shallow copy shares the file but starts from an empty plane table and object list.
         sub = copy.copy(self)
         sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
+        sub._payloads, sub._sources = {}, {}
         sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
         stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
         for i in np.flatnonzero(np.isin(types[: pos + 1], [schema.OBJT, schema.PLNS])).tolist() + [int(pos)]:

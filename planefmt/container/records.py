@@ -31,7 +31,7 @@ KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
 KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3),
                 int(GroupKind.SHELL_TREE_PARALLELOGRAM): (3, 4), int(GroupKind.SHELL_WALK): (4, 1),
-                int(GroupKind.SHELL_WALK_MULTI): (4, 2)}
+                int(GroupKind.SHELL_WALK_MULTI): (4, 2), int(GroupKind.COPY): (4, 2)}
 
 
 def _kind(value: int) -> GroupKind | int:
@@ -377,7 +377,7 @@ def encode_group(g: PartGroup, compress: bool, major: int = 1, brotli_allowed: b
         raise PlnError("sealed groups need version 3.1", code="UNKNOWN_GROUP_KIND")
     if g.shell is not None and major < 3:
         raise PlnError("shell groups need version 3.2", code="UNKNOWN_GROUP_KIND")
-    body = _compact_body(g) if major >= 2 else _body(g)
+    body = group_body(g) if major >= 2 else _body(g)
     method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9,
                           brotli_allowed=brotli_allowed and major >= 4)
     if major >= 3:
@@ -391,7 +391,8 @@ def _roles(g: PartGroup) -> bytes:
     return np.packbits(np.asarray(g.bounding, dtype=bool), bitorder="little").tobytes()
 
 
-def _compact_body(g: PartGroup) -> bytes:
+def group_body(g: PartGroup) -> bytes:
+    """The raw (uncompressed) GRUP body of versions 2 to 4 (spec §9.2): references, roles, kind data."""
     refs = np.asarray(g.refs, dtype=np.int64)
     gaps = np.diff(refs, prepend=0)
     if len(refs) and gaps[1:].min(initial=0) < 0:
@@ -417,6 +418,8 @@ def _compact_body(g: PartGroup) -> bytes:
                 varint.encode(np.column_stack([gaps, facets[:, 1:]]).astype(np.uint64))]
     elif g.kind in (GroupKind.SHELL, *TREE_KINDS) and g.shell is not None:
         out.append(shell_kind_data(g.kind, g.shell))
+    elif g.kind == GroupKind.COPY:
+        out.append(varint.encode([g.source]))
     else:
         out.append(g.extra)
     return b"".join(out)
@@ -515,7 +518,7 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
                           code="BAD_PLANE_REFERENCE")
     bounding, pos = varint.bit_field(raw, pos, count, "group body", "role bits")
     rest = raw[pos:]
-    cells = tree = vertex_planes = facets = shell = None
+    cells = tree = vertex_planes = facets = shell = source = None
     extra = b""
     if head.kind not in kinds:
         extra = rest.tobytes()
@@ -531,11 +534,19 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
         tree = _decode_compact_tree(rest, count)
     elif head.kind == GroupKind.SEALED:
         vertex_planes, facets = _decode_sealed(rest, bounding)
+    elif head.kind == GroupKind.COPY:
+        (source,), used = varint.decode(rest, 1, "copy source")
+        if used != len(rest):
+            raise FormatError(f"{len(rest) - used} unexpected bytes after a copy's source", code="BAD_PAYLOAD")
+        if source >= head.index:
+            raise FormatError(f"group {head.index} copies group {int(source)}, not an earlier one",
+                              code="BAD_GROUP_STRUCTURE")
+        source = int(source)
     elif len(rest):
         raise FormatError(f"{len(rest)} unexpected bytes after the role bits", code="BAD_PAYLOAD")
     return PartGroup(index=head.index, object=head.object, kind=_kind(head.kind), refs=refs.astype(np.uint32),
                      bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
-                     facets=facets, shell=shell)
+                     facets=facets, shell=shell, source=source)
 
 
 def _decode_counted(raw: np.ndarray, what: str, limit: int) -> tuple[np.ndarray, int]:

@@ -10,6 +10,7 @@ is left under the target name).
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import os
 import tempfile
 from pathlib import Path
@@ -51,12 +52,14 @@ class Writer:
     shell group's body decodes to the shell given (spec §9.10, §9.11); the encoder turns it off only
     to measure the size of a candidate it may not write. ``brotli``: with ``compress``, in a version 4
     file, each payload Brotli-compressed where that is smaller than deflate (spec §6); the encoder's size
-    trials turn it off (Brotli's densest quality takes about 1 s a megabyte). Use as a context manager: leaving the block
-    by an exception discards a path target's temporary file.
+    trials turn it off (Brotli's densest quality takes about 1 s a megabyte). ``copies``: in a file whose
+    version has copies (4.2, spec §9.15), a group whose kind, references, role bits and kind data are an
+    earlier group's is written as a copy of it. Use as a context manager: leaving the block by an exception
+    discards a path target's temporary file.
     """
 
     def __init__(self, target: str | os.PathLike | BinaryIO, header: Header, *, compress: bool = False,
-                 index: bool | None = True, verify: bool = True, brotli: bool = True) -> None:
+                 index: bool | None = True, verify: bool = True, brotli: bool = True, copies: bool = True) -> None:
         if int(header.coding) not in records.CODINGS.get(header.version[0], ()):
             raise PlnError(f"coding {int(header.coding)} cannot be written in a version {header.version[0]} file",
                            code="UNSUPPORTED_CODING")
@@ -64,6 +67,9 @@ class Writer:
         self._brotli = brotli
         self._index = index
         self._verify = verify
+        # Each group's (kind, body digest) -> its index, where copies may be written.
+        self._bodies: dict[tuple[int, bytes], int] | None = \
+            {} if copies and int(GroupKind.COPY) in records.kinds_of(*header.version) else None
         self._path: Path | None = None
         self._tmp: str | None = None
         if isinstance(target, (str, os.PathLike)):
@@ -202,6 +208,13 @@ class Writer:
         group = PartGroup(index=index, object=obj, kind=int(kind), refs=refs.astype(np.uint32),
                           bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
                           facets=facets, shell=shell)
+        if self._bodies is not None and kind != GroupKind.COPY:
+            key = (int(kind), hashlib.sha256(records.group_body(group)).digest())
+            if key in self._bodies:
+                group = PartGroup(index=index, object=obj, kind=int(GroupKind.COPY), refs=group.refs,
+                                  bounding=bounding, source=self._bodies[key])
+            else:
+                self._bodies[key] = index
         self._emit(schema.GRUP, records.encode_group(group, self._compress, self._major, self._brotli), index)
         self._groups.append(len(refs))
         return index
