@@ -405,8 +405,7 @@ def test_kind_9_by_minor_version(read):
     group = (9, [0], [], data)
     assert read(pln_file(PLANE, [group], minor=1))["groups"][0]["shell"] == shell
     assert read(pln_file(PLANE, [group], minor=0))["error"] == "UNKNOWN_GROUP_KIND"
-    # a minor above the newest either reader knows (4.1 or 4.2): kind 9 read, the version reported,
-    # kind 11 skipped; kind 10 in a 4.1 file is unknown to both
+    # 4.3 is newer than either reader knows (4.2 since §9.14): kind 9 read, kind 11 skipped
     got = read(pln_file(PLANE, [group], minor=3))
     assert "shell" in got["groups"][0] and "NEWER_MINOR_VERSION" in got["findings"]
     assert read(pln_file(PLANE, [(10, [0], [], b"\x01")], minor=1))["error"] == "UNKNOWN_GROUP_KIND"

@@ -281,6 +281,10 @@ def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarr
 #: Brotli ranking all eight 73 (bench/walk_modes.py; the three cost 2.7 s of Brotli over the corpus,
 #: most of it on bun_zipper.ply's 150 kB of coordinates).
 RANK_LEVEL, RANK_TOP, RANK_CLOSE = 6, 3, 1.10
+#: Largest part Brotli decides on at its densest quality, 11 (about 2 s a megabyte, and an encode
+#: ranks several shells); a larger one is decided at quality 9, 50 times faster: at 11,
+#: smooth_dense/bun_zipper.ply's 150 kB of coordinates took 10 s of its 14 s encode.
+RANK_DENSEST_BYTES = 64 * 1024
 
 
 def _smallest(options: list[dict[str, bytes]]) -> dict[str, bytes]:
@@ -294,8 +298,10 @@ def _smallest(options: list[dict[str, bytes]]) -> dict[str, bytes]:
     close = [options[i] for i in order if sizes[i] <= RANK_CLOSE * sizes[order[0]]]
     if len(close) == 1:
         return close[0]
-    return min(close, key=lambda f: len(brotli.compress(
-        f["tables"] + f["coordinates"], quality=schema.brotli_quality(len(f["tables"]) + len(f["coordinates"])))))
+    def brotli_size(f: dict[str, bytes]) -> int:
+        part = f["tables"] + f["coordinates"]
+        return len(brotli.compress(part, quality=11 if len(part) <= RANK_DENSEST_BYTES else 9))
+    return min(close, key=brotli_size)
 
 
 #: The shell walk kinds: kind 9 (spec §9.13) and kind 10 (§9.14), which differ only in predictions.
