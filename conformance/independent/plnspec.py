@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 and 4.1), written from
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0, 4.1 and 4.2), written from
 spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
 
     python conformance/independent/plnspec.py FILE
@@ -20,6 +20,12 @@ its open edges in a map from each directed edge to the stack of its entries and,
 doubly linked lists of the entries starting and ending there, newest first (OpenEdges), so that
 each triangle takes constant time; what follows the escapes is read by the code of §9.11
 (shell_tree_rest), with §9.13's mode byte and value tables.
+
+Version 4.2 (§9.14, kind 10, shell walks with multi-parallelograms) was added from the 4.2 text of
+§9.14 and of §9.3, §5 and §13, before any 4.2 golden file existed: kind 9's walk and everything
+after it, with one rule changed, the prediction of an explicit corner (the rounded average of up to
+four parallelograms over the triangles around it, from a map of each directed edge to the first
+triangle that has it; kind 9's prediction where there is none).
 
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
 comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
@@ -48,7 +54,7 @@ OBJECT_LIMIT = 1 << 24
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 # §10.3: the values of the keywords the spec defines
 META_VALUES = {"up_axis": ("Y", "Z")}
-NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 1}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.1"
+NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 2}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.2"
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
 PI_F32 = np.frombuffer(struct.pack("<I", 0x40490FDB), "<f4")[0]
@@ -676,7 +682,7 @@ class Reader:
     # §9
     def kinds(self) -> set[int]:
         if self.major >= 4:
-            return set(range(9 + min(self.minor, 1)))  # §9.3: kinds 0-8 in 4.0, 0-9 in 4.1 (and later)
+            return set(range(9 + min(self.minor, 2)))  # §9.3: kinds 0-8 in 4.0, 0-9 in 4.1, 0-10 in 4.2 (and later)
         if self.major == 3:
             return set(range(5 + min(self.minor, 4)))  # §9.3: 3.1 adds kind 5, 3.2 kind 6, 3.3 kind 7, 3.4 kind 8
         return set(range(5))
@@ -727,8 +733,8 @@ class Reader:
             group["shell"] = self.shell(b, refs, roles)
         elif kind in (7, 8):
             group["shell"] = self.shell_tree(b, refs, roles, parallelogram=kind == 8)
-        elif kind == 9:
-            group["shell"] = self.shell_walk(b, refs, roles)
+        elif kind in (9, 10):
+            group["shell"] = self.shell_walk(b, refs, roles, multi=kind == 10)
         self.chunks.append((offset, b"GRUP", index))
         self.groups.append(group)
         self.group_refs.append(len(refs))
@@ -1007,10 +1013,11 @@ class Reader:
 
     def shell_tree_rest(self, b: Cursor, m: int, roles: list[int], v: int, flags: list[int],
                         face_codes: list[int], parents: list, tris: list[list[int]], named_by: list[int],
-                        parallelogram: bool = False, walk: bool = False) -> dict:
+                        parallelogram: bool = False, walk: bool = False, multi: bool = False) -> dict:
         """What §9.11 and §9.13 share after the triangles are known: the faces checked, the picks,
-        (kind 9: the mode byte), the grid, (kind 9: the value tables), the coordinates; then the
-        rest checked. ``parents`` holds (p, e) for an attached triangle, None for a root."""
+        (kinds 9, 10: the mode byte), the grid, (kinds 9, 10: the value tables), the coordinates;
+        then the rest checked. ``parents`` holds (p, e) for an attached triangle, None for a root.
+        Kind 10 (``multi``, §9.14) changes only the prediction of explicit corners."""
         faces = []  # local reference of each triangle, -1 for a free one
         for j, fc in enumerate(face_codes):
             if fc == 0:
@@ -1090,8 +1097,11 @@ class Reader:
             # where that i0 is explicit; otherwise the previous explicit corner (none for the first).
             # The rule of the "Explicit corners" paragraph, not the overview's bullet (SPEC_NOTES 23).
             # Kind 9 with tables: the values predicted and resolved are indices into each axis's
-            # table, resolved the same way, each within [0, C) (§9.13).
+            # table, resolved the same way, each within [0, C) (§9.13). Kind 10: the average of the
+            # corner's parallelograms where it has one, this prediction otherwise (§9.14).
             res = [[unzigzag(r) for r in residuals[a * e_count:(a + 1) * e_count]] for a in range(3)]
+            # kind 10 (§9.14): each explicit corner's parallelograms (a, b, c), at most four
+            parallelograms = self.multi_parallelograms(tris, flags) if multi else None
             xyz = {}
             for x, c in enumerate(explicit):
                 r = [res[a][x] for a in range(3)]
@@ -1109,6 +1119,16 @@ class Reader:
                     i0, i1, o = tris[j][0], tris[j][1], tris[p][(e + 2) % 3]
                     if flags[i0] and flags[i1] and flags[o]:
                         base = [a + b_ - c_ for a, b_, c_ in zip(xyz[i0], xyz[i1], xyz[o])]
+                # kind 10: where c has no parallelogram, the prediction above (by bit 0 of the
+                # mode, which then rarely matters, SPEC_NOTES 42)
+                if parallelograms is not None and parallelograms[c]:
+                    # §9.14: floor((S + floor(n/2)) / n) on each axis, S the sum of g(a) + g(b) - g(c)
+                    # over the n parallelograms; Python's // rounds toward -infinity, as the text asks.
+                    # Every term is a corner below c, resolved and checked already; the prediction
+                    # itself is not checked, only what it resolves to (SPEC_NOTES 41)
+                    par = parallelograms[c]
+                    base = [(sum(xyz[pa][ax] + xyz[pb][ax] - xyz[pc][ax] for pa, pb, pc in par) + len(par) // 2)
+                            // len(par) for ax in range(3)]
                 point = [a + s for a, s in zip(base, r)]
                 if any(abs(a) > lim for a in point):
                     fail("BAD_GROUP_STRUCTURE", f"explicit corner {c}: "
@@ -1126,6 +1146,35 @@ class Reader:
         facets = [[f, *tri] for f, tri in zip(faces, tris)]
         return {"explicit": explicit, "vertex_planes": vertex_planes, "grid": grid,
                 "origin": origin, "step": step, "facets": facets}
+
+    @staticmethod
+    def multi_parallelograms(tris: list[list[int]], flags: list[int]) -> list[list[tuple[int, int, int]]]:
+        """§9.14, per corner k: its parallelograms (a, b, c), the first four in triangle order, then
+        place order. For each place s of k in a triangle, (a, b) = (i_s+1, i_s+2) is the edge opposite
+        k and c its far corner: the corner other than a and b of the first triangle, in triangle
+        order, that has the edge (b, a) (SPEC_NOTES 37: the first only, whatever its third corner
+        is). A candidate counts where c exists and a, b, c are all explicit and numbered below k;
+        a repeated triangle repeats its parallelogram (SPEC_NOTES 38). The triangles may come
+        anywhere in triangle order (SPEC_NOTES 39). One pass to map each directed edge to the first
+        triangle that has it, then one over the triangles' places (SPEC_NOTES 43)."""
+        first = {}  # directed edge -> the corner other than its ends of the first triangle with it
+        for tri in tris:
+            for s in range(3):
+                first.setdefault((tri[s], tri[(s + 1) % 3]), tri[(s + 2) % 3])
+        out: list[list[tuple[int, int, int]]] = [[] for _ in flags]
+        for tri in tris:  # triangle order; within a triangle k has one place (SPEC_NOTES 40)
+            for s in range(3):
+                k = tri[s]
+                if not flags[k] or len(out[k]) >= 4:
+                    continue
+                a, b = tri[(s + 1) % 3], tri[(s + 2) % 3]
+                c = first.get((b, a))
+                if c is None:
+                    continue
+                # c is neither a nor b; c == k (the same triangle reversed) fails "below k"
+                if flags[a] and flags[b] and flags[c] and a < k and b < k and c < k:
+                    out[k].append((a, b, c))
+        return out
 
     @staticmethod
     def value_table(b: Cursor, e_count: int, axis: str) -> list[int]:
@@ -1148,11 +1197,13 @@ class Reader:
     ROOT_CHILDREN = [(), (0,), (1,), (2,), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1),
                      (0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
 
-    def shell_walk(self, b: Cursor, refs: list[int], roles: list[int]) -> dict:
+    def shell_walk(self, b: Cursor, refs: list[int], roles: list[int], multi: bool = False) -> dict:
         """Kind 9, a shell tree coded as a depth-first walk: one symbol per triangle (its
         children's edges and, attached, the kind of its third corner), escapes for what the
         symbols cannot say, then what §9.11 stores after its corner codes, with a mode byte and
-        optional per-axis value tables before the coordinates. Reported as kinds 7 and 8 are."""
+        optional per-axis value tables before the coordinates. Reported as kinds 7 and 8 are.
+        Kind 10 (§9.14, ``multi``) is the same body with explicit corners predicted by the
+        average of their parallelograms (multi_parallelograms)."""
         # 1. the three counts, read, then checked against the bytes left after all three
         v = b.varint("corner_count")
         t = b.varint("triangle_count")
@@ -1243,7 +1294,7 @@ class Reader:
             fail("BAD_GROUP_STRUCTURE", f"{n} corners named, V = {v}")
         # 4. the faces checked, then the picks and the rest, as §9.11 (with the links the walk gives)
         return self.shell_tree_rest(b, len(refs), roles, v, flags, face_codes, parents, tris, named_by,
-                                    walk=True)
+                                    walk=True, multi=multi)
 
     # §10.1
     def colr(self, p: bytes):
