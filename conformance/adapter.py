@@ -48,6 +48,9 @@ def _header(h: planefmt.Header) -> dict:
 def _group(g: planefmt.PartGroup) -> dict:
     out = {"index": g.index, "object": g.object, "kind": int(g.kind), "refs": g.refs.tolist(),
            "bounding": np.flatnonzero(g.bounding).tolist()}
+    if g.source is not None:
+        # A copy (spec §9.15) as stored: its source, not the surface it shares.
+        return {**out, "kind": int(planefmt.GroupKind.COPY), "source": g.source}
     if g.cells is not None:
         out["cells"] = [c.tolist() for c in g.cells]
     if g.tree is not None:

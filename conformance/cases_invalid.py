@@ -1757,8 +1757,73 @@ def _():
 
 
 @case("xv42_table_index", "BAD_GROUP_STRUCTURE", "version 4.2 shell walk with multi-parallelograms of the "
-      "all-explicit cube in mode 2 whose x table holds one value (0) where its corners' averaged indices reach 1")
+      "all-explicit cube in mode 2 (x table of 2 values) whose last corner, predicted by the average of its four "
+      "parallelograms, has an x residual 2 larger: every earlier index is in its table, the last resolves to 2 or 3")
 def _():
     f = walk_fields(TREE_BOX, 2, GroupKind.SHELL_WALK_MULTI)
-    t = _all_varints(np.frombuffer(f["tables"], dtype=np.uint8))
-    return walk_file({**f, "tables": _codes([1, t[1]] + t[3:])}, version=(4, 2), kind=MULTI)
+    z = np.array(_all_varints(np.frombuffer(f["coordinates"], dtype=np.uint8)), dtype=np.uint64).reshape(3, -1)
+    r = varint.unzigzag(z)
+    r[0, -1] += 2
+    return walk_file({**f, "coordinates": varint.encode(varint.zigzag(r).reshape(-1))}, version=(4, 2), kind=MULTI)
+
+
+# -- copies (spec/pln.md §9.15, version 4.2) ------------------------------------------------------
+
+COPY = int(GroupKind.COPY)
+
+
+def copies_file(bodies: list[tuple[int, bytes]], version: tuple[int, int] = (4, 2)) -> bytes:
+    """The cube's planes (float64) in a version 4.2 file (or ``version``) with one object per group of
+    ``bodies`` (kind, raw body), each stored without compression."""
+    n = len(bodies)
+    layout = [(schema.PHDR, header(version=version, coding=Coding.FLOAT64, object_count=n, group_count=n))]
+    for i, (kind, body) in enumerate(bodies):
+        layout.append((schema.OBJT, records.encode_object(ObjectRecord(i, f"cube{i}", None, None), version[0])))
+        if i == 0:
+            layout.append((schema.PLNS, records.encode_planes(0, CUBE, dataclasses.replace(V4_F64, version=version),
+                                                              False)))
+        layout.append((schema.GRUP, schema.GroupHead3.build(dict(index=i, object=i, kind=kind, compression=0,
+                                                                 raw_size=len(body), body=body))))
+    return frame(finish(layout, True, version[0]))
+
+
+@case("xv42_copy_in_4_1", "UNKNOWN_GROUP_KIND", "a convex cube and a well-formed copy of it (kind 11) in a version "
+      "4.1 file, whose version has no kind 11")
+def _():
+    return copies_file([(0, CUBE_REFS), (COPY, CUBE_REFS + b"\x00")], version=(4, 1))
+
+
+@case("xv42_copy_later", "BAD_GROUP_STRUCTURE", "version 4.2: a convex cube and a group copying group 1, itself: "
+      "a source not before the copy")
+def _():
+    return copies_file([(0, CUBE_REFS), (COPY, CUBE_REFS + b"\x01")])
+
+
+@case("xv42_copy_of_copy", "BAD_GROUP_STRUCTURE", "version 4.2: a convex cube, a copy of it, and a copy of that "
+      "copy (source 1, of kind 11)")
+def _():
+    return copies_file([(0, CUBE_REFS), (COPY, CUBE_REFS + b"\x00"), (COPY, CUBE_REFS + b"\x01")])
+
+
+@case("xv42_copy_refs", "BAD_GROUP_STRUCTURE", "version 4.2: a convex cube on references 0 to 5 and a copy of it "
+      "whose references are 0 to 4: not the source's")
+def _():
+    return copies_file([(0, CUBE_REFS), (COPY, b"\x05\x00\x01\x01\x01\x01\x00" + b"\x00")])
+
+
+@case("xv42_copy_roles", "BAD_GROUP_STRUCTURE", "version 4.2: a convex cube and a copy of it whose role bits mark "
+      "reference 0 bounding: not the source's")
+def _():
+    return copies_file([(0, CUBE_REFS), (COPY, CUBE_REFS[:-1] + b"\x01" + b"\x00")])
+
+
+@case("xv42_copy_trailing", "BAD_PAYLOAD", "version 4.2: a convex cube and a copy of it with a byte after its "
+      "source")
+def _():
+    return copies_file([(0, CUBE_REFS), (COPY, CUBE_REFS + b"\x00\x00")])
+
+
+@case("xv42_copy_truncated", "BAD_PAYLOAD", "version 4.2: a convex cube and a copy whose body ends inside its "
+      "source's varint")
+def _():
+    return copies_file([(0, CUBE_REFS), (COPY, CUBE_REFS + b"\x80")])

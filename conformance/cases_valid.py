@@ -185,6 +185,7 @@ def assembled(case: ValidCase, header: Header) -> bytes:
     phdr[2:4] = (int.from_bytes(phdr[2:4], "little") | case.header_flags).to_bytes(2, "little")
     layout = [(schema.PHDR, bytes(phdr))]
     planes = objects = groups = 0
+    copied = copies(case)
     for op in case.ops:
         if isinstance(op, Obj):
             rec = ObjectRecord(objects, op.name, op.parent, op.transform)
@@ -197,6 +198,8 @@ def assembled(case: ValidCase, header: Header) -> bytes:
             rec = PartGroup(groups, op.obj, op.kind, np.array(op.refs, dtype=np.uint32), _role_bits(op),
                             cells=_cells(op), tree=_tree(op), extra=op.extra, vertex_planes=_vertex_planes(op),
                             facets=_facets(op), shell=op.shell)
+            if groups in copied:
+                rec = PartGroup(groups, op.obj, int(GroupKind.COPY), rec.refs, rec.bounding, source=copied[groups])
             layout.append((schema.GRUP, records.encode_group(rec, case.compress, header.version[0])))
             groups += 1
         elif isinstance(op, Colour):
@@ -232,13 +235,34 @@ def geometry(case: ValidCase) -> tuple[dict, np.ndarray | None]:
     return section, world
 
 
+def copies(case: ValidCase) -> dict[int, int]:
+    """The groups a writer of the case's version writes as copies (spec §9.15: a group whose kind,
+    common body and kind data are an earlier group's), each with its source."""
+    if int(GroupKind.COPY) not in records.kinds_of(*case.header.version):
+        return {}
+    seen, out = {}, {}
+    for i, g in enumerate(case.groups):
+        body = records.group_body(PartGroup(i, g.obj, g.kind, np.array(g.refs, dtype=np.uint32), _role_bits(g),
+                                            cells=_cells(g), tree=_tree(g), extra=g.extra,
+                                            vertex_planes=_vertex_planes(g), facets=_facets(g), shell=g.shell))
+        if (int(g.kind), body) in seen:
+            out[i] = seen[int(g.kind), body]
+        else:
+            seen[int(g.kind), body] = i
+    return out
+
+
 def expected(case: ValidCase, header: Header, geo: dict) -> dict:
     objects = [{"name": o.name, "parent": o.parent,
                 "transform": None if o.transform is None else np.asarray(o.transform, float).ravel().tolist()}
                for o in case.objects]
     groups = []
+    copied = copies(case)
     for i, g in enumerate(case.groups):
         entry = {"index": i, "object": g.obj, "kind": g.kind, "refs": list(g.refs), "bounding": list(g.bounding)}
+        if i in copied:
+            groups.append({**entry, "kind": int(GroupKind.COPY), "source": copied[i]})
+            continue
         if g.cells is not None:
             entry["cells"] = [list(c) for c in g.cells]
         if g.tree is not None:
@@ -839,6 +863,16 @@ CASES = [
               "first corner of the triangle naming them", V42_CUBE,
               (Obj("torus"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_WALK_MULTI, (0,), shell=WALK_TORUS)),
               decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_TORUS, 2)),
+    ValidCase("copies_v4_2", "version 4.2: a shell walk cube and a convex cube, each placed twice: the second of "
+              "each a copy (kind 11) of the first, in an object translated by (2, 0, 0), the shell walk's copy with "
+              "a colour of its own", V42_CUBE,
+              (Obj("walk"), Planes(CUBE), Group(0, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
+               Obj("walk twin", None, translation(2.0, 0.0, 0.0)),
+               Group(1, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
+               Colour(1, np.tile(np.array([[200, 30, 30, 255]], dtype=np.uint8), (6, 1))),
+               Obj("solid", None, translation(0.0, 3.0, 0.0)), Group(2, GroupKind.CONVEX, tuple(range(6))),
+               Obj("solid twin", None, translation(2.0, 3.0, 0.0)), Group(3, GroupKind.CONVEX, tuple(range(6)))),
+              decoded_bbox=True),
     ValidCase("scene_transforms_v4_0", "version 4.0: three cubes under a root, with transforms coded entry by entry "
               "(spec §8): a translation by (2.5, -1, 0.125) (codes 1, 0 and f32), a rotation by 30 degrees about z "
               "with a translation by 0.1 (f64 entries), and a mirror with -0.0 (an f32); a cOLR of one colour for "
