@@ -2,7 +2,8 @@
 
 For every corpus mesh at draco-14's measured error on it (read from the per-mesh table of
 ``docs/benchmarks.md``, the draco-14 column), the default encoder writes the file; for each shell walk
-group in it, every coordinate mode's kind data is built (``shellwalk.shell_walk_fields(shell, mode)``)
+group in it, the kind data of both walk kinds (9, spec §9.13; 10, §9.14) in every coordinate mode is
+built (``shellwalk.shell_walk_fields(shell, mode, kind)``)
 and compressed whole with Brotli at quality 11, the writer's coder: the *oracle* is the smallest of
 them. Each *ranking* picks a mode from its own score, and loses the oracle's bytes less the picked
 mode's. Rankings: deflate at levels 1, 6 and 9 and Brotli at quality 1 and 5 of the tables and
@@ -77,9 +78,10 @@ def main() -> int:
         buf = io.BytesIO()
         codec.encode_scene(scene, buf, tolerance=error, compress=True, compact=True)
         with planefmt.open(io.BytesIO(buf.getvalue())) as r:
-            shells = [g.shell for g in r.part_groups() if g.kind == GroupKind.SHELL_WALK]
+            shells = [g.shell for g in r.part_groups() if g.kind in shellwalk.WALK_KINDS]
         for shell in shells:
-            options = [shellwalk.shell_walk_fields(shell, m) for m in shellwalk.MODES]
+            options = [shellwalk.shell_walk_fields(shell, m, kind) for kind in shellwalk.WALK_KINDS
+                       for m in shellwalk.MODES]
             if "mode" not in options[0]:
                 continue
             true = [len(brotli.compress(b"".join(f.values()), quality=11)) for f in options]
@@ -91,9 +93,9 @@ def main() -> int:
                 seconds[key] += time.perf_counter() - t0
                 picks[key] = true[scores.index(min(scores))]
             t0 = time.perf_counter()
-            chosen = shellwalk._smallest(options)
+            chosen = shellwalk._smallest([{k: f[k] for k in ("tables", "coordinates")} for f in options])
             seconds["encoder"] += time.perf_counter() - t0
-            picks["encoder"] = true[options.index(chosen)]
+            picks["encoder"] = true[[part(f) for f in options].index(part(chosen))]
             for key, size in picks.items():
                 lost[key] += size - best
             worse = {k: s - best for k, s in picks.items() if s - best > 20}

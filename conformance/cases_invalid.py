@@ -25,7 +25,7 @@ import numpy as np
 
 from planefmt.container import records, schema, shellfields, shellwalk, varint
 from planefmt.container.chunks import chunk_bytes
-from planefmt.model import Coding, Colours, Header, ObjectRecord, PartGroup, Quantization, Units
+from planefmt.model import Coding, Colours, GroupKind, Header, ObjectRecord, PartGroup, Quantization, Units
 
 from . import reference
 from .build import CUBE, SPEC_HEADER, Layout, box, finish, frame, offsets
@@ -1588,21 +1588,22 @@ def _():
 
 # -- shell walks (spec/pln.md §9.13, version 4.1) --------------------------------------------------
 
-def walk_file(fields: dict[str, bytes], version: tuple[int, int] = (4, 1)) -> bytes:
+def walk_file(fields: dict[str, bytes], version: tuple[int, int] = (4, 1), kind: int = 9) -> bytes:
     """The cube of spec/pln-1.md §12 in a version 4.1 file (or ``version``), float64, with a shell walk
-    (kind 9) of the kind data ``fields`` on its six planes, stored without compression."""
+    (kind 9, or ``kind``) of the kind data ``fields`` on its six planes, stored without compression."""
     body = CUBE_REFS + b"".join(fields.values())
-    group = schema.GroupHead3.build(dict(index=0, object=0, kind=9, compression=0, raw_size=len(body), body=body))
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=kind, compression=0, raw_size=len(body), body=body))
     layout = cube(PHDR=header(version=version, coding=Coding.FLOAT64),
                   OBJT=records.encode_object(ObjectRecord(0, "cube", None, None), version[0]),
                   PLNS=records.encode_planes(0, CUBE, dataclasses.replace(V4_F64, version=version), False), GRUP=group)
     return frame(finish(layout, True, version[0]))
 
 
-def walk_fields(shell=TREE_CUBE, coding: int | None = None, **changed: bytes) -> dict[str, bytes]:
-    """The fields of ``shell``'s shell walk body by name (explicit corners in mode ``coding``),
-    ``changed`` ones replaced."""
-    return {**shellwalk.shell_walk_fields(shell, coding), **changed}
+def walk_fields(shell=TREE_CUBE, coding: int | None = None, kind: GroupKind = GroupKind.SHELL_WALK,
+                **changed: bytes) -> dict[str, bytes]:
+    """The fields of ``shell``'s shell walk body (of ``kind``) by name (explicit corners in mode
+    ``coding``), ``changed`` ones replaced."""
+    return {**shellwalk.shell_walk_fields(shell, coding, kind), **changed}
 
 
 def walk_values(name: str, shell=TREE_CUBE, mode: int | None = None) -> list[int]:
@@ -1725,3 +1726,39 @@ def _():
     (v, t, x) = _all_varints(np.frombuffer(f["counts"], dtype=np.uint8))
     return walk_file({"counts": _codes([v, t, 12]), "symbols": f["symbols"], "escapes": f["escapes"],
                       "faces": f["faces"]})
+
+
+# -- shell walks with multi-parallelograms (spec/pln.md §9.14, version 4.2) ------------------------
+
+MULTI = int(GroupKind.SHELL_WALK_MULTI)
+
+
+@case("xv42_multi_in_4_1", "UNKNOWN_GROUP_KIND", "a well-formed shell walk with multi-parallelograms (kind 10) of "
+      "the all-explicit cube in a version 4.1 file, whose version has no kind 10")
+def _():
+    return walk_file(walk_fields(TREE_BOX, 1, GroupKind.SHELL_WALK_MULTI), version=(4, 1), kind=MULTI)
+
+
+@case("xv42_mode_bits", "BAD_GROUP_STRUCTURE", "version 4.2 shell walk with multi-parallelograms of the "
+      "all-explicit cube whose coordinate mode is 4: a bit above bit 1")
+def _():
+    return walk_file(walk_fields(TREE_BOX, 0, GroupKind.SHELL_WALK_MULTI, mode=b"\x04"), version=(4, 2), kind=MULTI)
+
+
+@case("xv42_average_beyond", "BAD_GROUP_STRUCTURE", "version 4.2 shell walk with multi-parallelograms of the "
+      "all-explicit cube whose corners' x are 2^52 but the last corner's, 2^52 + 1: every residual is within 2^52 "
+      "(the last is 1 over its average of parallelograms, 2^52), the last resolved value is beyond it")
+def _():
+    grid = np.asarray(TREE_BOX.grid, dtype=np.int64).copy()
+    grid[:, 0] = 1 << 52
+    grid[-1, 0] += 1
+    return walk_file(walk_fields(dataclasses.replace(TREE_BOX, grid=grid), 0, GroupKind.SHELL_WALK_MULTI),
+                     version=(4, 2), kind=MULTI)
+
+
+@case("xv42_table_index", "BAD_GROUP_STRUCTURE", "version 4.2 shell walk with multi-parallelograms of the "
+      "all-explicit cube in mode 2 whose x table holds one value (0) where its corners' averaged indices reach 1")
+def _():
+    f = walk_fields(TREE_BOX, 2, GroupKind.SHELL_WALK_MULTI)
+    t = _all_varints(np.frombuffer(f["tables"], dtype=np.uint8))
+    return walk_file({**f, "tables": _codes([1, t[1]] + t[3:])}, version=(4, 2), kind=MULTI)

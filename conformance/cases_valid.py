@@ -460,6 +460,7 @@ TREE_BOX = tree_of([1] * 8, [], [(1, 0, 0), (1, 1, 0), (1, 1, 1), (1, 0, 1), (0,
 V34_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 4))
 V40_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 0))
 V41_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 1))
+V42_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 2))
 
 
 def _explicit_walk(mesh, edge_two_first: bool = False) -> Shell:
@@ -521,20 +522,22 @@ WALK_TORUS = _explicit_walk(_trimesh("torus", major_radius=1.0, minor_radius=0.4
 
 
 def walk_mode(shell: Shell, mode: int) -> Callable[[list], list]:
-    """An edit replacing every kind 9 GRUP body's kind data by ``shell``'s with its explicit corners
-    in coordinate ``mode`` (spec §9.13), whichever a writer would pick: a reader must decode each."""
+    """An edit replacing every kind 9 or kind 10 GRUP body's kind data by ``shell``'s with its explicit
+    corners in coordinate ``mode`` (spec §9.13, §9.14), whichever a writer would pick: a reader must
+    decode each."""
     from planefmt.container import shellwalk, varint
 
     def edit(layout: list) -> list:
         out = []
         for kind, payload in layout:
-            if kind == schema.GRUP and schema.GroupHead3.parse(payload).kind == GroupKind.SHELL_WALK:
+            if kind == schema.GRUP and schema.GroupHead3.parse(payload).kind in shellwalk.WALK_KINDS:
                 head = schema.GroupHead3.parse(payload)
                 raw = np.frombuffer(bytes(head.body), dtype=np.uint8)
                 (count,), pos = varint.decode(raw, 1, "count")
                 _, used = varint.decode(raw[pos:], int(count), "refs")
                 pos += used + (int(count) + 7) // 8
-                body = raw[:pos].tobytes() + b"".join(shellwalk.shell_walk_fields(shell, mode).values())
+                body = raw[:pos].tobytes() + b"".join(
+                    shellwalk.shell_walk_fields(shell, mode, GroupKind(head.kind)).values())
                 payload = schema.GroupHead3.build(dict(head, raw_size=len(body), body=body))
             out.append((kind, payload))
         return out
@@ -822,6 +825,19 @@ CASES = [
               "corner steps in escapes; its 24 explicit corners in mode 2, indices into each axis's table of "
               "values predicted by the first corner of the triangle naming them", V41_CUBE,
               (Obj("torus"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_WALK, (0,), shell=WALK_TORUS)),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_TORUS, 2)),
+    ValidCase("shell_walk_multi_sphere_v4_2", "version 4.2: the icosphere of shell_walk_sphere_v4_1 as a shell walk "
+              "with multi-parallelograms (kind 10): explicit corners predicted by the floor average of one to four "
+              "parallelograms over the triangles around them (negative sums and odd counts among them), the first "
+              "corners, which have none, by kind 9's mode 1 parallelogram or by the corner before; mode 1",
+              V42_CUBE,
+              (Obj("sphere"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_WALK_MULTI, (0,), shell=WALK_SPHERE)),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_SPHERE, 1)),
+    ValidCase("shell_walk_multi_tables_v4_2", "version 4.2: the torus of shell_walk_torus_v4_1 (walked edge 2 "
+              "first) as a shell walk with multi-parallelograms, its explicit corners in mode 2: the averages taken "
+              "over indices into each axis's table of values, the corners without a parallelogram predicted by the "
+              "first corner of the triangle naming them", V42_CUBE,
+              (Obj("torus"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_WALK_MULTI, (0,), shell=WALK_TORUS)),
               decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_TORUS, 2)),
     ValidCase("scene_transforms_v4_0", "version 4.0: three cubes under a root, with transforms coded entry by entry "
               "(spec §8): a translation by (2.5, -1, 0.125) (codes 1, 0 and f32), a rotation by 30 degrees about z "

@@ -64,11 +64,14 @@ class GroupKind(IntEnum):
     SHELL_TREE = 7
     SHELL_TREE_PARALLELOGRAM = 8
     SHELL_WALK = 9
+    SHELL_WALK_MULTI = 10
 
 
 #: The shell trees (spec §9.11): kind 7, kind 8 whose explicit corners parallelograms predict (§9.12),
-#: and kind 9 whose tree and corners are coded as a walk (§9.13).
-TREE_KINDS = (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM, GroupKind.SHELL_WALK)
+#: kind 9 whose tree and corners are coded as a walk (§9.13), and kind 10, a walk whose explicit corners
+#: averaged parallelograms predict (§9.14).
+TREE_KINDS = (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM, GroupKind.SHELL_WALK,
+              GroupKind.SHELL_WALK_MULTI)
 
 
 #: BSP tree leaf tokens in version 1.0's numbering (spec Appendix A.1), which the model uses for every

@@ -8,7 +8,7 @@ the Python 3.11 standard library, and for the Brotli payloads of version
 4.0 (compression method 2) the PyPI package `brotli` (1.2 bounds the output
 of each call; with 1.1 the stored bytes are given one at a time), imported only when such a payload is met: files of versions 1.0 to 3.4, and
 4.0 files without Brotli payloads, need nothing else.  It reads versions
-1.0, 2.0, 3.0 to 3.4, 4.0 and 4.1 (pln.md §13: files of major versions 1, 2, 3
+1.0, 2.0, 3.0 to 3.4, 4.0, 4.1 and 4.2 (pln.md §13: files of major versions 1, 2, 3
 and 4, each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
 was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
@@ -60,6 +60,11 @@ it also moved the check of a shell tree's picks after the grid and the
 coordinates are read, where pln.md §9.11 puts it ("reads the picks, the grid
 and the coordinates, and checks the rest"); this reader had checked each pick
 as it read it.
+Kind 10 (version 4.2, pln.md §9.14, shell walks with multi-parallelograms)
+was added from the 4.2 text of §9.14 alone, before the 4.2 golden files
+existed: kind 9 with an explicit corner that has parallelograms (over the
+triangles around it whose far corner is decoded) predicted by their average,
+rounded toward -infinity after adding half the count; reported as kind 9 is.
 
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
@@ -99,8 +104,8 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0, 2.0, 3.4 and 4.1; pln.md §13: a reader of 4.1 reads major versions 1 to 4)
-READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 1}
+# (1.0, 2.0, 3.4 and 4.2; pln.md §13: a reader of 4.2 reads major versions 1 to 4)
+READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 
@@ -127,10 +132,14 @@ KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
 # and later only, kind 6, the shell (§8.9), in files of version 3.2 and later,
 # kind 7, the shell tree (§8.10), in files of version 3.3 and later; pln.md
 # §9.3: kind 8 in 3.4 and later, kind 9, the shell walk (pln.md §9.13), in 4.1
-# and later; in older files each is a kind the file's version does not have
+# and later, kind 10, the shell walk with multi-parallelograms (pln.md
+# §9.14), in 4.2 and later; in older files each is a kind the file's version
+# does not have
 SEALED_KIND, SHELL_KIND, SHELL_TREE_KIND, PARALLELOGRAM_KIND, WALK_KIND = 5, 6, 7, 8, 9
+MULTI_WALK_KIND = 10
 KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3), PARALLELOGRAM_KIND: (3, 4),
-              WALK_KIND: (4, 1)}
+              WALK_KIND: (4, 1), MULTI_WALK_KIND: (4, 2)}
+MULTI_PARALLELOGRAMS = 4  # pln.md §9.14: a corner has at most four parallelograms
 SHELL_COORD_LIMIT = 2**52  # pln-3 §8.9: each grid step and coordinate of magnitude at most 2^52
 SHELL_GRID_BYTES = 32  # pln-3 §8.9: origin x, y, z and step s, f64 each
 
@@ -419,6 +428,40 @@ def unbrotli(raw_size, stored, what):
         raise PlnError("SIZE_MISMATCH", "%s: Brotli stream decompresses to %d bytes, raw size %d"
                        % (what, total, raw_size))
     return b"".join(out)
+
+
+def multi_parallelograms(tris, is_explicit):
+    """pln.md §9.14: each explicit corner's parallelograms, as a dict
+    corner -> [(a, b, c), ...] (at most four; corners with none are left
+    out).  The far corner of a directed edge (a, b) is the corner other than
+    a and b of the first triangle, in triangle order, that has the edge
+    (b, a).  The candidates of corner k are taken triangle by triangle in
+    triangle order, and within a triangle place by place (s = 0, 1, 2) where
+    i_s = k: a = i_(s+1), b = i_(s+2), c the far corner of (a, b); one is a
+    parallelogram where c exists and a, b and c are all explicit and all
+    numbered below k.  One pass over the triangles for the edge map, one
+    for the candidates."""
+    first = {}  # directed edge -> the first triangle, in triangle order, that has it
+    for j, tri in enumerate(tris):
+        for s in range(3):
+            first.setdefault((tri[s], tri[(s + 1) % 3]), j)
+    grams = {}
+    for tri in tris:
+        for s in range(3):
+            k = tri[s]
+            if k not in is_explicit:
+                continue
+            found = grams.get(k)
+            if found is not None and len(found) == MULTI_PARALLELOGRAMS:
+                continue
+            a, b = tri[(s + 1) % 3], tri[(s + 2) % 3]
+            other = first.get((b, a))
+            if other is None:
+                continue
+            far = next(x for x in tris[other] if x != a and x != b)
+            if a < k and b < k and far < k and a in is_explicit and b in is_explicit and far in is_explicit:
+                grams.setdefault(k, []).append((a, b, far))
+    return grams
 
 
 class OpenEdges:
@@ -1018,8 +1061,8 @@ class Reader:
             g["shell"] = self.read_shell(c, m, set(bounding))
         elif kind in (SHELL_TREE_KIND, PARALLELOGRAM_KIND):
             g["shell"] = self.read_shell_tree(c, m, set(bounding), kind == PARALLELOGRAM_KIND)
-        elif kind == WALK_KIND:
-            g["shell"] = self.read_shell_walk(c, m, set(bounding))
+        elif kind in (WALK_KIND, MULTI_WALK_KIND):
+            g["shell"] = self.read_shell_walk(c, m, set(bounding), kind == MULTI_WALK_KIND)
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.chunk_list.append((offset, b"GRUP", index))
@@ -1388,14 +1431,17 @@ class Reader:
                                          parallelogram)
 
     def read_shell_tree_rest(self, c, m, bounding, v, flags, face_codes, tris, parents, creator,
-                             parallelogram=False, walk=False):
+                             parallelogram=False, walk=False, multi=False):
         """What pln.md §9.11 and §9.13 have in common once the triangles,
         each one's parent (or None) and the triangle that named each corner
         anew are known: the faces (checked here, since they decide the
         picks), the picks, the grid and the coordinates.  A shell walk
         (``walk``, pln.md §9.13) has a mode byte before the grid (bit 0:
         the parallelogram of §9.12; bit 1: per-axis value tables, read after
-        the grid, into which the predicted and resolved values index)."""
+        the grid, into which the predicted and resolved values index).
+        A shell walk with multi-parallelograms (``multi``, pln.md §9.14)
+        predicts an explicit corner that has parallelograms by their
+        average, and any other as a shell walk does."""
         explicit = [k for k in range(v) if (flags[k >> 3] >> (k & 7)) & 1]
         is_explicit = set(explicit)
         faces = []
@@ -1472,12 +1518,21 @@ class Reader:
                                            "the %s table's value %d, beyond 2^52" % (axis, value))
             xyz = {}  # with tables, each corner's indices into them; otherwise its coordinates
             previous = None
+            grams = multi_parallelograms(tris, is_explicit) if multi else {}
             for r, k in enumerate(explicit):  # corner order: every predictor comes first
                 j = creator[k]
                 first = tris[j][0]
                 pred = first if parents[j] is not None and first in is_explicit else previous
                 base = [xyz[pred][a] if pred is not None else 0 for a in range(3)]
-                if parallelogram and parents[j] is not None:
+                if k in grams:
+                    # pln.md §9.14: floor((S + floor(n/2)) / n), S the sum of
+                    # g(a) + g(b) - g(c) over the n parallelograms; Python's //
+                    # rounds toward -infinity, and its integers cannot wrap
+                    # (every term was checked within 2^52 as it was resolved)
+                    count = len(grams[k])
+                    base = [(sum(xyz[a][axis] + xyz[b][axis] - xyz[far][axis] for a, b, far in grams[k])
+                             + count // 2) // count for axis in range(3)]
+                elif parallelogram and parents[j] is not None:
                     p, edge = parents[j]
                     second, opposite = tris[j][1], tris[p][(edge + 2) % 3]
                     if first in is_explicit and second in is_explicit and opposite in is_explicit:
@@ -1520,7 +1575,7 @@ class Reader:
     WALK_CHILDREN_ROOT = ((), (0,), (1,), (2,), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1),
                           (0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
 
-    def read_shell_walk(self, c, m, bounding):
+    def read_shell_walk(self, c, m, bounding, multi=False):
         """pln.md §9.13, kind 9: corner_count V, triangle_count T,
         escape_count X (read, then checked against the bytes left after the
         three); T symbols, X escapes, T face codes and the corner flags
@@ -1534,7 +1589,9 @@ class Reader:
         walk, the links it gives and everything after the escapes are those
         of §9.11 (read_shell_tree_rest), with a mode byte and per-axis value
         tables for the explicit corners.  Returned as a kind 7 group's
-        "shell", its triangles in walk order."""
+        "shell", its triangles in walk order.  pln.md §9.14, kind 10
+        (``multi``): the same, but an explicit corner with parallelograms
+        (see multi_parallelograms) is predicted by their rounded average."""
         v = c.varint("corner_count")
         t = c.varint("triangle_count")
         x = c.varint("escape_count")
@@ -1630,7 +1687,7 @@ class Reader:
         if n != v:
             raise PlnError("BAD_GROUP_STRUCTURE", "%d corners named anew, corner_count %d" % (n, v))
         return self.read_shell_tree_rest(c, m, bounding, v, flags, face_codes, tris, parents, creator,
-                                         walk=True)
+                                         walk=True, multi=multi)
 
     def check_tree(self, tokens, m):
         """§8.4: exactly one complete tree in preorder (tokens numbered as in §8.4)."""

@@ -342,14 +342,20 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         # tables) and whose connectivity took 40-69 % of theirs, the file 0.58-0.97 of theirs, on the
         # twelve corpus meshes of bench/shell_bits.py: where it may be written, no tree is made to
         # be outbid.
+        # Kind 10 (spec §9.14) is kind 9 with its corners predicted by averaged parallelograms: smaller on
+        # irregular surfaces (ballA.off's coordinates 4 % smaller at draco-14's error), larger on regular
+        # tessellations whose single parallelograms repeat exactly (torus.STL, capsule.obj); the walk's
+        # coder picks kind and mode together.
         options = []
         trees = [layout for layout in TREE_KINDS if layout in SHELL_LAYOUTS]
-        if GroupKind.SHELL_WALK in trees:
-            trees = [GroupKind.SHELL_WALK]
+        walks = tuple(layout for layout in trees if layout in shellwalk.WALK_KINDS)
         if trees:
             tree, source = shell_tree(shell, plan.walk)
-            bodies = {GroupKind.SHELL_WALK: shellwalk.shell_walk_body(tree)} if trees == [GroupKind.SHELL_WALK] \
-                else shellfields.shell_tree_bodies(tree)
+            if walks:
+                trees = [shellwalk.shell_walk_choice(tree, walks)[0]]
+                bodies = {trees[0]: shellwalk.shell_walk_body(tree, trees[0])}
+            else:
+                bodies = shellfields.shell_tree_bodies(tree)
             options += [(layout, tree, plan.points[source], bodies[layout]) for layout in trees]
         if GroupKind.SHELL in SHELL_LAYOUTS and (not trees or 2 * int((tree.links == 0).sum()) >= len(tree.links)):
             options.append((GroupKind.SHELL, shell, plan.points, shellwalk.shell_kind_data(GroupKind.SHELL, shell)))

@@ -17,7 +17,7 @@ from typing import BinaryIO
 import numpy as np
 
 from .. import progress
-from ..container import quantize, records, shellfields
+from ..container import quantize, records, shellfields, shellwalk
 from ..container.writer import BLOCK_PLANES, Writer
 from ..errors import GeometryError, PlnError
 from ..geometry.planes import transform_points
@@ -317,9 +317,9 @@ def _scene_diagonal(scene: Scene, worlds: list[np.ndarray], meshes: list[int]) -
 
 
 def _as_tree(g: GroupSpec) -> GroupSpec:
-    """``g``, a shell walk (version 4.1) written as the shell tree it is for readers of 3.x: kind 7 or
-    8, whichever deflates smaller."""
-    if g.kind != GroupKind.SHELL_WALK:
+    """``g``, a shell walk (version 4.1 or 4.2) written as the shell tree it is for readers of 3.x:
+    kind 7 or 8, whichever deflates smaller."""
+    if g.kind not in shellwalk.WALK_KINDS:
         return g
     bodies = shellfields.shell_tree_bodies(g.shell)
     return replace(g, kind=min(bodies, key=lambda k: len(zlib.compress(bodies[k], 9))))

@@ -96,6 +96,93 @@ done:
 }
 
 
+static PyObject *
+average(PyObject *self, PyObject *args)
+{
+    /* One axis of a kind 10 walk's explicit corners (spec/pln.md §9.14), in place and in corner
+     * order: where corner k has parallelograms start[k] .. start[k + 1] - 1 (corners a, b, c each),
+     * value[k] = offset[k] + floor((S + floor(n / 2)) / n), S the sum of value[a] + value[b] - value[c];
+     * elsewhere resolve()'s rule (pointer, plus, minus; -1 where unused).  Every term is an earlier
+     * corner and every resolved magnitude is checked against limit as it is made, so with terms within
+     * 2^52 a sum of four parallelograms stays below 2^56. */
+    PyObject *objs[9];
+    static const char *names[9] = {"value", "pointer", "plus", "minus", "offset", "start", "a", "b", "c"};
+    Py_buffer views[9];
+    long long limit;
+    int held = 0;
+    if (!PyArg_ParseTuple(args, "OOOOOOOOOL", &objs[0], &objs[1], &objs[2], &objs[3], &objs[4], &objs[5],
+                          &objs[6], &objs[7], &objs[8], &limit))
+        return NULL;
+    for (; held < 9; held++)
+        if (int64_view(objs[held], &views[held], held == 0, names[held]) < 0)
+            goto done;
+    Py_ssize_t n = views[0].len / 8, m = views[6].len / 8, bad = -1;
+    for (int i = 1; i < 5; i++)
+        if (views[i].len / 8 != n) {
+            PyErr_SetString(PyExc_ValueError, "the corner arrays differ in length");
+            goto done;
+        }
+    if (views[5].len / 8 != n + 1 || views[7].len / 8 != m || views[8].len / 8 != m) {
+        PyErr_SetString(PyExc_ValueError, "the parallelogram arrays do not match");
+        goto done;
+    }
+    int64_t *value = views[0].buf;
+    const int64_t *pointer = views[1].buf, *plus = views[2].buf, *minus = views[3].buf, *offset = views[4].buf;
+    const int64_t *start = views[5].buf, *pa = views[6].buf, *pb = views[7].buf, *pc = views[8].buf;
+    int beyond = 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t k = 0; k < n; k++) {
+        int64_t lo = start[k], hi = start[k + 1], x;
+        if (lo < 0 || hi < lo || hi > m) {
+            bad = k;
+            break;
+        }
+        if (hi > lo) {
+            int64_t sum = 0, count = hi - lo;
+            for (int64_t q = lo; q < hi; q++) {
+                if (pa[q] < 0 || pa[q] >= k || pb[q] < 0 || pb[q] >= k || pc[q] < 0 || pc[q] >= k) {
+                    bad = k;
+                    break;
+                }
+                sum += value[pa[q]] + value[pb[q]] - value[pc[q]];
+            }
+            if (bad >= 0)
+                break;
+            int64_t num = sum + count / 2, quotient = num / count;
+            if ((num % count != 0) && ((num < 0) != (count < 0)))
+                quotient -= 1;
+            x = offset[k] + quotient;
+        } else if (pointer[k] >= 0) {
+            int64_t p = pointer[k], a = plus[k], b = minus[k];
+            if (p >= k || a >= k || b >= k) {
+                bad = k;
+                break;
+            }
+            x = offset[k] + value[p] + (a >= 0 ? value[a] : 0) - (b >= 0 ? value[b] : 0);
+        } else {
+            continue;
+        }
+        if (x > limit || x < -limit) {
+            bad = k;
+            beyond = 1;
+            break;
+        }
+        value[k] = x;
+    }
+    Py_END_ALLOW_THREADS
+    if (bad >= 0 && beyond)
+        PyErr_Format(PyExc_OverflowError, "corner %zd resolves beyond %lld", bad, limit);
+    else if (bad >= 0)
+        PyErr_Format(PyExc_ValueError, "corner %zd is predicted from a corner not before it", bad);
+done:
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&views[i]);
+    if (PyErr_Occurred())
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+
 /* A shell walk's open edges (spec/pln.md §9.13): directed edges of the decoded surface that no
  * second triangle has closed yet.  Each entry sits on a stack of its directed edge (a hash map
  * from edge to the newest entry) and on two doubly linked lists, of the entries starting and of
@@ -415,6 +502,10 @@ static PyMethodDef methods[] = {
      "resolve(value, pointer, offset[, plus, minus[, limit]]): in place, value[k] = offset[k] + "
      "value[pointer[k]] (+ value[plus[k]] - value[minus[k]] where those are >= 0) wherever pointer[k] >= 0, "
      "in entry order (int64 arrays; every pointer must go to an earlier entry; OverflowError past limit)."},
+    {"average", average, METH_VARARGS,
+     "average(value, pointer, plus, minus, offset, start, a, b, c, limit): one axis of a kind 10 walk's "
+     "corners (spec §9.14) in place: the floor average of parallelograms a + b - c where a corner has "
+     "some, resolve()'s rule elsewhere (OverflowError past limit, ValueError for a term not before)."},
     {"walk", walk, METH_VARARGS,
      "walk(symbols, escapes, corners, triangles, links): decode a shell walk (spec §9.13) into triangles "
      "(3T int64) and links (T int64) in place; returns (reason, triangle), reason 0 where the walk is valid."},

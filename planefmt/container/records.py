@@ -24,13 +24,14 @@ from .shellfields import _decode_shell, _decode_shell_tree
 from .shellwalk import decode_shell_walk, shell_kind_data
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 4, 4: 1}
+VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2}
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
 KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3),
-                int(GroupKind.SHELL_TREE_PARALLELOGRAM): (3, 4), int(GroupKind.SHELL_WALK): (4, 1)}
+                int(GroupKind.SHELL_TREE_PARALLELOGRAM): (3, 4), int(GroupKind.SHELL_WALK): (4, 1),
+                int(GroupKind.SHELL_WALK_MULTI): (4, 2)}
 
 
 def _kind(value: int) -> GroupKind | int:
@@ -520,8 +521,8 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
         extra = rest.tobytes()
     elif head.kind == GroupKind.SHELL:
         shell = _decode_shell(rest, bounding)
-    elif head.kind == GroupKind.SHELL_WALK:
-        shell = decode_shell_walk(rest, bounding)
+    elif head.kind in (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI):
+        shell = decode_shell_walk(rest, bounding, head.kind == GroupKind.SHELL_WALK_MULTI)
     elif head.kind in TREE_KINDS:
         shell = _decode_shell_tree(rest, bounding, head.kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
     elif head.kind == GroupKind.CELLS:

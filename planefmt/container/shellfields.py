@@ -12,9 +12,12 @@ from ..model import FREE, MAX_GRID, GroupKind, Shell
 from . import schema, varint
 
 try:
-    from ._chains import resolve as _resolve_forward
+    from ._chains import average as _average, resolve as _resolve_forward
 except ImportError:  # built without a C compiler: pointer jumping in numpy does the same, more slowly
-    _resolve_forward = None
+    _average = _resolve_forward = None
+
+#: A kind 10 corner's parallelograms (spec §9.14): at most this many, the first in triangle order.
+MAX_PARALLELOGRAMS = 4
 
 
 def corner_codes(triangles: np.ndarray) -> np.ndarray:
@@ -295,6 +298,80 @@ def _tree_predictors(links: np.ndarray, triangles: np.ndarray, explicit: np.ndar
     return out
 
 
+def parallelograms(triangles: np.ndarray, explicit: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each corner's parallelograms of spec §9.14, as ``start`` (V + 1: corner k's are rows
+    ``start[k]:start[k + 1]``) and ``terms`` (rows ``(a, b, c)``, predicting a + b - c): for each
+    triangle in order and each place of k in it, the edge (a, b) opposite k and the far corner c of
+    that edge (the third corner of the first triangle that has (b, a)), where a, b and c are
+    explicit and numbered below k; the first :data:`MAX_PARALLELOGRAMS` of each corner."""
+    tri = np.asarray(triangles, dtype=np.int64)
+    v = len(explicit)
+    k, a, b = (np.roll(tri, -s, axis=1).reshape(-1) for s in range(3))
+    # Far corners: the edges sorted by (start, end), stable, so the first of a run is the first triangle's.
+    key = k * v + a
+    order = np.argsort(key, kind="stable")
+    sorted_key = key[order]
+    first = np.r_[True, sorted_key[1:] != sorted_key[:-1]]
+    edge_key, edge_far = sorted_key[first], b[order][first]
+    want = b * v + a
+    at = np.minimum(np.searchsorted(edge_key, want), max(len(edge_key) - 1, 0))
+    found = edge_key[at] == want if len(edge_key) else np.zeros(len(want), dtype=bool)
+    c = np.where(found, edge_far[at], 0)
+    live = found & (a < k) & (b < k) & (c < k) & explicit[k] & explicit[a] & explicit[b] & explicit[c]
+    k, terms = k[live], np.column_stack([a[live], b[live], c[live]])
+    order = np.argsort(k, kind="stable")
+    k, terms = k[order], terms[order]
+    counts = np.bincount(k, minlength=v)
+    rank = np.arange(len(k)) - (np.cumsum(counts) - counts)[k]
+    keep = rank < MAX_PARALLELOGRAMS
+    counts = np.bincount(k[keep], minlength=v)
+    return np.r_[0, np.cumsum(counts)], terms[keep]
+
+
+def predict_averaged(values: np.ndarray, start: np.ndarray, terms: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    """The predictions ``(V, 3)`` of spec §9.14 from every corner's known ``values``: the floor
+    average of a corner's parallelograms (:func:`parallelograms`), or ``fallback`` where it has none."""
+    counts = np.diff(start)
+    owner = np.repeat(np.arange(len(counts)), counts)
+    sums = np.zeros_like(values)
+    np.add.at(sums, owner, values[terms[:, 0]] + values[terms[:, 1]] - values[terms[:, 2]])
+    averaged = np.floor_divide(sums + (counts // 2)[:, None], np.maximum(counts, 1)[:, None])
+    return np.where((counts > 0)[:, None], averaged, fallback)
+
+
+def _resolve_averaged(value: np.ndarray, pointer: np.ndarray, plus: np.ndarray, minus: np.ndarray,
+                      start: np.ndarray, terms: np.ndarray) -> np.ndarray:
+    """One axis of a kind 10 walk's corners resolved in corner order (spec §9.14): ``value`` the
+    residuals (a corner's value where it has no predictor), each resolved value checked against
+    :data:`MAX_GRID` as it is made. In C (``_chains.average``); without it, the same loop in Python."""
+    out = np.array(value, dtype=np.int64)
+    columns = [np.ascontiguousarray(terms[:, i], dtype=np.int64) for i in range(3)]
+    if _average is not None:
+        try:
+            _average(out, *(np.ascontiguousarray(x, dtype=np.int64) for x in (pointer, plus, minus, value, start)),
+                     *columns, MAX_GRID)
+        except ValueError as exc:
+            raise FormatError(f"shell walk: {exc}", code="BAD_GROUP_STRUCTURE") from None
+        except OverflowError:
+            raise FormatError("shell walk: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE") from None
+        return out
+    res = [int(x) for x in value]
+    got = [int(x) for x in value]
+    ca, cb, cc = (col.tolist() for col in columns)
+    for k, (lo, hi) in enumerate(zip(start[:-1].tolist(), start[1:].tolist())):
+        if hi > lo:
+            total = sum(got[ca[q]] + got[cb[q]] - got[cc[q]] for q in range(lo, hi))
+            x = res[k] + (total + (hi - lo) // 2) // (hi - lo)
+        elif pointer[k] >= 0:
+            x = res[k] + got[pointer[k]] + (got[plus[k]] if plus[k] >= 0 else 0) - (got[minus[k]] if minus[k] >= 0 else 0)
+        else:
+            continue
+        if abs(x) > MAX_GRID:
+            raise FormatError("shell walk: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE")
+        got[k] = x
+    return np.array(got, dtype=np.int64)
+
+
 def _predict(grid: np.ndarray, terms: np.ndarray) -> np.ndarray:
     """The predictions ``(V, 3)`` of :func:`_tree_predictors`' ``terms`` from every corner's ``grid``."""
     def at(j: np.ndarray) -> np.ndarray:
@@ -470,9 +547,11 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: boo
 
 
 def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, links: np.ndarray,
-              faces: np.ndarray, explicit: np.ndarray, new: np.ndarray, parallelogram: bool | None) -> Shell:
+              faces: np.ndarray, explicit: np.ndarray, new: np.ndarray, parallelogram: bool | None,
+              averaged: bool = False) -> Shell:
     """A shell tree's body from its faces' checks on (spec §9.11 and §9.12; §9.13 with
-    ``parallelogram`` None, whose mode byte and tables come before the coordinates): ``tri`` and
+    ``parallelogram`` None, whose mode byte and tables come before the coordinates; §9.14 with
+    ``averaged`` too, whose corners parallelograms average where they can): ``tri`` and
     ``links`` as decoded, ``faces`` the face codes and ``explicit`` the flags as read, ``new`` which of
     the corner code stream's entries (3 per root, 1 per attached triangle) name a corner anew."""
     def bad(reason: str) -> FormatError:
@@ -537,11 +616,16 @@ def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, 
         ex = np.flatnonzero(explicit)
         residual = np.zeros((3, v), dtype=np.int64)
         residual[:, ex] = steps.T
-        # One chain per axis: axis i's entries are i * V on.
-        pointers = [np.where(j >= 0, j + np.arange(3)[:, None] * v, -1).reshape(-1) for j in terms.T]
-        flat = residual.reshape(-1)
-        chained = resolve_sums(flat, *pointers, flat)
-        grid = chained.reshape(3, v).T[ex]
+        if averaged:
+            start, quads = parallelograms(tri, explicit)
+            grid = np.column_stack([_resolve_averaged(residual[axis], *terms.T, start, quads)
+                                    for axis in range(3)])[ex]
+        else:
+            # One chain per axis: axis i's entries are i * V on.
+            pointers = [np.where(j >= 0, j + np.arange(3)[:, None] * v, -1).reshape(-1) for j in terms.T]
+            flat = residual.reshape(-1)
+            chained = resolve_sums(flat, *pointers, flat)
+            grid = chained.reshape(3, v).T[ex]
         if np.abs(grid).max(initial=0) > MAX_GRID:
             raise bad("a grid coordinate is beyond 2^52")
         if tables is not None:

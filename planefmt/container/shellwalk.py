@@ -21,7 +21,7 @@ from ..errors import FormatError, LimitError
 from ..model import GroupKind, Shell
 from . import schema, varint
 from .shellfields import (_predict, _shell_body, _shell_tree_body, _tree_parents, _tree_predictors, code_stream,
-                          same_tree, surface_fields, tree_rest)
+                          parallelograms, predict_averaged, same_tree, surface_fields, tree_rest)
 
 try:
     from ._chains import walk as _walk_c, walk_codes as _walk_codes_c
@@ -218,8 +218,9 @@ def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray,
     return tri, links
 
 
-def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray) -> Shell:
-    """The corners and triangles of a SHELL_WALK body (spec §9.13), checked."""
+def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, averaged: bool = False) -> Shell:
+    """The corners and triangles of a SHELL_WALK body (spec §9.13), or with ``averaged`` of a
+    SHELL_WALK_MULTI body (§9.14), checked."""
     (v, t, x), pos = varint.decode(raw, 3, "shell walk counts")
     v, t, x = int(v), int(t), int(x)
     left = len(raw) - pos
@@ -235,18 +236,19 @@ def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray) -> Shell:
     explicit, pos = varint.bit_field(raw, pos, v, "shell walk: the body", "corner flags")
     tri, links = _walk(symbols, escapes, v)
     _, new, _ = code_stream(tri, links == 0)
-    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None)
+    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None, averaged)
 
 
 def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray,
-                 modes: tuple[int, ...]) -> dict[str, bytes]:
-    """The mode, grid, tables and coordinates of a walk's explicit corners in whichever of ``modes``
-    compresses smallest (:func:`_smallest`)."""
+                 options: tuple[tuple[GroupKind, int], ...]) -> tuple[GroupKind, dict[str, bytes]]:
+    """The kind (SHELL_WALK or SHELL_WALK_MULTI) and the mode, grid, tables and coordinates of a
+    walk's explicit corners, in whichever of the ``(kind, mode)`` options compresses smallest
+    (:func:`_smallest`)."""
     explicit = np.asarray(shell.explicit, dtype=bool)
     values = np.zeros((len(explicit), 3), dtype=np.int64)
     values[explicit] = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
     indices, tables = values, b""
-    if any(m & MODE_TABLES for m in modes):
+    if any(m & MODE_TABLES for _, m in options):
         indices = values.copy()
         parts = []
         for axis in range(3):
@@ -255,43 +257,58 @@ def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarr
                       varint.encode(np.diff(table) - 1)]
         tables = b"".join(parts)
     per = np.where(links == 0, 3, 1)
-    terms = {p: _tree_predictors(links, tri, explicit, per, new, p) for p in {bool(m & MODE_PARALLELOGRAM) for m in modes}}
+    terms = {p: _tree_predictors(links, tri, explicit, per, new, p)
+             for p in {bool(m & MODE_PARALLELOGRAM) for _, m in options}}
+    averaged = parallelograms(tri, explicit) if any(k == GroupKind.SHELL_WALK_MULTI for k, _ in options) else None
     grid = schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step)))
-    options = []
-    for m in modes:
+    fields = []
+    for kind, m in options:
         v = indices if m & MODE_TABLES else values
-        residual = (v - _predict(v, terms[bool(m & MODE_PARALLELOGRAM)]))[explicit]
-        options.append({"mode": bytes([m]), "grid": grid, "tables": tables if m & MODE_TABLES else b"",
-                        "coordinates": varint.encode(varint.zigzag(residual.T))})
-    return _smallest(options)
+        prediction = _predict(v, terms[bool(m & MODE_PARALLELOGRAM)])
+        if kind == GroupKind.SHELL_WALK_MULTI:
+            prediction = predict_averaged(v, *averaged, prediction)
+        fields.append({"mode": bytes([m]), "grid": grid, "tables": tables if m & MODE_TABLES else b"",
+                       "coordinates": varint.encode(varint.zigzag((v - prediction)[explicit].T))})
+    best = _smallest(fields)
+    return options[fields.index(best)][0], best
 
 
-#: Deflate level that ranks coordinate modes, and how close (a ratio) the two best may come before the
-#: file's own coder decides between them: over the corpus at Draco-14's error, deflate at level 1
-#: ranked modes 1,065 bytes worse than Brotli at quality 11 would (425 on
-#: nonconvex_watertight/quadknot.obj, 552 on open/capsule.obj), level 6 521, level 6 with Brotli
-#: deciding the closest two 36, for 0.2 s of Brotli over the whole corpus (bench/walk_modes.py).
-RANK_LEVEL, RANK_CLOSE = 6, 1.05
+#: Deflate level that ranks a walk's codings (kind and mode), and how many of the best (within what
+#: ratio of the best) the file's own coder then decides between: over the corpus at Draco-14's error,
+#: with kinds 9 and 10 in four modes each, deflate at level 1 picks codings 1,014 bytes worse than
+#: Brotli at quality 11 would, level 6 480 (quadknot.obj 342, capsule.obj 552 at level 1), level 6
+#: with Brotli deciding between the best two within 5 % 424, between the best three within 10 % 77,
+#: Brotli ranking all eight 73 (bench/walk_modes.py; the three cost 2.7 s of Brotli over the corpus,
+#: most of it on bun_zipper.ply's 150 kB of coordinates).
+RANK_LEVEL, RANK_TOP, RANK_CLOSE = 6, 3, 1.10
+#: Largest part Brotli decides on at its densest quality, 11 (about 2 s a megabyte, and an encode
+#: ranks several shells); a larger one is decided at quality 9, 50 times faster: at 11,
+#: smooth_dense/bun_zipper.ply's 150 kB of coordinates took 10 s of its 14 s encode.
+RANK_DENSEST_BYTES = 64 * 1024
 
 
 def _smallest(options: list[dict[str, bytes]]) -> dict[str, bytes]:
     """Of candidate coordinate fields, the one whose body compresses smallest, as deflate ranks them,
-    with Brotli (the writer's coder) deciding between the best two where deflate finds them within
-    ``RANK_CLOSE`` of each other."""
+    with Brotli (the writer's coder) deciding between the best ``RANK_TOP`` where deflate finds them
+    within ``RANK_CLOSE`` of the best."""
     if len(options) == 1:
         return options[0]
     sizes = [len(zlib.compress(f["tables"] + f["coordinates"], RANK_LEVEL)) for f in options]
-    first, second = np.argsort(sizes, kind="stable")[:2]
-    if sizes[second] > RANK_CLOSE * sizes[first]:
-        return options[first]
-    return min((options[first], options[second]), key=lambda f: len(brotli.compress(
-        f["tables"] + f["coordinates"], quality=schema.brotli_quality(len(f["tables"]) + len(f["coordinates"])))))
+    order = np.argsort(sizes, kind="stable")[:RANK_TOP]
+    close = [options[i] for i in order if sizes[i] <= RANK_CLOSE * sizes[order[0]]]
+    if len(close) == 1:
+        return close[0]
+    def brotli_size(f: dict[str, bytes]) -> int:
+        part = f["tables"] + f["coordinates"]
+        return len(brotli.compress(part, quality=11 if len(part) <= RANK_DENSEST_BYTES else 9))
+    return min(close, key=brotli_size)
 
 
-def shell_walk_fields(shell: Shell, mode: int | None = None) -> dict[str, bytes]:
-    """The fields of ``shell`` (a shell tree whose links are a depth-first walk, as
-    ``groups.shells.spanning_walk`` makes them) as a SHELL_WALK body (spec §9.13), by name in body
-    order; its explicit corners in ``mode``, or in whichever of the four deflates smallest."""
+#: The shell walk kinds: kind 9 (spec §9.13) and kind 10 (§9.14), which differ only in predictions.
+WALK_KINDS = (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI)
+
+
+def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[GroupKind, dict[str, bytes]]:
     common = surface_fields(shell)
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
@@ -312,45 +329,77 @@ def shell_walk_fields(shell: Shell, mode: int | None = None) -> dict[str, bytes]
     out = {"counts": varint.encode([len(explicit), len(links), len(escapes)]), "symbols": varint.encode(symbols),
            "escapes": varint.encode(escapes), "faces": common["faces"], "flags": common["flags"],
            "picks": common["picks"]}
-    if explicit.any():
-        out.update(_coordinates(shell, tri, links, new, MODES if mode is None else (mode,)))
-    return out
+    if not explicit.any():
+        # Nothing to predict: the kinds' bodies are alike, and the first needs the lower version.
+        return kinds[0], out
+    kind, coordinates = _coordinates(shell, tri, links, new,
+                                     tuple((k, m) for k in kinds for m in (MODES if mode is None else (mode,))))
+    return kind, {**out, **coordinates}
+
+
+def shell_walk_fields(shell: Shell, mode: int | None = None, kind: GroupKind = GroupKind.SHELL_WALK) -> dict[str, bytes]:
+    """The fields of ``shell`` (a shell tree whose links are a depth-first walk, as
+    ``groups.shells.spanning_walk`` makes them) as a ``kind`` body (SHELL_WALK, spec §9.13, or
+    SHELL_WALK_MULTI, §9.14), by name in body order; its explicit corners in ``mode``, or in whichever
+    of the four compresses smallest."""
+    return _fields(shell, (kind,), mode)[1]
 
 
 def shell_kind_data(kind: GroupKind, shell: Shell) -> bytes:
-    """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11), SHELL_TREE_PARALLELOGRAM (§9.12) or
-    SHELL_WALK (§9.13) group."""
+    """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11), SHELL_TREE_PARALLELOGRAM (§9.12),
+    SHELL_WALK (§9.13) or SHELL_WALK_MULTI (§9.14) group."""
     if kind == GroupKind.SHELL:
         return _shell_body(shell)
-    if kind == GroupKind.SHELL_WALK:
-        return shell_walk_body(shell)
+    if kind in WALK_KINDS:
+        return shell_walk_body(shell, kind)
     return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
 
 
 #: The last few bodies made, by the shell they were made of (kept alive here, so an id is not
-#: reused while its entry stands): an encode sizes, writes and verifies one shell several times.
-_BODIES: collections.OrderedDict[int, tuple[Shell, bytes]] = collections.OrderedDict()
+#: reused while its entry stands) and by kind, with the kind :func:`shell_walk_choice` chose: an
+#: encode sizes, writes and verifies one shell several times.
+_BODIES: collections.OrderedDict[int, tuple[Shell, dict]] = collections.OrderedDict()
 
 
-def shell_walk_body(shell: Shell) -> bytes:
-    """The kind data of ``shell`` as a SHELL_WALK group (spec §9.13). Shells are frozen and their
-    arrays never written to, so a body made once for a shell object is its body."""
+def _held(shell: Shell) -> dict:
     held = _BODIES.get(id(shell))
     if held is not None and held[0] is shell:
         _BODIES.move_to_end(id(shell))
         return held[1]
-    body = b"".join(shell_walk_fields(shell).values())
-    _BODIES[id(shell)] = (shell, body)
+    bodies: dict = {}
+    _BODIES[id(shell)] = (shell, bodies)
     while len(_BODIES) > 8:
         _BODIES.popitem(last=False)
-    return body
+    return bodies
 
 
-def check_shell_walk(shell: Shell, bounding: np.ndarray) -> None:
-    """``FormatError`` (``BAD_GROUP_STRUCTURE``) unless ``shell``'s body as a shell walk decodes to it."""
+def shell_walk_choice(shell: Shell, kinds: tuple[GroupKind, ...] = WALK_KINDS) -> tuple[GroupKind, bytes]:
+    """Whichever of ``kinds`` (shell walk kinds) codes ``shell`` smallest, and its kind data. Shells
+    are frozen and their arrays never written to, so a body made once for a shell object is its body."""
+    bodies = _held(shell)
+    if kinds not in bodies:
+        kind, fields = _fields(shell, kinds)
+        bodies[kinds] = kind
+        bodies[kind] = b"".join(fields.values())
+    return bodies[kinds], bodies[bodies[kinds]]
+
+
+def shell_walk_body(shell: Shell, kind: GroupKind = GroupKind.SHELL_WALK) -> bytes:
+    """The kind data of ``shell`` as a ``kind`` group (SHELL_WALK, spec §9.13, or SHELL_WALK_MULTI,
+    §9.14), its coordinates in the mode that compresses smallest."""
+    bodies = _held(shell)
+    if kind not in bodies:
+        bodies[kind] = b"".join(_fields(shell, (kind,))[1].values())
+    return bodies[kind]
+
+
+def check_shell_walk(shell: Shell, bounding: np.ndarray, kind: GroupKind = GroupKind.SHELL_WALK) -> None:
+    """``FormatError`` (``BAD_GROUP_STRUCTURE``) unless ``shell``'s body as a ``kind`` group (a shell
+    walk kind) decodes to it."""
     if shell.links is None or len(shell.links) != len(shell.facets):
         raise FormatError("shell walk: one link per triangle", code="BAD_GROUP_STRUCTURE")
-    back = decode_shell_walk(np.frombuffer(shell_walk_body(shell), dtype=np.uint8), np.asarray(bounding, bool))
+    back = decode_shell_walk(np.frombuffer(shell_walk_body(shell, kind), dtype=np.uint8), np.asarray(bounding, bool),
+                             kind == GroupKind.SHELL_WALK_MULTI)
     if not same_tree(back, shell):
         raise FormatError("shell walk: its body does not decode to it (links not a depth-first walk, corners "
                           "not numbered by first use, or named corners not three of their face planes in "

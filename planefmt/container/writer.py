@@ -191,8 +191,8 @@ class Writer:
             if shell is None:
                 raise PlnError("a shell tree needs its corners and triangles", code="BAD_GROUP_STRUCTURE")
             if self._verify:
-                if kind == GroupKind.SHELL_WALK:
-                    shellwalk.check_shell_walk(shell, bounding)
+                if kind in shellwalk.WALK_KINDS:
+                    shellwalk.check_shell_walk(shell, bounding, kind)
                 else:
                     shellfields.check_shell_tree(shell, bounding, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
         elif shell is not None:
