@@ -16,11 +16,11 @@ import { readShellWalk } from './shellwalk.mjs';
  * @property {Uint32Array} refs plane-table indices
  * @property {Uint8Array} roles 1 where the reference's role bit is set, one byte per reference
  * @property {boolean} skipped a kind of a newer minor version (§9.3): no kind data read
- * @property {any} data the kind data: cells, tree, or a Shell (kinds 5-9)
+ * @property {any} data the kind data: cells, tree, or a Shell (kinds 5-10)
  */
 
-/** The newest minor version this reader knows, per major (§5, §9.3): 4.1 (kind 9), 3.4 (kind 8). */
-export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 1 };
+/** The newest minor version this reader knows, per major (§5, §9.3): 4.2 (kind 10), 3.4 (kind 8). */
+export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2 };
 
 /**
  * Whether `kind` is a kind of the file's version (§9.3).
@@ -28,7 +28,8 @@ export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 1 };
  */
 function kindOfVersion(kind, [major, minor]) {
   if (kind <= 4) return true;
-  if (major >= 4) return kind <= (minor >= 1 ? 9 : 8); // kinds 0-8 in 4.0, 0-9 in 4.1 (and later minors)
+  // kinds 0-8 in 4.0, 0-9 in 4.1, 0-10 in 4.2 (and later minors)
+  if (major >= 4) return kind <= (minor >= 2 ? 10 : minor >= 1 ? 9 : 8);
   return major === 3 && kind <= 8 && minor >= kind - 4;
 }
 
@@ -88,7 +89,7 @@ export function readGroup(payload, ctx) {
     else if (kind === 2) data = readTree(b, m, major);
     else if (kind === 5) data = readSealed(b, roles);
     else if (kind === 6) data = readShell(b, roles);
-    else if (kind === 9) data = readShellWalk(b, roles);
+    else if (kind === 9 || kind === 10) data = readShellWalk(b, roles, kind === 10);
     else data = readShellTree(b, roles, kind === 8);
   }
   return { index, object, kind, refs, roles, skipped, data };

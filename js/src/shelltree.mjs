@@ -7,8 +7,9 @@
  * triangle order does the same work in linear time, which is what a loop in JavaScript is good
  * at (the corners each triangle takes from its parent are known when the loop reaches it).
  *
- * shellTreeRest, everything after the corner codes, is shared with shell walks (kind 9, §9.13,
- * shellwalk.mjs), whose links and corners come from a walk instead.
+ * shellTreeRest, everything after the corner codes, is shared with shell walks (kind 9, §9.13, and
+ * kind 10, §9.14, shellwalk.mjs), whose links and corners come from a walk instead; kind 10's
+ * multi-parallelogram prediction (parallelograms, averaged) is here, with the other predictions.
  */
 import { fail } from './errors.mjs';
 import { unzigzag, readBits } from './varint.mjs';
@@ -113,11 +114,11 @@ export function readShellTree(b, roles, parallelogram = false) {
  * @param {Int32Array} s.parent per triangle, -1 for a root
  * @param {Int32Array} s.opposite per triangle, the parent's corner off the shared edge, -1 for a root
  * @param {Float64Array} s.faceCodes per triangle, as read
- * @param {{parallelogram: boolean, walk?: boolean}} how kind 8 (parallelogram), kind 9 (walk: a
- *   mode byte decides both)
+ * @param {{parallelogram: boolean, walk?: boolean, multi?: boolean}} how kind 8 (parallelogram), kind 9
+ *   (walk: a mode byte decides both), kind 10 (walk and multi: §9.14's averaged parallelograms first)
  * @returns {import('./shells.mjs').Shell}
  */
-export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, walk = false }) {
+export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, walk = false, multi = false }) {
   const m = roles.length;
   // faces: 0 the parent's (the previous triangle's for a root), 1 free, r + 2 reference r
   const face = new Int32Array(T);
@@ -229,6 +230,8 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
   // are explicit. What is predicted and resolved is the integer coordinates, or with a walk's tables
   // the indices into each axis's table. Every term is within 2^52 (checked as made), so each sum is
   // exact in binary64.
+  // kind 10 (§9.14): up to four parallelograms (a, b, c) per explicit corner, averaged where there are any
+  const multiGrams = multi && E > 0 ? parallelograms(V, T, explicit, tri) : null;
   const values = new Float64Array(3 * V);
   const coords = tables ? new Float64Array(3 * V) : values;
   let previous = -1;
@@ -237,10 +240,23 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
     const t = namer[k];
     const pred = t >= 0 && explicit[tri[3 * t]] ? tri[3 * t] : previous;
     const gram = parallelogram && t >= 0 && explicit[tri[3 * t]] && explicit[tri[3 * t + 1]] && explicit[opposite[t]];
+    const grams = multiGrams ? multiGrams.count[k] : 0;
     for (let a = 0; a < 3; a++) {
       const zz = residuals[a * E + e];
       // zigzag in integer arithmetic where it fits (nearly always), else in floating point
       const r = zz < 0x7fffffff ? (zz & 1 ? -((zz + 1) >>> 1) : zz >>> 1) : unzigzag(zz);
+      if (grams > 0) {
+        if (r > MAX_COORD || r < -MAX_COORD) fail('BAD_GROUP_STRUCTURE', 'residual beyond 2^52');
+        const v = averaged(values, /** @type {Int32Array} */ (multiGrams?.abc), 12 * k, grams, a, r);
+        if (v > MAX_COORD || v < -MAX_COORD) fail('BAD_GROUP_STRUCTURE', `corner ${k}: a value beyond 2^52`);
+        values[3 * k + a] = v;
+        if (tables) {
+          const table = tables[a];
+          if (v < 0 || v >= table.length) fail('BAD_GROUP_STRUCTURE', `corner ${k}: index ${v} outside a table of ${table.length}`);
+          coords[3 * k + a] = table[v];
+        }
+        continue;
+      }
       const base = gram
         ? values[3 * tri[3 * t] + a] + values[3 * tri[3 * t + 1] + a] - values[3 * opposite[t] + a]
         : pred >= 0 ? values[3 * pred + a] : 0;
@@ -264,4 +280,117 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
     e++;
   }
   return { V, T, explicit, cornerPlanes, grid: coords, origin: grid && grid.origin, step: grid && grid.step, face, tri };
+}
+
+const TWO_53 = 2 ** 53;
+
+/**
+ * §9.14: the parallelograms of each explicit corner k, at most four: for each triangle in triangle
+ * order and each place s where i_s = k, a = i_(s+1), b = i_(s+2) and c the far corner of (a, b) (the
+ * corner off (b, a) of the first triangle, in triangle order, that has the directed edge (b, a)),
+ * where c exists and a, b, c are all explicit and all below k.
+ *
+ * The first triangle of each directed edge is found without a hash table (whose probe lengths a
+ * hostile file could choose): the 3T edges, numbered 3j + e in triangle order, are sorted by their
+ * end corner and then, stably, by their start corner (two counting sorts, linear in T and V), so
+ * that the edges starting at b are one run, ordered by end corner and within one end by triangle:
+ * the first triangle with (b, a) is the lower bound of a in b's run (a binary search, log of the
+ * run's length).
+ * @param {number} V @param {number} T @param {Uint8Array} explicit @param {Uint32Array} tri
+ * @returns {{count: Uint8Array, abc: Int32Array}} per corner its number of parallelograms, and
+ *   (a, b, c) for each of them at 12k + 3i
+ */
+export function parallelograms(V, T, explicit, tri) {
+  const N = 3 * T;
+  /** the end corner of edge i (3j + e: from i_e to i_(e+1) mod 3 of triangle j) @param {number} i */
+  const endOf = (i) => tri[i % 3 === 2 ? i - 2 : i + 1];
+  const runs = new Int32Array(V + 1);
+  const byEnd = new Int32Array(N);
+  for (let i = 0; i < N; i++) runs[endOf(i) + 1]++;
+  for (let k = 0; k < V; k++) runs[k + 1] += runs[k];
+  let at = runs.slice(0, V);
+  for (let i = 0; i < N; i++) byEnd[at[endOf(i)]++] = i;
+  runs.fill(0);
+  for (let i = 0; i < N; i++) runs[tri[i] + 1]++;
+  for (let k = 0; k < V; k++) runs[k + 1] += runs[k];
+  at = runs.slice(0, V);
+  const sorted = new Int32Array(N);
+  for (let q = 0; q < N; q++) {
+    const i = byEnd[q];
+    sorted[at[tri[i]]++] = i;
+  }
+
+  const count = new Uint8Array(V);
+  const abc = new Int32Array(12 * V);
+  for (let j = 0; j < T; j++) {
+    for (let s = 0; s < 3; s++) {
+      const k = tri[3 * j + s];
+      if (!explicit[k] || count[k] === 4) continue;
+      const a = tri[3 * j + (s === 2 ? 0 : s + 1)];
+      const b = tri[3 * j + (s === 0 ? 2 : s - 1)];
+      if (a >= k || b >= k || !explicit[a] || !explicit[b]) continue;
+      // the first edge (b, a): the lower bound of a among the ends of b's run
+      let lo = runs[b];
+      let hi = runs[b + 1];
+      while (lo < hi) {
+        const mid = (lo + hi) >>> 1;
+        if (endOf(sorted[mid]) < a) lo = mid + 1;
+        else hi = mid;
+      }
+      if (lo === runs[b + 1] || endOf(sorted[lo]) !== a) continue;
+      const i = sorted[lo]; // edge e of triangle t runs b -> a; its far corner is i_(e+2)
+      const c = tri[i % 3 === 0 ? i + 2 : i - 1];
+      if (c >= k || !explicit[c]) continue;
+      const w = 12 * k + 3 * count[k]++;
+      abc[w] = a;
+      abc[w + 1] = b;
+      abc[w + 2] = c;
+    }
+  }
+  return { count, abc };
+}
+
+/**
+ * §9.14's prediction on axis `ax`, ⌊(S + ⌊n/2⌋) / n⌋ rounding toward −∞, S the sum of g(a) + g(b) −
+ * g(c) over the n parallelograms at abc[w..], plus the residual r: exact whatever the values (each
+ * within 2^52, so |S| < 2^56). In binary64 while every partial sum stays below 2^53 in magnitude
+ * (then each is exact: a sum of integers whose exact value is within 2^53 is representable, and
+ * one beyond it rounds to 2^53 or more), else in BigInt. A result beyond 2^52 is returned as is or
+ * as ±Infinity, for the caller to refuse.
+ * @param {Float64Array} values 3 per corner @param {Int32Array} abc @param {number} w
+ * @param {number} n 1-4 @param {number} ax @param {number} r the residual, within 2^52
+ */
+export function averaged(values, abc, w, n, ax, r) {
+  let S = 0;
+  let exact = true;
+  for (let i = 0; i < n; i++) {
+    S += values[3 * abc[w + 3 * i] + ax];
+    if (S >= TWO_53 || S <= -TWO_53) exact = false;
+    S += values[3 * abc[w + 3 * i + 1] + ax];
+    if (S >= TWO_53 || S <= -TWO_53) exact = false;
+    S -= values[3 * abc[w + 3 * i + 2] + ax];
+    if (S >= TWO_53 || S <= -TWO_53) exact = false;
+  }
+  if (exact && S < 2 ** 52 && S > -(2 ** 52)) {
+    // |S + ⌊n/2⌋| < 2^52 + 2: exact; its quotient by 1, 2 or 4 is exact, by 3 corrected to the floor
+    const s = S + (n >>> 1);
+    let q = Math.floor(s / n);
+    const rem = s - q * n;
+    if (rem < 0) q--;
+    else if (rem >= n) q++;
+    // |q| ≤ 2^52 / n + 1 and |r| ≤ 2^52: the exact sum is within 2^53 + 1, and one beyond 2^52
+    // stays beyond it however it rounds
+    return q + r;
+  }
+  let big = 0n;
+  for (let i = 0; i < n; i++) {
+    big += BigInt(values[3 * abc[w + 3 * i] + ax]) + BigInt(values[3 * abc[w + 3 * i + 1] + ax]) - BigInt(values[3 * abc[w + 3 * i + 2] + ax]);
+  }
+  big += BigInt(n >>> 1);
+  const N = BigInt(n);
+  let q = big / N; // toward zero
+  if (big % N !== 0n && big < 0n) q -= 1n;
+  const v = q + BigInt(r);
+  const limit = BigInt(MAX_COORD);
+  return v > limit ? Infinity : v < -limit ? -Infinity : Number(v);
 }

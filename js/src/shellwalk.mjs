@@ -1,5 +1,7 @@
 /**
- * Shell walks (kind 9, spec §9.13, version 4.1), read into the Shell structure of shells.mjs.
+ * Shell walks (kind 9, spec §9.13, version 4.1) and shell walks with multi-parallelograms (kind 10,
+ * §9.14, version 4.2: the same data, another prediction of explicit corners, in shelltree.mjs), read
+ * into the Shell structure of shells.mjs.
  *
  * A walk is a shell tree (§9.11) whose tree is a depth-first walk (a stack of slots, one symbol per
  * triangle naming the edges that have children) and whose third corners are mostly "left" or
@@ -193,12 +195,14 @@ export class OpenEdges {
 }
 
 /**
- * Kind 9 data, read and checked in §9.13's order.
+ * Kind 9 data, read and checked in §9.13's order; kind 10 (§9.14, `multi`) is the same data with
+ * its explicit corners predicted by averaged parallelograms where they have any.
  * @param {import('./varint.mjs').Cursor} b
  * @param {Uint8Array} roles
+ * @param {boolean} [multi] kind 10
  * @returns {import('./shells.mjs').Shell}
  */
-export function readShellWalk(b, roles) {
+export function readShellWalk(b, roles, multi = false) {
   const V = b.varint();
   const T = b.varint();
   const X = b.varint();
@@ -296,5 +300,5 @@ export function readShellWalk(b, roles) {
   if (top !== 0) fail('BAD_GROUP_STRUCTURE', `${top} slots left on the stack after the last triangle`);
   if (x !== X) fail('BAD_GROUP_STRUCTURE', `${X - x} escapes left over`);
   if (n !== V) fail('BAD_GROUP_STRUCTURE', `${n} corners named, ${V} declared`);
-  return shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram: false, walk: true });
+  return shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram: false, walk: true, multi });
 }

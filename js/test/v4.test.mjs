@@ -290,7 +290,7 @@ test('the Brotli decompressors stop at maxOutputLength (raw size + 1)', () => {
   }
 });
 
-test('version 4 files of zlib payloads read too; version 4.0 kinds 0-8, 4.1 kinds 0-9, 4.2 skips kind 10, major 5 refused', () => {
+test('version 4 files of zlib payloads read too; version 4.0 kinds 0-8, 4.1 kinds 0-9, 4.2 kinds 0-10, 4.3 skips kind 12, major 5 refused', () => {
   const zlibbed = assemble(chunksOf(upgrade(CUBE)).map((c) => {
     if (c.type !== 'GRUP') return c;
     const g = /** @type {Chunk} */ (chunksOf(CUBE).find((k) => k.type === 'GRUP'));
@@ -312,8 +312,14 @@ test('version 4 files of zlib payloads read too; version 4.0 kinds 0-8, 4.1 kind
   // walk and ends inside its counts
   expectBoth(kind(9, 1), 'BAD_PAYLOAD');
   expectBoth(kind(10, 1), 'UNKNOWN_GROUP_KIND');
+  expectBoth(kind(10, 0), 'UNKNOWN_GROUP_KIND');
   assert.deepEqual(readNode(kind(0, 1)).findings, new Set());
-  const skipped = readNode(kind(10, 2));
+  assert.deepEqual(readNode(kind(0, 2)).findings, new Set());
+  // 4.2 knows kind 10 (§9.14): read as a shell walk, ending inside its counts; kind 12 unknown
+  expectBoth(kind(10, 2), 'BAD_PAYLOAD');
+  expectBoth(kind(9, 2), 'BAD_PAYLOAD');
+  expectBoth(kind(12, 2), 'UNKNOWN_GROUP_KIND');
+  const skipped = readNode(kind(12, 3));
   assert.deepEqual([...skipped.findings].sort(), ['NEWER_MINOR_VERSION', 'SKIPPED_GROUP_KIND']);
   assert.deepEqual(readNode(cubeGroup()).findings, new Set());
   assert.deepEqual(readNode(cubeGroup()).version, [4, 0]);

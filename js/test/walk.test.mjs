@@ -3,7 +3,10 @@
 // hash table and linked lists) encodes meshes, which must decode to their triangles and corners, and
 // to what the same triangles decode to as a shell tree (kind 7, or kind 8 with the parallelogram
 // bit); hand-built bodies for every error of §9.13, in the order the section gives; the versions
-// (kind 9 in 4.1 only, kind 10 unknown in 4.1 and skipped in 4.2); linear time on hostile walks.
+// (kind 9 in 4.1 and later, kind 10 in 4.2 and later); linear time on hostile walks. Kind 10
+// (§9.14, version 4.2): the same encoder's walks with the multi-parallelogram prediction (written
+// here from §9.14 in BigInt), round trips in every mode, hand-computed predictions, and values
+// near and past 2^52 against a reference decoding in BigInt.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import zlib from 'node:zlib';
@@ -309,14 +312,162 @@ function encode(mesh, { mode = 0, reverse = false, rotate = 0, grid = [0.5, -1, 
   const tables = E > 0 && mode & 2 ? [0, 1, 2].map((a) => [...new Set(ex.map((k) => /** @type {number[]} */ (mesh.coords[source[k]])[a]))].sort((p, q) => p - q)) : null;
   const gridBytes = E > 0 ? grid.flatMap(f64) : [];
   const tableBytes = tables ? tables.flatMap((t) => [...varint(t.length), ...varint(zigzag(t[0])), ...varints(t.slice(1).map((v, i) => v - t[i] - 1))]) : [];
-  const kind9 = [...varints([V, T, escapes.length]), ...varints(symbols), ...varints(escapes), ...varints(faces), ...flags, ...varints(picks),
-    ...(E > 0 ? [mode] : []), ...gridBytes, ...tableBytes, ...(E > 0 ? varints(residuals((mode & 1) !== 0, tables)) : [])];
+  // everything before the coordinates, which kinds 9 and 10 share (§9.14)
+  const head = [...varints([V, T, escapes.length]), ...varints(symbols), ...varints(escapes), ...varints(faces), ...flags, ...varints(picks),
+    ...(E > 0 ? [mode] : []), ...gridBytes, ...tableBytes];
+  const kind9 = [...head, ...(E > 0 ? varints(residuals((mode & 1) !== 0, tables)) : [])];
   const tree = [...varints([V, T]), ...varints(links), ...varints(codes7), ...varints(faces), ...flags, ...varints(picks), ...gridBytes,
     ...(E > 0 ? varints(residuals((mode & 1) !== 0, null)) : [])];
+  /** the value kind 10 resolves for corner k on axis a: its coordinate, or with tables its index */
+  const value = (/** @type {number} */ k, /** @type {number} */ a) => {
+    const c = /** @type {number[]} */ (mesh.coords[source[k]])[a];
+    return BigInt(tables ? tables[a].indexOf(c) : c);
+  };
+  const walk = { tris: order.map((o) => o.tri), parent: order.map((o) => o.parent), edge: order.map((o) => o.edge), namer, explicit, ex, mode, tables };
+  const multi = E > 0 ? residuals10(walk, value) : null;
+  const kind10 = [...head, ...(multi ? varints(multi.residuals.map(zigzagBig)) : [])];
   return {
-    kind9, tree, treeKind: mode & 1 ? 8 : 7, V, E, order, source, symbols, escapes, seconds,
+    kind9, kind10, head, walk, multi, tree, treeKind: mode & 1 ? 8 : 7, V, E, order, source, symbols, escapes, seconds,
     parts: { symbols, escapes, faces, flags, picks },
   };
+}
+
+// ---------------------------------------------------------------------------------------------
+// Kind 10 (§9.14): the multi-parallelogram prediction, written for this test from §9.14's text in
+// BigInt throughout (a plain Map of directed edges; nothing of the reader's sorted runs or its
+// binary64 fast path)
+
+/** @param {bigint} d */
+const zigzagBig = (d) => (d >= 0n ? 2n * d : -2n * d - 1n);
+/** @param {bigint} z */
+const unzigzagBig = (z) => (z % 2n === 0n ? z / 2n : -(z + 1n) / 2n);
+/** ⌊x / n⌋, rounding toward −∞ @param {bigint} x @param {bigint} n */
+const floorDiv = (x, n) => (x % n !== 0n && x < 0n ? x / n - 1n : x / n);
+const LIMIT = 2n ** 52n;
+
+/**
+ * @typedef {object} Walk the decoded walk, as the encoder made it
+ * @property {number[][]} tris corners of each triangle, in triangle order
+ * @property {number[]} parent per triangle, -1 for a root
+ * @property {number[]} edge per triangle, the parent's edge it is attached to
+ * @property {number[]} namer per corner the triangle whose code 0 named it, -1 for a root's
+ * @property {boolean[]} explicit per corner
+ * @property {number[]} ex the explicit corners, ascending
+ * @property {number} mode
+ * @property {number[][] | null} tables
+ */
+
+/**
+ * §9.14's parallelograms of every corner: per triangle in triangle order, per place s with i_s = k,
+ * a = i_(s+1), b = i_(s+2), c the far corner of (a, b); kept where c exists and a, b, c are explicit
+ * and below k; the first four.
+ * @param {Walk} w @returns {number[][][]} per corner its list of [a, b, c]
+ */
+function multiGrams({ tris, explicit }) {
+  /** @type {Map<string, number>} directed edge → the first triangle that has it */
+  const first = new Map();
+  tris.forEach((t, j) => {
+    for (let e = 0; e < 3; e++) {
+      const key = `${t[e]},${t[(e + 1) % 3]}`;
+      if (!first.has(key)) first.set(key, j);
+    }
+  });
+  /** @type {number[][][]} */
+  const grams = explicit.map(() => []);
+  for (const t of tris) {
+    for (let s = 0; s < 3; s++) {
+      const k = t[s];
+      if (!explicit[k] || grams[k].length === 4) continue;
+      const a = t[(s + 1) % 3];
+      const b = t[(s + 2) % 3];
+      const f = first.get(`${b},${a}`);
+      if (f === undefined) continue;
+      const c = /** @type {number} */ (tris[f].find((v) => v !== a && v !== b));
+      if ([a, b, c].every((v) => explicit[v] && v < k)) grams[k].push([a, b, c]);
+    }
+  }
+  return grams;
+}
+
+/**
+ * The prediction of §9.14 for explicit corner k on axis ax from the values g resolved so far;
+ * without parallelograms §9.13's (bit 0 of the mode: §9.12's, else §9.11's).
+ * @param {Walk} w @param {number[][][]} grams @param {number} k @param {number} ax
+ * @param {(k: number, a: number) => bigint} g @param {number} previous the previous explicit corner, -1 for none
+ */
+function predict10(w, grams, k, ax, g, previous) {
+  const list = grams[k];
+  if (list.length > 0) {
+    let S = 0n;
+    for (const [a, b, c] of list) S += g(a, ax) + g(b, ax) - g(c, ax);
+    const n = BigInt(list.length);
+    return floorDiv(S + n / 2n, n);
+  }
+  const t = w.namer[k];
+  if (t >= 0) {
+    const [i0, i1] = w.tris[t];
+    const o = w.tris[w.parent[t]][(w.edge[t] + 2) % 3];
+    if (w.mode & 1 && w.explicit[i0] && w.explicit[i1] && w.explicit[o]) return g(i0, ax) + g(i1, ax) - g(o, ax);
+    if (w.explicit[i0]) return g(i0, ax);
+  }
+  return previous >= 0 ? g(previous, ax) : 0n;
+}
+
+/**
+ * Kind 10's residuals (axis by axis, in corner order) of the values `value` gives, and what the
+ * predictions met: how many corners had n parallelograms, and divisions that rounded a negative sum.
+ * @param {Walk} w @param {(k: number, a: number) => bigint} value
+ */
+function residuals10(w, value) {
+  const grams = multiGrams(w);
+  /** @type {bigint[][]} */
+  const out = [[], [], []];
+  const histogram = [0, 0, 0, 0, 0];
+  let negativeRounded = 0;
+  let previous = -1;
+  for (const k of w.ex) {
+    histogram[grams[k].length]++;
+    for (let a = 0; a < 3; a++) {
+      const p = predict10(w, grams, k, a, value, previous);
+      out[a].push(value(k, a) - p);
+      const n = grams[k].length;
+      if (n > 0) {
+        let S = 0n;
+        for (const [x, y, z] of grams[k]) S += value(x, a) + value(y, a) - value(z, a);
+        if (S + BigInt(n >> 1) < 0n && (S + BigInt(n >> 1)) % BigInt(n) !== 0n) negativeRounded++;
+      }
+    }
+    previous = k;
+  }
+  return { residuals: out.flat(), histogram, negativeRounded, grams };
+}
+
+/**
+ * The reference decoding of kind 10 residuals (zigzag, axis by axis) over a walk, in BigInt: the
+ * resolved values by corner, or the error a reader must give.
+ * @param {Walk} w @param {bigint[]} zz
+ * @returns {Map<number, bigint[]> | 'BAD_GROUP_STRUCTURE'}
+ */
+function decode10(w, zz) {
+  const grams = multiGrams(w);
+  const E = w.ex.length;
+  /** @type {Map<number, bigint[]>} */
+  const values = new Map();
+  const g = (/** @type {number} */ k, /** @type {number} */ a) => /** @type {bigint[]} */ (values.get(k))[a];
+  let previous = -1;
+  for (let e = 0; e < E; e++) {
+    const k = w.ex[e];
+    values.set(k, [0n, 0n, 0n]);
+    for (let a = 0; a < 3; a++) {
+      const r = unzigzagBig(zz[a * E + e]);
+      const v = predict10(w, grams, k, a, g, previous) + r;
+      if (r > LIMIT || r < -LIMIT || v > LIMIT || v < -LIMIT) return 'BAD_GROUP_STRUCTURE';
+      if (w.tables && (v < 0n || v >= BigInt(w.tables[a].length))) return 'BAD_GROUP_STRUCTURE';
+      /** @type {bigint[]} */ (values.get(k))[a] = v;
+    }
+    previous = k;
+  }
+  return values;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -409,10 +560,11 @@ function decoded(/** @type {Uint8Array} */ bytes, /** @type {{source: number[]}}
  * walk order, each as its source triangle turned), the explicit corners at origin + step × their
  * coordinates, and the report and geometry equal to those of the same triangles as a shell tree.
  * @param {number[][]} planes @param {Mesh} mesh @param {Parameters<typeof encode>[1]} options
+ * @param {9 | 10} [kind] 10: the same walk with §9.14's prediction, in a 4.2 file
  */
-function roundTrip(planes, mesh, options = {}) {
+function roundTrip(planes, mesh, options = {}, kind = 9) {
   const enc = encode(mesh, options);
-  const bytes = file({ planes, groups: [{ kind: 9, data: enc.kind9 }] });
+  const bytes = file({ planes, groups: [{ kind, data: kind === 10 ? enc.kind10 : enc.kind9 }], version: [4, kind === 10 ? 2 : 1] });
   const { f, shell, tris } = decoded(bytes, enc);
   assert.equal(tris.length, mesh.tris.length);
   tris.forEach((t, j) => {
@@ -431,8 +583,8 @@ function roundTrip(planes, mesh, options = {}) {
   const walk = conformanceJson(f);
   assert.deepEqual(walk.groups[0].shell, tree.groups[0].shell);
   assert.deepEqual(walk.geometry, tree.geometry);
-  assert.equal(walk.groups[0].kind, 9);
-  assert.deepEqual(walk.header.version, [4, 1]);
+  assert.equal(walk.groups[0].kind, kind);
+  assert.deepEqual(walk.header.version, [4, kind === 10 ? 2 : 1]);
   assert.deepEqual(walk.findings, []);
   // and the browser entry reads it alike
   assert.deepEqual(conformanceJson(readBrowser(bytes)), walk);
@@ -820,25 +972,43 @@ test('§9.12 in a walk: the parallelogram bit predicts i0 + i1 - o, of indices w
   assert.deepEqual(g3, [[0, 0, 0], [4, 0, 0], [0, 4, 0], [5, -3, 1]]);
 });
 
-test('§9.3, §5: kind 9 in 4.1 and later minors; in 4.0 and 3.4 unknown; kind 10 unknown in 4.1, skipped in 4.2', () => {
-  const data = encode(torus()).kind9;
+test('§9.3, §5: kind 9 in 4.1 and later minors; in 4.0 and 3.4 unknown; kind 10 in 4.2 and later, unknown in 4.0 and 4.1; kind 12 unknown in 4.2, skipped in 4.3', () => {
+  const enc = encode(torus(), { mode: 1 });
+  const data = enc.kind9;
   assert.deepEqual(readNode(kind9(data)).findings, new Set());
   assert.equal(outcome(kind9(data, [4, 0])), 'UNKNOWN_GROUP_KIND');
   assert.equal(outcome(kind9(data, [3, 4])), 'UNKNOWN_GROUP_KIND');
   // a 3.5 file: kind 9 is a kind of a newer minor of major 3, skipped
   const v35 = readNode(kind9(data, [3, 5]));
   assert.deepEqual([...v35.findings].sort(), ['NEWER_MINOR_VERSION', 'SKIPPED_GROUP_KIND']);
-  // a 4.2 file: kind 9 decoded, kind 10 skipped (its common body still checked)
-  const v42 = file({ planes: ONE_PLANE, groups: [{ kind: 9, data }, { kind: 10, data: [1, 2, 3] }], version: [4, 2] });
-  const r = readNode(v42);
+  // a 4.2 file: kinds 9 and 10 decoded, no finding
+  const both = readNode(file({ planes: ONE_PLANE, groups: [{ kind: 9, data }, { kind: 10, data: enc.kind10 }], version: [4, 2] }));
+  assert.deepEqual(both.findings, new Set());
+  const json = conformanceJson(both);
+  assert.deepEqual(json.groups[1].shell, json.groups[0].shell);
+  assert.deepEqual(json.groups.map((/** @type {any} */ g) => g.kind), [9, 10]);
+  // kind 10 in a 4.0 or 4.1 file: not a kind of the file's version, whose minor this reader knows
+  for (const minor of [0, 1]) {
+    assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: enc.kind10 }], version: [4, minor] })), 'UNKNOWN_GROUP_KIND');
+  }
+  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: [] }], version: [4, 1] })), 'UNKNOWN_GROUP_KIND');
+  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: enc.kind10 }], version: [3, 4] })), 'UNKNOWN_GROUP_KIND');
+  // kind 10 read in 4.2: an empty kind data ends inside its counts
+  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: [] }], version: [4, 2] })), 'BAD_PAYLOAD');
+  // kind 12, a kind of no version (11 is kind 11 of main's work in progress, §9.15): unknown in
+  // 4.2 (the newest minor known), skipped in 4.3 with its common body checked
+  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 12, data: [1, 2, 3] }], version: [4, 2] })), 'UNKNOWN_GROUP_KIND');
+  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 255, data: [] }], version: [4, 2] })), 'UNKNOWN_GROUP_KIND');
+  const v43 = file({ planes: ONE_PLANE, groups: [{ kind: 10, data: enc.kind10 }, { kind: 12, data: [1, 2, 3] }], version: [4, 3] });
+  const r = readNode(v43);
   assert.deepEqual([...r.findings].sort(), ['NEWER_MINOR_VERSION', 'SKIPPED_GROUP_KIND']);
   assert.equal(r.meshes[1], null);
   assert.ok(/** @type {any} */ (r.meshes[0]).indices.length > 0);
   assert.equal(/** @type {any} */ (conformanceJson(r).geometry).groups[1], null);
-  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: [] }], version: [4, 1] })), 'UNKNOWN_GROUP_KIND');
-  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 255, data: [] }], version: [4, 1] })), 'UNKNOWN_GROUP_KIND');
-  // kinds 0-8 are still read in 4.1
-  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 7, data: encode(torus()).tree }], version: [4, 1] })), 'ok');
+  assert.deepEqual(conformanceJson(r).groups[0].shell, json.groups[0].shell);
+  // a 4.2 file without kind 10 reads alike; kinds 0-8 are still read in 4.1 and 4.2
+  assert.deepEqual(conformanceJson(readNode(kind9(data, [4, 2]))).groups[0].shell, json.groups[0].shell);
+  for (const minor of [1, 2]) assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 7, data: encode(torus()).tree }], version: [4, minor] })), 'ok');
 });
 
 test('§9.13: linear time on large and hostile walks', () => {
@@ -861,5 +1031,271 @@ test('§9.13: linear time on large and hostile walks', () => {
   const many = 100000;
   const roots = explicitBody({ V: 3, T: many, symbols: new Array(many).fill(0), escapes: [0, 0, 0, ...new Array(many - 1).fill([3, 2, 1]).flat()], flags: [] });
   assert.equal(outcome(kind9(roots)), 'ok');
+  assert.ok(performance.now() - t0 < 3000, `${performance.now() - t0} ms`);
+});
+
+// ---------------------------------------------------------------------------------------------
+// Kind 10 (§9.14, version 4.2): shell walks with multi-parallelograms
+
+/**
+ * An icosahedron subdivided `levels` times onto a sphere of radius r, corners rounded to integers
+ * (every corner explicit, every triangle free), counter-clockwise seen from outside.
+ */
+function icosphere(levels = 2, r = 1000) {
+  const t = (1 + Math.sqrt(5)) / 2;
+  /** @type {number[][]} */
+  const points = [[-1, t, 0], [1, t, 0], [-1, -t, 0], [1, -t, 0], [0, -1, t], [0, 1, t], [0, -1, -t], [0, 1, -t], [t, 0, -1], [t, 0, 1], [-t, 0, -1], [-t, 0, 1]];
+  let tris = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4], [11, 10, 2], [10, 7, 6], [7, 1, 8],
+    [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8], [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]];
+  for (let l = 0; l < levels; l++) {
+    /** @type {Map<string, number>} */
+    const mid = new Map();
+    const m = (/** @type {number} */ a, /** @type {number} */ b) => {
+      const key = a < b ? `${a},${b}` : `${b},${a}`;
+      if (!mid.has(key)) { mid.set(key, points.length); points.push(points[a].map((c, i) => (c + points[b][i]) / 2)); }
+      return /** @type {number} */ (mid.get(key));
+    };
+    tris = tris.flatMap(([a, b, c]) => {
+      const [ab, bc, ca] = [m(a, b), m(b, c), m(c, a)];
+      return [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]];
+    });
+  }
+  const coords = points.map((p) => {
+    const l = Math.hypot(...p);
+    return p.map((c) => Math.round((r * c) / l));
+  });
+  return { tris, face: tris.map(() => -1), coords };
+}
+
+test('§9.14: kind 10 round trips: an icosphere, a torus, an open grid, pieces, a cube of named and explicit corners; four modes', () => {
+  const histogram = [0, 0, 0, 0, 0];
+  let negativeRounded = 0;
+  let differs = 0;
+  // the icosphere is closed and manifold: every directed edge once, its reverse present
+  const ico = icosphere();
+  const edges = new Set(ico.tris.flatMap((t) => [0, 1, 2].map((e) => `${t[e]},${t[(e + 1) % 3]}`)));
+  assert.equal(edges.size, 3 * ico.tris.length);
+  for (const e of edges) assert.ok(edges.has(e.split(',').reverse().join()));
+  const cases = /** @type {[number[][], Mesh, Parameters<typeof encode>[1]][]} */ ([
+    [ONE_PLANE, ico, {}], [ONE_PLANE, icosphere(1, 50), { reverse: true }], [ONE_PLANE, torus(20, 12), {}], [ONE_PLANE, torus(9, 7), { oneChild: true }],
+    [ONE_PLANE, torus(), { drop: 7 }], [ONE_PLANE, grid(9, 5), {}], [ONE_PLANE, grid(), { drop: 3, reverse: true }], [ONE_PLANE, pieces(), {}],
+    [CUBE_PLANES, cube([0, 3, 5, 6, 7]), {}], [CUBE_PLANES, cube([1, 2, 4, 7]), { reverse: true }], [ONE_PLANE, ico, { escapeAll: true }],
+  ]);
+  for (const [planes, mesh, options] of cases) {
+    for (const mode of [0, 1, 2, 3]) {
+      const { enc, shell } = roundTrip(planes, mesh, { ...options, mode }, 10);
+      const m = /** @type {NonNullable<typeof enc.multi>} */ (enc.multi);
+      m.histogram.forEach((c, n) => { histogram[n] += c; });
+      negativeRounded += m.negativeRounded;
+      // the reference decoding of the residuals gives back the values encoded
+      const ref = decode10(enc.walk, m.residuals.map(zigzagBig));
+      assert.notEqual(ref, 'BAD_GROUP_STRUCTURE');
+      for (const k of enc.walk.ex) {
+        for (let a = 0; a < 3; a++) assert.equal(/** @type {Map<number, bigint[]>} */ (ref).get(k)?.[a], enc.walk.tables ? BigInt(enc.walk.tables[a].indexOf(/** @type {number[]} */ (mesh.coords[enc.source[k]])[a])) : BigInt(/** @type {number[]} */ (mesh.coords[enc.source[k]])[a]));
+      }
+      // the same residuals read as kind 9 decode elsewhere wherever some corner has a parallelogram
+      if (m.histogram.slice(1).some((c) => c > 0)) {
+        assert.notDeepEqual(enc.kind10, enc.kind9);
+        const as9 = file({ planes, groups: [{ kind: 9, data: enc.kind10 }] });
+        const o = outcome(as9);
+        if (o !== 'ok' || JSON.stringify(conformanceJson(readNode(as9)).groups[0].shell) !== JSON.stringify(shell)) differs++;
+      }
+    }
+  }
+  // every count of parallelograms met, and floors of negative sums that round
+  for (let n = 0; n <= 4; n++) assert.ok(histogram[n] > 0, `${histogram}`);
+  assert.ok(negativeRounded > 0);
+  assert.ok(differs > 20, `${differs}`);
+});
+
+test('§9.14: kind 10 beside kind 9 in one file, compressed payloads, and the parallelograms of the reader against the test\'s', async () => {
+  const enc = encode(icosphere(2), { mode: 1 });
+  const bytes = file({ planes: ONE_PLANE, groups: [{ kind: 10, data: enc.kind10, method: 2 }, { kind: 10, data: enc.kind10, method: 1 }, { kind: 9, data: enc.kind9 }], version: [4, 2] });
+  const json = conformanceJson(readNode(bytes));
+  assert.deepEqual(json.groups[0].shell, json.groups[2].shell);
+  assert.deepEqual(json.groups[1].shell, json.groups[2].shell);
+  assert.deepEqual(conformanceJson(readBrowser(bytes)), json);
+  // the reader's parallelograms (sorted runs, binary search) equal the test's (a Map), on walks
+  // with several roots over old corners, non-manifold pieces and named corners
+  const { parallelograms } = await import('../src/shelltree.mjs');
+  const meshes = [icosphere(1), torus(), grid(), pieces(), cube([0, 3, 5, 6, 7]), fins()];
+  for (const [i, mesh] of meshes.entries()) {
+    for (const drop of [0, 5 + i]) {
+      const e = encode(mesh, { drop });
+      const w = e.walk;
+      const want = multiGrams(w);
+      const got = parallelograms(w.explicit.length, w.tris.length, Uint8Array.from(w.explicit, Number), Uint32Array.from(w.tris.flat()));
+      for (let k = 0; k < w.explicit.length; k++) {
+        const list = [];
+        for (let q = 0; q < got.count[k]; q++) list.push([...got.abc.subarray(12 * k + 3 * q, 12 * k + 3 * q + 3)]);
+        assert.deepEqual(list, want[k], `mesh ${i} corner ${k}`);
+      }
+    }
+  }
+});
+
+/**
+ * A non-manifold mesh: three triangles on edge (0, 1) one way, two the other (the far corner of a
+ * directed edge is the first triangle's), a strip beside them; every corner explicit.
+ */
+function fins() {
+  const tris = [[0, 1, 2], [1, 0, 3], [1, 0, 4], [0, 1, 5], [1, 0, 6], [2, 1, 7], [7, 1, 8], [3, 0, 9], [9, 0, 4], [5, 1, 6]];
+  const coords = [[0, 0, 0], [10, 0, 0], [5, 8, 0], [5, -8, 1], [4, -3, 9], [6, 5, -7], [3, -1, -9], [14, 9, 2], [20, 1, -1], [-3, -9, 4]];
+  return { tris, face: tris.map(() => -1), coords };
+}
+
+test('§9.14 by hand: the parallelograms of the triangles around a corner, averaged, the division rounding toward −∞', () => {
+  // root (0 1 2), children across edges 0 and 1 (list 4); (1 0 3) new, its child across its edge 2
+  // (3 -> 1): (1 3 4) new; then across the root's edge 1: (2 1 4) by left (the newest open edge
+  // ending at 1 is (4, 1))
+  const walk = { V: 5, T: 4, symbols: [4, 8, 0, 1], escapes: [0, 0, 0], flags: [] };
+  assert.deepEqual(trianglesOf(walk), [[0, 1, 2], [1, 0, 3], [1, 3, 4], [2, 1, 4]]);
+  // corner 3: (1 0 3) gives a = 1, b = 0, and (0, 1) is the root's, far corner 2: one
+  // parallelogram, 1 + 0 - 2. Corner 4: (1 3 4) gives (1, 3, far corner of (1, 3) = 0 from (1 0 3)),
+  // (2 1 4) gives (2, 1, 0 from the root): S = g1 + g3 - g0 + g2 + g1 - g0, n = 2.
+  // Corners 0-2 have none: a root's, predicted by the previous explicit corner.
+  // Values: 0 (0,0,0), 1 (10,-7,1), 2 (3,5,-2), 3 = (7,-12,3) + (1,-1,0) = (8,-13,3),
+  // 4: S = (31, -22, 3), ⌊(S + 1) / 2⌋ = (16, -11, 2) (truncation would give -10), residual 0
+  const xs = [0, 20, 13, 2, 0];
+  const ys = [0, 13, 24, 1, 0];
+  const zs = [0, 2, 5, 0, 0];
+  const g = (/** @type {number} */ kind, /** @type {number} */ mode) => conformanceJson(readNode(file({ planes: ONE_PLANE, groups: [{ kind, data: explicitBody(walk, mode, [], [...xs, ...ys, ...zs]) }], version: [4, 2] }))).groups[0].shell.grid;
+  const want = [[0, 0, 0], [10, -7, 1], [3, 5, -2], [8, -13, 3], [16, -11, 2]];
+  assert.deepEqual(g(10, 0), want);
+  assert.deepEqual(g(10, 1), want); // every corner with a parallelogram or none of §9.12's
+  // kind 9 reads the same residuals otherwise: corner 3 from i0 = 1 (mode 0), then corner 4 from 1
+  assert.deepEqual(g(9, 0), [[0, 0, 0], [10, -7, 1], [3, 5, -2], [11, -8, 1], [10, -7, 1]]);
+  // a non-manifold edge: the far corner is the first triangle's with the reverse edge (checked
+  // against the test's reference encoding rather than by hand)
+  const mesh = fins();
+  for (const mode of [0, 1]) roundTrip(ONE_PLANE, mesh, { mode }, 10);
+  const e = encode(mesh);
+  assert.ok(/** @type {NonNullable<typeof e.multi>} */ (e.multi).histogram[0] < e.E);
+});
+
+test('§9.14 hostile: values near 2^52, sums past 2^53, a value pushed past 2^52, an index outside its table', () => {
+  const walk = { V: 5, T: 4, symbols: [4, 8, 0, 1], escapes: [0, 0, 0], flags: [] };
+  const Z = 2 ** 52;
+  const go = (/** @type {(number | bigint)[]} */ xs, mode = 0, /** @type {number[]} */ tables = []) => {
+    const data = explicitBody(walk, mode, tables, [...xs, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0]);
+    const bytes = file({ planes: ONE_PLANE, groups: [{ kind: 10, data }], version: [4, 2] });
+    const o = outcome(bytes);
+    return o === 'ok' ? conformanceJson(readNode(bytes)).groups[0].shell.grid.map((/** @type {number[]} */ c) => c[0]) : o;
+  };
+  const zz = (/** @type {number} */ v) => zigzagBig(BigInt(v));
+  // x: g0 = -2^52 + 1, g1 = 1, g2 = 2^52 - 1, g3 = g1 + g0 - g2 + 2^52 = 3 - 2^52; corner 4:
+  // S = (g1 + g3 - g0) + (g2 + g1 - g0) = 3 + (2^53 - 1): its partial sums pass 2^53, where binary64
+  // rounds (S + 1 = 2^53 + 3 would round to 2^53 + 4 and the prediction to 2^52 + 2)
+  const head = [zz(-Z + 1), zz(Z), zz(Z - 2), zz(Z)];
+  assert.deepEqual(go([...head, zz(-1)]), [-Z + 1, 1, Z - 1, 3 - Z, Z]);
+  assert.deepEqual(go([...head, zz(-2)]), [-Z + 1, 1, Z - 1, 3 - Z, Z - 1]);
+  assert.deepEqual(go([...head, zz(-Z)]), [-Z + 1, 1, Z - 1, 3 - Z, 1]);
+  assert.equal(go([...head, zz(0)]), 'BAD_GROUP_STRUCTURE'); // 2^52 + 1
+  assert.equal(go([...head, zz(Z)]), 'BAD_GROUP_STRUCTURE');
+  assert.equal(go([...head, zz(-Z) + 2n]), 'BAD_GROUP_STRUCTURE'); // a residual of -2^52 - 1
+  assert.equal(go([...head, 2n ** 64n - 1n]), 'BAD_GROUP_STRUCTURE');
+  // a value pushed past 2^52 earlier in the chain by a residual within it: corner 3 is
+  // g1 + g0 - g2 + r3 = 3 - 2^53 + r3
+  assert.deepEqual(go([zz(-Z + 1), zz(Z), zz(Z - 2), zz(Z - 2), zz(0)]), [-Z + 1, 1, Z - 1, 1 - Z, Z]); // S = 2^53
+  assert.equal(go([zz(-Z + 1), zz(Z), zz(Z - 2), zz(Z - 4), zz(0)]), 'BAD_GROUP_STRUCTURE'); // -2^52 - 1
+  assert.equal(go([zz(-Z + 1), zz(Z), zz(Z), zz(-Z), zz(0)]), 'BAD_GROUP_STRUCTURE'); // corner 2 at 2^52 + 1
+  // tables: x indices 0, 2, 1, 3 (residuals 0, +2, -1, +2), corner 4 ⌊(8 + 1) / 2⌋ = 4 plus its residual,
+  // in a table of 5 values (-10, -9, -7, -4, 0)
+  const tables = [5, zigzag(-10), 0, 1, 2, 3, 1, 0, 1, 0];
+  assert.deepEqual(go([0, 4, 1, 4, 0], 2, tables), [-10, -7, -9, -4, 0]);
+  assert.deepEqual(go([0, 4, 1, 4, 1], 2, tables), [-10, -7, -9, -4, -4]);
+  assert.deepEqual(go([0, 4, 1, 4, 7], 2, tables), [-10, -7, -9, -4, -10]);
+  assert.equal(go([0, 4, 1, 4, 2], 2, tables), 'BAD_GROUP_STRUCTURE'); // index 5
+  assert.equal(go([0, 4, 1, 4, 9], 2, tables), 'BAD_GROUP_STRUCTURE'); // index -1
+  assert.equal(go([0, 4, 1, 4, zz(-Z)], 2, tables), 'BAD_GROUP_STRUCTURE');
+  assert.equal(go([0, 4, 1, 4, zz(Z) + 1n], 2, tables), 'BAD_GROUP_STRUCTURE');
+  assert.equal(go([0, 4, 1, 4, 2n ** 64n - 1n], 2, tables), 'BAD_GROUP_STRUCTURE');
+  assert.equal(go([0, 4, 1, 6, 0], 2, tables), 'BAD_GROUP_STRUCTURE'); // corner 3 at index 4, corner 4 at 5
+  assert.deepEqual(go([0, 4, 1, 6, 1], 2, tables), [-10, -7, -9, 0, 0]); // 5 - 1
+});
+
+test('§9.14 hostile: residuals near 2^52 against the reference decoding, in every mode, on several walks', () => {
+  let seed = 12345;
+  const rnd = () => {
+    seed = (Math.imul(seed, 1103515245) + 12345) >>> 0;
+    return seed / 4294967296;
+  };
+  const L = 2n ** 52n;
+  const extremes = [L, L - 1n, -L, -L + 1n, 0n, 1n, -1n, L / 2n, -L / 3n];
+  const outcomes = { ok: 0, bad: 0 };
+  for (const mesh of [icosphere(1, 100), torus(6, 4), grid(4, 3), fins()]) {
+    for (const mode of [0, 1, 2, 3]) {
+      const enc = encode(mesh, { mode });
+      const w = enc.walk;
+      const grams = multiGrams(w);
+      const E = w.ex.length;
+      for (let trial = 0; trial < 12; trial++) {
+        // per corner a target value (extreme, or random within the range; with tables an index,
+        // sometimes just outside its table), the residual that reaches it from the prediction,
+        // clamped to ±2^52 (then the value misses the target, and may pass 2^52)
+        /** @type {bigint[]} */
+        const zzs = new Array(3 * E);
+        /** @type {Map<number, bigint[]>} */
+        const values = new Map();
+        const g = (/** @type {number} */ k, /** @type {number} */ a) => /** @type {bigint[]} */ (values.get(k))[a];
+        let previous = -1;
+        for (let e = 0; e < E; e++) {
+          const k = w.ex[e];
+          values.set(k, [0n, 0n, 0n]);
+          for (let a = 0; a < 3; a++) {
+            let target;
+            if (w.tables) {
+              const C = w.tables[a].length;
+              target = BigInt(Math.floor(rnd() * (C + (trial % 3 === 0 ? 0.02 * E : 0))) - (rnd() < 0.01 * (trial % 3) ? 1 : 0));
+            } else {
+              target = rnd() < 0.5 ? extremes[Math.floor(rnd() * extremes.length)] : BigInt(Math.floor((rnd() * 2 - 1) * 2 ** 52));
+            }
+            let r = target - predict10(w, grams, k, a, g, previous);
+            if (r > L) r = L;
+            if (r < -L) r = -L;
+            zzs[a * E + e] = zigzagBig(r);
+            /** @type {bigint[]} */ (values.get(k))[a] = predict10(w, grams, k, a, g, previous) + r;
+          }
+          previous = k;
+        }
+        const want = decode10(w, zzs);
+        const bytes = file({ planes: ONE_PLANE, groups: [{ kind: 10, data: [...enc.head, ...varints(zzs)] }], version: [4, 2] });
+        const got = outcome(bytes);
+        if (want === 'BAD_GROUP_STRUCTURE') {
+          assert.equal(got, want, `mode ${mode} trial ${trial}`);
+          outcomes.bad++;
+          continue;
+        }
+        assert.equal(got, 'ok', `mode ${mode} trial ${trial}`);
+        outcomes.ok++;
+        const grid = conformanceJson(readNode(bytes)).groups[0].shell.grid;
+        w.ex.forEach((k, e) => {
+          const v = /** @type {bigint[]} */ (want.get(k));
+          const c = w.tables ? v.map((x, a) => /** @type {number[][]} */ (w.tables)[a][Number(x)]) : v.map(Number);
+          assert.deepEqual(grid[e], c, `mode ${mode} trial ${trial} corner ${k}`);
+        });
+      }
+    }
+  }
+  assert.ok(outcomes.ok > 20 && outcomes.bad > 20, JSON.stringify(outcomes));
+});
+
+test('§9.14: linear time on large and hostile walks', () => {
+  const enc = encode(torus(60, 100), { mode: 1 });
+  let t0 = performance.now();
+  const f = readNode(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: enc.kind10 }], version: [4, 2] }));
+  assert.equal(/** @type {any} */ (f.meshes[0]).indices.length, 3 * 12000);
+  assert.ok(performance.now() - t0 < 3000, `${performance.now() - t0} ms`);
+  // a fan of 200,000 triangles around corner 0, every corner explicit: corner 0's edges are one
+  // long run, each later corner finds its far corners by binary search in it
+  const T = 200000;
+  const symbols = [3, ...new Array(T - 2).fill(8), 2];
+  const fan = explicitBody({ V: T + 1, T, symbols, escapes: [0, 0, 0], flags: [] }, 1);
+  t0 = performance.now();
+  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: fan }], version: [4, 2] })), 'ok');
+  // many roots over three old corners: one directed edge held by 100,000 triangles
+  const many = 100000;
+  const roots = explicitBody({ V: 3, T: many, symbols: new Array(many).fill(0), escapes: [0, 0, 0, ...new Array(many - 1).fill([3, 2, 1]).flat()], flags: [] });
+  assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: roots }], version: [4, 2] })), 'ok');
   assert.ok(performance.now() - t0 < 3000, `${performance.now() - t0} ms`);
 });

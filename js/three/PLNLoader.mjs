@@ -30,7 +30,7 @@ import { readPln } from '../src/browser.mjs';
 /** spec §9.3's kinds. */
 export const KIND_NAMES = [
   'convex solid', 'cells', 'tree', 'pseudo-convex patch', 'pseudo-concave patch', 'sealed surface',
-  'shell', 'shell tree', 'shell tree with parallelograms', 'shell walk',
+  'shell', 'shell tree', 'shell tree with parallelograms', 'shell walk', 'shell walk with multi-parallelograms',
 ];
 
 export class PLNLoader extends Loader {
