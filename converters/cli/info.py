@@ -56,6 +56,8 @@ class _Summary:
         elif isinstance(rec, PartGroup):
             kind = GroupKind(rec.kind).name.lower() if rec.kind in KINDS \
                 else f"kind{rec.kind}"
+            if rec.source is not None:
+                kind = "copy"  # spec §9.15: stored as a copy of an earlier group, decoded as that group
             self.kinds[kind] += 1
             self.planes_by_kind[kind] += len(rec.refs)
             self.largest_by_kind[kind] = max(self.largest_by_kind[kind], len(rec.refs))

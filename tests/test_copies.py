@@ -1,0 +1,101 @@
+"""Copies (kind 11, spec §9.15): a scene that places one mesh several times stores it once; every
+reader path (streaming, a pipe, random access) gives each copy its source's surface in its own object."""
+
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+
+import planefmt
+from planefmt import codec
+from planefmt.codec import encoding
+from planefmt.model import GroupKind
+from planefmt_converters import registry
+
+from corpus import CORPUS
+from streams import TrickleReader
+
+PINS = CORPUS / "gltf_scene" / "pins.glb"
+
+
+def encoded(path, tolerance: float, copies: bool = True, monkeypatch=None) -> bytes:
+    scene, _ = registry.read(str(path))
+    if not copies:
+        monkeypatch.setattr(encoding, "_repeats", lambda placed: False)
+    buf = io.BytesIO()
+    codec.encode_scene(scene, buf, tolerance=tolerance)
+    return buf.getvalue()
+
+
+def meshes(data: bytes) -> list[tuple[np.ndarray, np.ndarray]]:
+    scene = codec.decode_scene(io.BytesIO(data))
+    return [(np.asarray(n.mesh.vertices), np.asarray(n.mesh.faces)) for n in scene.nodes if n.mesh is not None]
+
+
+def test_a_scene_of_one_mesh_placed_six_times_stores_it_once(monkeypatch):
+    with_copies = encoded(PINS, 3.2e-5)
+    without = encoded(PINS, 3.2e-5, copies=False, monkeypatch=monkeypatch)
+    assert len(with_copies) < 0.7 * len(without)
+    with planefmt.open(io.BytesIO(with_copies)) as r:
+        assert r.header.version == (4, 2)
+        groups = list(r.part_groups())
+    copies = [g for g in groups if g.source is not None]
+    assert len(copies) == 5 and {g.source for g in copies} == {1}
+    assert all(g.kind == groups[1].kind and np.array_equal(g.shell.facets, groups[1].shell.facets) for g in copies)
+    assert len({g.object for g in copies}) == 5
+    a, b = meshes(with_copies), meshes(without)
+    assert len(a) == len(b) == 7
+    for (va, fa), (vb, fb) in zip(a, b):
+        assert np.array_equal(va, vb) and np.array_equal(fa, fb)
+
+
+def test_copies_read_alike_streamed_through_a_pipe_and_by_random_access(monkeypatch):
+    from planefmt.container import writer
+
+    monkeypatch.setattr(writer, "INDEX_MIN_BYTES", 0)  # an index for random access, small as the file is
+    data = encoded(PINS, 3.2e-5)
+    with planefmt.open(io.BytesIO(data)) as r:
+        streamed = list(r.part_groups())
+    with planefmt.open(TrickleReader(data)) as r:
+        piped = list(r.part_groups())
+    with planefmt.open(io.BytesIO(data)) as r:
+        random = [r.group(k) for k in reversed(range(len(streamed)))][::-1]
+    for a, b, c in zip(streamed, piped, random):
+        assert (a.index, a.object, a.kind, a.source) == (b.index, b.object, b.kind, b.source) \
+            == (c.index, c.object, c.kind, c.source)
+        assert np.array_equal(a.shell.grid, b.shell.grid) and np.array_equal(a.shell.grid, c.shell.grid)
+
+
+def test_a_writer_asked_for_no_copies_writes_every_group(tmp_path):
+    header = planefmt.Header(version=(4, 2), coding=planefmt.Coding.FLOAT64)
+    cube = np.array([[0.0, 0.0, 1.0], [np.pi, 0.0, 0.0], [np.pi / 2, 0.0, 1.0], [np.pi / 2, np.pi, 0.0],
+                     [np.pi / 2, np.pi / 2, 1.0], [np.pi / 2, 3 * np.pi / 2, 0.0]])
+    for copies, kinds in ((True, [GroupKind.CONVEX, GroupKind.COPY]), (False, [GroupKind.CONVEX, GroupKind.CONVEX])):
+        path = tmp_path / f"{copies}.pln"
+        with planefmt.Writer(path, header, copies=copies) as w:
+            w.add_planes(cube)
+            for name in ("a", "b"):
+                w.add_group(w.add_object(name), GroupKind.CONVEX, np.arange(6))
+        raw = path.read_bytes()
+        stored = []
+        pos = 8
+        while pos < len(raw):
+            length = int.from_bytes(raw[pos + 4:pos + 8], "little")
+            if raw[pos:pos + 4] == b"GRUP":
+                stored.append(GroupKind(raw[pos + 8 + 2]))  # index, object (one-byte varints), then the kind
+            pos += 12 + length
+        assert stored == kinds
+        with planefmt.open(path) as r:
+            assert [g.kind for g in r.part_groups()] == [GroupKind.CONVEX] * 2
+
+
+@pytest.mark.parametrize("major", [3, 4])
+def test_a_file_for_older_readers_repeats_the_group(tmp_path, major):
+    scene, _ = registry.read(str(PINS))
+    header = codec.encode_scene(scene, tmp_path / "p.pln", tolerance=3.2e-5, major=major)
+    assert header.version < (4, 2) or major == 4
+    with planefmt.open(tmp_path / "p.pln") as r:
+        sources = [g.source for g in r.part_groups()]
+    assert (major == 3) == all(s is None for s in sources)
