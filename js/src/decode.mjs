@@ -1,11 +1,11 @@
-/** Geometry of part groups (spec §9.4-§9.13): each group to an indexed triangle mesh. */
+/** Geometry of part groups (spec §9.4-§9.15): each group to an indexed triangle mesh. */
 import { fail } from './errors.mjs';
 import { intersectHalfSpaces, WORK_LIMIT, EXACT } from './convex.mjs';
 import { cellsSurface, treeSurface, halfSpace } from './union.mjs';
 
 /**
  * @typedef {object} GroupMesh
- * @property {number} kind
+ * @property {number} kind the group's kind (11 for a copy, whose other fields are its source's)
  * @property {Float64Array} positions64 3 per vertex, object-local
  * @property {Uint32Array} indices 3 per triangle, counter-clockwise seen from outside
  * @property {Int32Array} faceRefs local face reference per triangle, -1 for a free triangle
@@ -36,10 +36,18 @@ function planesOf(group, table) {
  * @param {import('./groups.mjs').Group} group
  * @param {Float64Array} table the plane table
  * @param {import('./header.mjs').Header} header for the merge distance of polytopes (§9.4)
+ * @param {(GroupMesh | null)[]} [earlier] the surfaces of the groups before it, for a copy (kind 11)
  * @returns {GroupMesh | null}
  */
-export function decodeGroup(group, table, header) {
+export function decodeGroup(group, table, header, earlier = []) {
   if (group.skipped) return null;
+  if (group.kind === 11) {
+    // §9.15: the source's surface (its references are the copy's), in the copy's object; the
+    // arrays are shared, not copied
+    const src = earlier[group.data.source];
+    if (!src) throw new Error(`copy ${group.index}: its source ${group.data.source} is not decoded`);
+    return { ...src, kind: 11 };
+  }
   const planes = planesOf(group, table);
   const m = group.refs.length;
   /** @type {import('./convex.mjs').Budget} */

@@ -15,11 +15,12 @@ import { readShellWalk } from './shellwalk.mjs';
  * @property {number} kind
  * @property {Uint32Array} refs plane-table indices
  * @property {Uint8Array} roles 1 where the reference's role bit is set, one byte per reference
- * @property {boolean} skipped a kind of a newer minor version (§9.3): no kind data read
- * @property {any} data the kind data: cells, tree, or a Shell (kinds 5-10)
+ * @property {boolean} skipped a kind of a newer minor version (§9.3), or a copy of such a group
+ *   (§9.15 step 3): no kind data read (a copy's source is read)
+ * @property {any} data the kind data: cells, tree, a Shell (kinds 5-10), or {source} (kind 11)
  */
 
-/** The newest minor version this reader knows, per major (§5, §9.3): 4.2 (kind 10), 3.4 (kind 8). */
+/** The newest minor version this reader knows, per major (§5, §9.3): 4.2 (kinds 10, 11), 3.4 (kind 8). */
 export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2 };
 
 /**
@@ -28,8 +29,8 @@ export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2 };
  */
 function kindOfVersion(kind, [major, minor]) {
   if (kind <= 4) return true;
-  // kinds 0-8 in 4.0, 0-9 in 4.1, 0-10 in 4.2 (and later minors)
-  if (major >= 4) return kind <= (minor >= 2 ? 10 : minor >= 1 ? 9 : 8);
+  // kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later minors)
+  if (major >= 4) return kind <= (minor >= 2 ? 11 : minor >= 1 ? 9 : 8);
   return major === 3 && kind <= 8 && minor >= kind - 4;
 }
 
@@ -39,6 +40,7 @@ function kindOfVersion(kind, [major, minor]) {
  * @param {object} ctx
  * @param {[number, number]} ctx.version
  * @param {number} ctx.groups groups read before
+ * @param {Group[]} ctx.earlier the groups read before, in file order: the sources a copy (kind 11) may name
  * @param {number} ctx.objects objects read before
  * @param {number} ctx.planes planes defined before this chunk
  * @param {import('./compression.mjs').Limits} ctx.limits
@@ -82,7 +84,11 @@ export function readGroup(payload, ctx) {
   const { refs, roles } = major === 1 ? readBodyV1(b, ctx) : readBody(b, ctx);
   const m = refs.length;
   let data = null;
-  if (!skipped) {
+  if (!skipped && kind === 11) {
+    const copy = readCopy(b, index, refs, roles, ctx.earlier);
+    skipped = copy.skipped;
+    data = { source: copy.source };
+  } else if (!skipped) {
     if (kind === 0 || kind === 3 || kind === 4) {
       if (b.left > 0) fail('BAD_PAYLOAD', `${b.left} bytes after the roles of a kind ${kind} group`);
     } else if (kind === 1) data = readCells(b, m, major, ctx.limits);
@@ -93,6 +99,35 @@ export function readGroup(payload, ctx) {
     else data = readShellTree(b, roles, kind === 8);
   }
   return { index, object, kind, refs, roles, skipped, data };
+}
+
+/**
+ * §9.15, a copy's kind data, with its checks in their order: the source's varint and nothing after
+ * it (BAD_PAYLOAD); a source not before the copy, or itself a copy (BAD_GROUP_STRUCTURE); a skipped
+ * source (the copy is skipped too); references and role bits other than the source's
+ * (BAD_GROUP_STRUCTURE).
+ * @param {Cursor} b at the kind data
+ * @param {number} index the copy's index
+ * @param {Uint32Array} refs @param {Uint8Array} roles the copy's common body
+ * @param {Group[]} earlier the groups before the copy
+ * @returns {{source: number, skipped: boolean}}
+ */
+function readCopy(b, index, refs, roles, earlier) {
+  const s = b.varint();
+  if (b.left > 0) fail('BAD_PAYLOAD', `${b.left} bytes after a copy's source`);
+  if (s >= index) fail('BAD_GROUP_STRUCTURE', `copy ${index} of group ${s}, not an earlier group`);
+  const src = earlier[s];
+  if (src.kind === 11) fail('BAD_GROUP_STRUCTURE', `copy ${index} of group ${s}, itself a copy`);
+  if (src.skipped) return { source: s, skipped: true };
+  const m = refs.length;
+  if (src.refs.length !== m) fail('BAD_GROUP_STRUCTURE', `copy ${index}: ${m} references, its source ${src.refs.length}`);
+  for (let i = 0; i < m; i++) {
+    if (refs[i] !== src.refs[i]) fail('BAD_GROUP_STRUCTURE', `copy ${index}: reference ${i} is ${refs[i]}, its source's ${src.refs[i]}`);
+  }
+  for (let i = 0; i < m; i++) {
+    if (roles[i] !== src.roles[i]) fail('BAD_GROUP_STRUCTURE', `copy ${index}: role bit ${i} is ${roles[i]}, its source's ${src.roles[i]}`);
+  }
+  return { source: s, skipped: false };
 }
 
 /**

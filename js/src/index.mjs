@@ -21,6 +21,7 @@ export { PlnError };
  * @typedef {object} MeshGroup
  * @property {number} kind
  * @property {number} index the group's index in the file
+ * @property {number | null} source a copy's (kind 11) source group, whose surface it has (§9.15); else null
  * @property {Float32Array} positions 3 per vertex, object-local
  * @property {Float64Array} positions64 the same in binary64, as decoded
  * @property {Uint32Array} indices 3 per triangle, counter-clockwise seen from outside
@@ -56,21 +57,30 @@ function read(bytes, options) {
   const decode = options.decode ?? true;
   /** @type {Map<number, Uint8Array>} the last cOLR of each group applies (§10.1) */
   const colourOf = new Map(c.colours.map((col) => [col.group, col.rgba]));
+  /** @type {(import('./decode.mjs').GroupMesh | null)[]} the surfaces decoded so far, for copies (§9.15) */
+  const surfaces = [];
   /** @type {(MeshGroup | null)[]} per group in file order; null: not decoded */
-  const meshes = c.groups.map((g) => {
-    if (!decode) return null;
-    const mesh = decodeGroup(g, c.planes, c.header);
-    if (!mesh) return null;
-    return {
+  const meshes = [];
+  for (const g of c.groups) {
+    const mesh = decode ? decodeGroup(g, c.planes, c.header, surfaces) : null;
+    surfaces.push(mesh);
+    if (!mesh) {
+      meshes.push(null);
+      continue;
+    }
+    const source = g.kind === 11 ? g.data.source : null;
+    meshes.push({
       kind: g.kind,
       index: g.index,
-      positions: new Float32Array(mesh.positions64),
+      source,
+      // a copy shares its source's arrays
+      positions: source !== null ? /** @type {MeshGroup} */ (meshes[source]).positions : new Float32Array(mesh.positions64),
       positions64: mesh.positions64,
       indices: mesh.indices,
       faceColors: colourOf.has(g.index) ? triangleColours(mesh, /** @type {Uint8Array} */ (colourOf.get(g.index))) : null,
       faceRefs: mesh.faceRefs,
-    };
-  });
+    });
+  }
   const objects = c.objects.map((o) => ({
     name: o.name,
     parent: o.parent,

@@ -84,7 +84,7 @@ export function readContainer(bytes, options = {}) {
       } else if (type === 'GRUP') {
         listed.push({ offset, type, ordinal: groups.length });
         const g = readGroup(payload, {
-          version: h.version, groups: groups.length, objects: objects.length, planes: table.count, limits, codecs,
+          version: h.version, groups: groups.length, earlier: groups, objects: objects.length, planes: table.count, limits, codecs,
         });
         if (g.skipped) findings.add('SKIPPED_GROUP_KIND');
         groups.push(g);

@@ -37,6 +37,8 @@ function groupJson(g) {
   /** @type {Record<string, any>} */
   const out = { index: g.index, object: g.object, kind: g.kind, refs: [...g.refs], bounding: [] };
   g.roles.forEach((r, i) => r && out.bounding.push(i));
+  // a copy is listed as stored: its source, no kind-specific field (also where it is skipped, §9.15 step 3)
+  if (g.kind === 11 && g.data) out.source = g.data.source;
   if (g.skipped) return out;
   if (g.kind === 1) out.cells = g.data.cells;
   else if (g.kind === 2) out.tree = g.data.tree;
@@ -44,7 +46,7 @@ function groupJson(g) {
     const s = g.data;
     out.vertex_planes = triples(s.cornerPlanes, s.V, null);
     out.facets = facets(s);
-  } else if (g.kind >= 6) {
+  } else if (g.kind >= 6 && g.kind <= 10) {
     const s = g.data;
     const explicit = [];
     const grid = [];
@@ -97,7 +99,8 @@ function geometryJson(file) {
         hi[r] = Math.max(hi[r], w);
       }
     }
-    return summary(mesh.positions64, mesh.indices, mesh.kind);
+    // a copy's surface is its source's, placed by the copy's object (§9.15)
+    return summary(mesh.positions64, mesh.indices, c.groups[mesh.source ?? i].kind);
   });
   return { world_bbox: lo[0] <= hi[0] ? [lo, hi] : null, groups };
 }

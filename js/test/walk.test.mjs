@@ -995,7 +995,7 @@ test('§9.3, §5: kind 9 in 4.1 and later minors; in 4.0 and 3.4 unknown; kind 1
   assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: enc.kind10 }], version: [3, 4] })), 'UNKNOWN_GROUP_KIND');
   // kind 10 read in 4.2: an empty kind data ends inside its counts
   assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: [] }], version: [4, 2] })), 'BAD_PAYLOAD');
-  // kind 12, a kind of no version (11 is kind 11 of main's work in progress, §9.15): unknown in
+  // kind 12, a kind of no version (11 is a copy, §9.15, tested in copies.test.mjs): unknown in
   // 4.2 (the newest minor known), skipped in 4.3 with its common body checked
   assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 12, data: [1, 2, 3] }], version: [4, 2] })), 'UNKNOWN_GROUP_KIND');
   assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 255, data: [] }], version: [4, 2] })), 'UNKNOWN_GROUP_KIND');

@@ -13,9 +13,10 @@
  * MeshStandardMaterial with flat shading, both sides drawn, one per mesh (a viewer may recolour each part).
  *
  * userData of the returned group: `header`, `chunks`, `metadata` (mETA), `findings`, `groups`
- * (per group in file order: {index, kind, kindName, object, references, triangles}), `upAxis`
- * ('Y', 'Z' or null) and `file` (readPln's result). A mesh's userData: {groupIndex, kind,
- * kindName, object}. The loader does not turn a Z-up file Y-up; a viewer may (§10.3).
+ * (per group in file order: {index, kind, kindName, object, references, triangles, source}, source
+ * a copy's source group or null), `upAxis` ('Y', 'Z' or null) and `file` (readPln's result). A
+ * mesh's userData: {groupIndex, kind, kindName, object, source}. A copy (kind 11, §9.15) is a mesh
+ * of its source's triangles in the copy's object (placed by its transform), coloured by its own cOLR. The loader does not turn a Z-up file Y-up; a viewer may (§10.3).
  *
  * Decoding uses ../src/browser.mjs (fflate inflates, brotli-dec-wasm decodes Brotli): in a browser,
  * an import map resolves `three`, `fflate` and `brotli-dec-wasm/web`; in Node, node_modules does. An invalid file raises readPln's PlnError
@@ -31,6 +32,7 @@ import { readPln } from '../src/browser.mjs';
 export const KIND_NAMES = [
   'convex solid', 'cells', 'tree', 'pseudo-convex patch', 'pseudo-concave patch', 'sealed surface',
   'shell', 'shell tree', 'shell tree with parallelograms', 'shell walk', 'shell walk with multi-parallelograms',
+  'copy',
 ];
 
 export class PLNLoader extends Loader {
@@ -101,6 +103,7 @@ export class PLNLoader extends Loader {
         kindName: KIND_NAMES[g.kind] ?? `kind ${g.kind}`,
         object: g.object,
         references: g.refs.length,
+        source: g.kind === 11 && g.data ? g.data.source : null,
         triangles: file.meshes[g.index] ? /** @type {any} */ (file.meshes[g.index]).indices.length / 3 : 0,
       })),
       file,
@@ -157,6 +160,8 @@ function groupMesh(g, objectName) {
   });
   const mesh = new Mesh(geometry, material);
   mesh.name = `group ${g.index}`;
-  mesh.userData = { groupIndex: g.index, kind: g.kind, kindName: KIND_NAMES[g.kind] ?? `kind ${g.kind}`, object: objectName };
+  mesh.userData = {
+    groupIndex: g.index, kind: g.kind, kindName: KIND_NAMES[g.kind] ?? `kind ${g.kind}`, object: objectName, source: g.source,
+  };
   return mesh;
 }

@@ -136,7 +136,7 @@ function statsOf(root, name, size) {
     groups: groups.length,
     triangles: groups.reduce((/** @type {number} */ s, /** @type {any} */ g) => s + g.triangles, 0),
     vertices,
-    groupTable: groups.map((/** @type {any} */ g) => ({ index: g.index, kind: g.kind, kindName: g.kindName, references: g.references, triangles: g.triangles })),
+    groupTable: groups.map((/** @type {any} */ g) => ({ index: g.index, kind: g.kind, kindName: g.kindName, references: g.references, triangles: g.triangles, source: g.source })),
     chunkBytes,
   };
 }
@@ -170,7 +170,7 @@ function showStats(s, swatches) {
   const gBody = /** @type {HTMLElement} */ (document.querySelector('#groups tbody'));
   gBody.replaceChildren(...s.groupTable.map((/** @type {any} */ g) => row([
     swatches.has(g.index) ? `<span class="swatch" style="background:${swatches.get(g.index)}"></span>${g.index}` : String(g.index),
-    `${g.kindName} (${g.kind})`, int(g.references), int(g.triangles)], [false, false, true, true], true)));
+    g.source === null || g.source === undefined ? `${g.kindName} (${g.kind})` : `${g.kindName} of ${g.source} (${g.kind})`, int(g.references), int(g.triangles)], [false, false, true, true], true)));
   const cBody = /** @type {HTMLElement} */ (document.querySelector('#chunks tbody'));
   const entries = Object.entries(s.chunkBytes).sort((a, b) => b[1].bytes - a[1].bytes);
   cBody.replaceChildren(...entries.map(([type, e]) => row([type, int(e.chunks), int(e.bytes), `${(100 * e.bytes / s.size).toFixed(1)} %`],
