@@ -702,9 +702,10 @@ def test_kind_10_by_version():
         assert read(pln(PLANE, [group], minor=minor))["error"] == "UNKNOWN_GROUP_KIND"
     got = read(pln(PLANE, [group], minor=3))  # a newer minor: read, and said so
     assert got["groups"][0]["shell"] == shell and "NEWER_MINOR_VERSION" in got["findings"]
-    # kind 11: unknown in 4.2, skipped in 4.3 (its common body still checked, its group counted)
-    assert read(pln(PLANE, [(11, [0], [], b"\x07")], minor=2))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln(PLANE, [(11, [0], [], b"\x07"), group], minor=3))
+    # kind 12: unknown in 4.2, skipped in 4.3 (its common body still checked, its group counted);
+    # kind 11 is the copy of §9.15, a kind of 4.2 (tests/test_independent_copies_read.py)
+    assert read(pln(PLANE, [(12, [0], [], b"\x07")], minor=2))["error"] == "UNKNOWN_GROUP_KIND"
+    got = read(pln(PLANE, [(12, [0], [], b"\x07"), group], minor=3))
     assert "SKIPPED_GROUP_KIND" in got["findings"] and "shell" not in got["groups"][0]
     assert got["groups"][1]["shell"] == shell
     # kind 9 is still a kind of 4.2

@@ -65,6 +65,13 @@ was added from the 4.2 text of §9.14 alone, before the 4.2 golden files
 existed: kind 9 with an explicit corner that has parallelograms (over the
 triangles around it whose far corner is decoded) predicted by their average,
 rounded toward -infinity after adding half the count; reported as kind 9 is.
+Kind 11 (version 4.2, pln.md §9.15, copies) was added from the 4.2 text of
+§9.15 alone: one varint, the index of an earlier source group that is not
+itself a copy, whose references and role bits the copy must repeat; reported
+as stored, with "source" and no kind-specific field.  Since this reader never
+looks back, it keeps each group's kind and whether it was skipped, besides
+the references and role bits it reports anyway (its output has no geometry,
+so it keeps no surface).
 
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
@@ -133,12 +140,13 @@ KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
 # kind 7, the shell tree (§8.10), in files of version 3.3 and later; pln.md
 # §9.3: kind 8 in 3.4 and later, kind 9, the shell walk (pln.md §9.13), in 4.1
 # and later, kind 10, the shell walk with multi-parallelograms (pln.md
-# §9.14), in 4.2 and later; in older files each is a kind the file's version
-# does not have
+# §9.14), and kind 11, the copy (pln.md §9.15), in 4.2 and later; in older
+# files each is a kind the file's version does not have
 SEALED_KIND, SHELL_KIND, SHELL_TREE_KIND, PARALLELOGRAM_KIND, WALK_KIND = 5, 6, 7, 8, 9
 MULTI_WALK_KIND = 10
+COPY_KIND = 11  # pln.md §9.15, the copy, in 4.2 and later
 KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3), PARALLELOGRAM_KIND: (3, 4),
-              WALK_KIND: (4, 1), MULTI_WALK_KIND: (4, 2)}
+              WALK_KIND: (4, 1), MULTI_WALK_KIND: (4, 2), COPY_KIND: (4, 2)}
 MULTI_PARALLELOGRAMS = 4  # pln.md §9.14: a corner has at most four parallelograms
 SHELL_COORD_LIMIT = 2**52  # pln-3 §8.9: each grid step and coordinate of magnitude at most 2^52
 SHELL_GRID_BYTES = 32  # pln-3 §8.9: origin x, y, z and step s, f64 each
@@ -552,6 +560,11 @@ class Reader:
         self.objects = []
         self.groups = []  # JSON dicts
         self.group_refcounts = []
+        # pln.md §9.15: what a later copy needs of each group, kept as it is read
+        # (this reader never looks back in its input): its kind and whether it
+        # was skipped; its references and role bits are in self.groups
+        self.group_kinds = []
+        self.group_skipped = []
         self.colours = []
         self.metadata = {}
         self.findings = []
@@ -1045,8 +1058,12 @@ class Reader:
         bounding = [i for i in range(m) if (roles[i >> 3] >> (i & 7)) & 1]
 
         g = {"index": index, "object": obj, "kind": kind, "refs": refs, "bounding": bounding}
+        skipped = not known
         if not known:
             self.finding("SKIPPED_GROUP_KIND")  # kind data is not interpreted
+        elif kind == COPY_KIND:
+            g["source"] = source = self.read_copy(c, index, refs, bounding)
+            skipped = self.group_skipped[source]
         elif kind in (0, 3, 4):
             if c.remaining():
                 raise PlnError("BAD_PAYLOAD",
@@ -1065,7 +1082,40 @@ class Reader:
             g["shell"] = self.read_shell_walk(c, m, set(bounding), kind == MULTI_WALK_KIND)
         self.groups.append(g)
         self.group_refcounts.append(m)
+        self.group_kinds.append(kind)
+        self.group_skipped.append(skipped)
         self.chunk_list.append((offset, b"GRUP", index))
+
+    def read_copy(self, c, index, refs, bounding):
+        """pln.md §9.15, kind 11: one varint s, the index of the source group,
+        checked in the order §9.15 lists: (1) the body ends inside s or s is a
+        bad varint, or bytes follow it: BAD_PAYLOAD; (2) s not below this
+        group's index, or a source of kind 11: BAD_GROUP_STRUCTURE; (3) a
+        source whose kind was skipped (§9.3): the copy is skipped too
+        (SKIPPED_GROUP_KIND), and (4) is not checked; (4) references or role
+        bits other than the source's: BAD_GROUP_STRUCTURE.  s is "one varint",
+        not a varint32: a value of 2^32 or more is not below the index (2).
+        Returns s; the group is reported as stored, with "source": s."""
+        s = c.varint("source")
+        if c.remaining():
+            raise PlnError("BAD_PAYLOAD", "%d bytes after a copy's source" % c.remaining())
+        if s >= index:
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "copy %d names source %d, not an earlier group" % (index, s))
+        if self.group_kinds[s] == COPY_KIND:
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "copy %d names group %d, itself a copy" % (index, s))
+        if self.group_skipped[s]:
+            self.finding("SKIPPED_GROUP_KIND")
+            return s
+        source = self.groups[s]
+        if refs != source["refs"]:
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "copy %d: references other than its source %d's" % (index, s))
+        if bounding != source["bounding"]:
+            raise PlnError("BAD_GROUP_STRUCTURE",
+                           "copy %d: role bits other than its source %d's" % (index, s))
+        return s
 
     def read_group_head_v3(self, p):
         """pln-3 §8.2: index, object (varint32), kind, compression (u8),
