@@ -12,8 +12,9 @@ merged by exact position) and every codec:
   bbox diagonal), the whole file with its chunks and object records, as
   ``pln convert`` writes it with its default scheme (convex bodies of up to
   256 planes as convex groups, everything else as one shell group per object,
-  as a shell tree where smaller: versions 3.2 to 3.4, spec/pln.md §9.10 to
-  §9.12; bit-packed or predicted plane codes,
+  a shell walk of kind 9 or 10 where smaller: spec/pln.md §9.10 to §9.14; a
+  group that repeats an earlier one as a copy, §9.15; bit-packed or predicted
+  plane codes,
   varint group bodies and chunk heads, ``--compact``),
   payloads deflated where that saves bytes (spec §6, ``--compress``); the
   codec picks its coding (quantized or float planes). The source scene is
