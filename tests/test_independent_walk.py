@@ -405,11 +405,12 @@ def test_kind_9_by_minor_version(read):
     group = (9, [0], [], data)
     assert read(pln_file(PLANE, [group], minor=1))["groups"][0]["shell"] == shell
     assert read(pln_file(PLANE, [group], minor=0))["error"] == "UNKNOWN_GROUP_KIND"
-    # 4.3 is newer than either reader knows (4.2 since §9.14): kind 9 read, kind 11 skipped
+    # 4.3 is newer than either reader knows (4.2 since §9.14): kind 9 read, kind 12 skipped (kind 11
+    # is a copy since §9.15)
     got = read(pln_file(PLANE, [group], minor=3))
     assert "shell" in got["groups"][0] and "NEWER_MINOR_VERSION" in got["findings"]
     assert read(pln_file(PLANE, [(10, [0], [], b"\x01")], minor=1))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln_file(PLANE, [(11, [0], [], b"\x01"), group], minor=3))
+    got = read(pln_file(PLANE, [(12, [0], [], b"\x01"), group], minor=3))
     assert "SKIPPED_GROUP_KIND" in got["findings"] and "shell" not in got["groups"][0]
 
 
