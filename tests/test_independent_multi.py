@@ -496,8 +496,9 @@ def test_kind_10_by_minor_version():
         assert read(pln(PLANE, [group], minor=minor))["error"] == "UNKNOWN_GROUP_KIND"
     got = read(pln(PLANE, [group], minor=3))  # a newer minor: read, and reported
     assert got["groups"][0]["shell"] == walk.shell() and "NEWER_MINOR_VERSION" in got["findings"]
-    assert read(pln(PLANE, [(11, [0], [], b"\x01")], minor=2))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln(PLANE, [(11, [0], [], b"\x01"), group], minor=3))
+    # kind 12: a kind 4.2 lacks (kind 11 is a copy since §9.15, tests/test_independent_copies.py)
+    assert read(pln(PLANE, [(12, [0], [], b"\x01")], minor=2))["error"] == "UNKNOWN_GROUP_KIND"
+    got = read(pln(PLANE, [(12, [0], [], b"\x01"), group], minor=3))
     assert "SKIPPED_GROUP_KIND" in got["findings"] and "shell" not in got["groups"][0]
     assert got["groups"][1]["shell"] == walk.shell()
 

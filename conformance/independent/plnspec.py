@@ -27,6 +27,11 @@ after it, with one rule changed, the prediction of an explicit corner (the round
 four parallelograms over the triangles around it, from a map of each directed edge to the first
 triangle that has it; kind 9's prediction where there is none).
 
+Version 4.2's kind 11 (§9.15, copies) was added from the text of §9.15 and §9.3: one varint, the
+source group's index, checked in §9.15's order (the varint and nothing after it; an earlier source,
+not a copy; a skipped source skips the copy; the same references and role bits), and listed as
+stored with "source" (conformance/README.md, the groups row).
+
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
 comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
 """
@@ -338,6 +343,8 @@ class Reader:
         self.objects: list[dict] = []
         self.groups: list[dict] = []
         self.group_refs: list[int] = []  # ref_count of every group read, skipped ones included
+        self.group_roles: list[list[int]] = []  # role bits of every group read (§9.15 compares them)
+        self.group_skipped: list[bool] = []  # whether its kind data was skipped (§9.3, §9.15 step 3)
         self.colours: list[dict] = []
         self.metadata: dict[str, str] = {}
         self.chunks: list[tuple[int, bytes, int]] = []  # (offset, type, ordinal) of OBJT/PLNS/GRUP
@@ -682,7 +689,8 @@ class Reader:
     # §9
     def kinds(self) -> set[int]:
         if self.major >= 4:
-            return set(range(9 + min(self.minor, 2)))  # §9.3: kinds 0-8 in 4.0, 0-9 in 4.1, 0-10 in 4.2 (and later)
+            # §9.3: kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later: SPEC_NOTES 29)
+            return set(range(9 + min(self.minor, 1) + 2 * (self.minor >= 2)))
         if self.major == 3:
             return set(range(5 + min(self.minor, 4)))  # §9.3: 3.1 adds kind 5, 3.2 kind 6, 3.3 kind 7, 3.4 kind 8
         return set(range(5))
@@ -735,9 +743,39 @@ class Reader:
             group["shell"] = self.shell_tree(b, refs, roles, parallelogram=kind == 8)
         elif kind in (9, 10):
             group["shell"] = self.shell_walk(b, refs, roles, multi=kind == 10)
+        elif kind == 11:
+            group["source"], skipped = self.copy(b, index, refs, roles)
+            if skipped:
+                self.finding("SKIPPED_GROUP_KIND")
         self.chunks.append((offset, b"GRUP", index))
         self.groups.append(group)
         self.group_refs.append(len(refs))
+        self.group_roles.append(roles)
+        self.group_skipped.append(skipped)
+
+    # §9.15 (added at version 4.2, from §9.15 and §9.3)
+    def copy(self, b: Cursor, index: int, refs: list[int], roles: list[int]) -> tuple[int, bool]:
+        """Kind 11: one varint, the index of the source group, checked in §9.15's order. Returns the
+        source and whether the copy is skipped (its source's kind was). Listed as stored: kind 11
+        with "source" (README's groups row), also where it is skipped (SPEC_NOTES 48)."""
+        # 1. the varint (a full varint, not a varint32: SPEC_NOTES 46), then nothing after it
+        s = b.varint("the source")
+        if b.left():
+            fail("BAD_PAYLOAD", f"{b.left()} bytes after the source")  # not §12.1 item 6's code (SPEC_NOTES 45)
+        # 2. an earlier group, not a copy (by its stored kind, even a copy that was skipped: SPEC_NOTES 47)
+        if s >= index:
+            fail("BAD_GROUP_STRUCTURE", f"source {s} not below the copy's index {index}")
+        if self.groups[s]["kind"] == 11:
+            fail("BAD_GROUP_STRUCTURE", f"source {s} is a copy")
+        # 3. a skipped source: the copy is skipped too, and step 4 is not taken (SPEC_NOTES 48)
+        if self.group_skipped[s]:
+            return s, True
+        # 4. the same references, in the same order, and the same role bits
+        if refs != self.groups[s]["refs"]:
+            fail("BAD_GROUP_STRUCTURE", f"references {refs}, the source's {self.groups[s]['refs']}")
+        if roles != self.group_roles[s]:
+            fail("BAD_GROUP_STRUCTURE", "role bits other than the source's")
+        return s, False
 
     def common_body(self, b: Cursor) -> tuple[list[int], list[int]]:
         """§9.2 (versions 2 and 3)."""
