@@ -2,12 +2,13 @@
 
 For every corpus mesh at draco-14's measured error on it (read from the per-mesh table of
 ``docs/benchmarks.md``, the draco-14 column), the default encoder writes the file; for each shell walk
-group in it, the kind data of both walk kinds (9, spec §9.13; 10, §9.14) in every coordinate mode is
-built (``shellwalk.shell_walk_fields(shell, mode, kind)``)
+group in it, the kind data of every coding the encoder tries (``shellwalk.codings``: kind 9, spec §9.13,
+in every coordinate mode, kind 10, §9.14, in those without bit 0) is built
+(``shellwalk.shell_walk_fields(shell, mode, kind)``)
 and compressed whole with Brotli at quality 11, the writer's coder: the *oracle* is the smallest of
 them. Each *ranking* picks a mode from its own score, and loses the oracle's bytes less the picked
 mode's. Rankings: deflate at levels 1, 6 and 9 and Brotli at quality 1 and 5 of the tables and
-coordinates; Brotli at quality 11 of the same (what the oracle would cost to run, nearly); and
+coordinates; Brotli at quality 10 and 11 of the same (what the oracle would cost to run, nearly); and
 ``encoder``, what ``shellwalk._smallest`` picks (deflate at ``RANK_LEVEL``, Brotli deciding the best
 two where they are within ``RANK_CLOSE``). Printed: the meshes where a ranking loses more than 20
 bytes, then per ranking the bytes lost over the corpus and the seconds its scores took.
@@ -66,6 +67,7 @@ RANKINGS = {
     "deflate-9": lambda f: len(zlib.compress(part(f), 9)),
     "brotli-1": lambda f: len(brotli.compress(part(f), quality=1)),
     "brotli-5": lambda f: len(brotli.compress(part(f), quality=5)),
+    "brotli-10": lambda f: len(brotli.compress(part(f), quality=10)),
     "brotli-11": lambda f: len(brotli.compress(part(f), quality=11)),
 }
 
@@ -80,8 +82,7 @@ def main() -> int:
         with planefmt.open(io.BytesIO(buf.getvalue())) as r:
             shells = [g.shell for g in r.part_groups() if g.kind in shellwalk.WALK_KINDS]
         for shell in shells:
-            options = [shellwalk.shell_walk_fields(shell, m, kind) for kind in shellwalk.WALK_KINDS
-                       for m in shellwalk.MODES]
+            options = [shellwalk.shell_walk_fields(shell, m, kind) for kind, m in shellwalk.codings(shellwalk.WALK_KINDS)]
             if "mode" not in options[0]:
                 continue
             true = [len(brotli.compress(b"".join(f.values()), quality=11)) for f in options]

@@ -11,6 +11,7 @@ Python, slowly.
 from __future__ import annotations
 
 import collections
+import hashlib
 import itertools
 import zlib
 
@@ -274,16 +275,14 @@ def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarr
 
 
 #: Deflate level that ranks a walk's codings (kind and mode), and how many of the best (within what
-#: ratio of the best) the file's own coder then decides between: over the corpus at Draco-14's error,
-#: with kinds 9 and 10 in four modes each, deflate at level 1 picks codings 1,014 bytes worse than
-#: Brotli at quality 11 would, level 6 480 (quadknot.obj 342, capsule.obj 552 at level 1), level 6
-#: with Brotli deciding between the best two within 5 % 424, between the best three within 10 % 77,
-#: Brotli ranking all eight 73 (bench/walk_modes.py; the three cost 2.7 s of Brotli over the corpus,
-#: most of it on bun_zipper.ply's 150 kB of coordinates).
-RANK_LEVEL, RANK_TOP, RANK_CLOSE = 6, 3, 1.10
-#: Largest part Brotli decides on at its densest quality, 11 (about 2 s a megabyte, and an encode
-#: ranks several shells); a larger one is decided at quality 9, 50 times faster: at 11,
-#: smooth_dense/bun_zipper.ply's 150 kB of coordinates took 10 s of its 14 s encode.
+#: ratio of the best) Brotli, the file's coder, then decides between: over the corpus at Draco-14's
+#: error, deflate at level 1 picks codings 998 bytes worse than the smallest body (capsule.obj 552
+#: bytes, quadknot.obj 342), level 6 464; Brotli deciding between the best two within 10 % 17, in
+#: 0.09 s of ranking over the whole corpus (bench/walk_modes.py). Brotli decides at
+#: quality 10, which ranks these parts as 11 does at 2.6 times the speed (quality 9 and below do not:
+#: 5 and 9 took the wrong mode on quadknot.obj), and at 9 above RANK_DENSEST_BYTES: 10 on
+#: bun_zipper.ply's 150 kB of coordinates took seconds of an encode that ranks several shells.
+RANK_LEVEL, RANK_TOP, RANK_CLOSE = 6, 2, 1.10
 RANK_DENSEST_BYTES = 64 * 1024
 
 
@@ -298,14 +297,44 @@ def _smallest(options: list[dict[str, bytes]]) -> dict[str, bytes]:
     close = [options[i] for i in order if sizes[i] <= RANK_CLOSE * sizes[order[0]]]
     if len(close) == 1:
         return close[0]
-    def brotli_size(f: dict[str, bytes]) -> int:
-        part = f["tables"] + f["coordinates"]
-        return len(brotli.compress(part, quality=11 if len(part) <= RANK_DENSEST_BYTES else 9))
-    return min(close, key=brotli_size)
+    return min(close, key=lambda f: _brotli_size(f["tables"] + f["coordinates"]))
+
+
+#: Brotli sizes of the parts ranked lately, by digest: an encode ranks the walks of several candidate
+#: shells (one per plane coding tried), whose explicit corners are often the same bytes.
+_SIZES: collections.OrderedDict[bytes, int] = collections.OrderedDict()
+
+
+def forget() -> None:
+    """Drop the bodies and sizes kept from earlier encodes."""
+    _SIZES.clear()
+    _BODIES.clear()
+
+
+def _brotli_size(part: bytes) -> int:
+    key = hashlib.blake2b(part, digest_size=16).digest()
+    if key in _SIZES:
+        _SIZES.move_to_end(key)
+        return _SIZES[key]
+    size = _SIZES[key] = len(brotli.compress(part, quality=10 if len(part) <= RANK_DENSEST_BYTES else 9))
+    while len(_SIZES) > 64:
+        _SIZES.popitem(last=False)
+    return size
 
 
 #: The shell walk kinds: kind 9 (spec §9.13) and kind 10 (§9.14), which differ only in predictions.
+#: The encoder writes kind 10 without mode bit 0 only: the bit decides kind 10's corners without
+#: parallelograms alone, a few per mesh, and over the corpus at 1e-6, 1e-4 and Draco-14's error no kind
+#: 10 group was smallest with it; its near copies of the bit-0-clear bodies only crowded the ranking's
+#: best two (on quadknot.obj they pushed out the smallest coding, 7 % smaller).
 WALK_KINDS = (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI)
+
+
+def codings(kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[tuple[GroupKind, int], ...]:
+    """The (kind, mode) pairs the encoder tries for a walk of one of ``kinds``: ``mode`` alone if given,
+    else every mode of kind 9 and kind 10's without bit 0 (see :data:`WALK_KINDS`)."""
+    return tuple((k, m) for k in kinds for m in (MODES if mode is None else (mode,))
+                 if mode is not None or k == GroupKind.SHELL_WALK or not m & MODE_PARALLELOGRAM)
 
 
 def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[GroupKind, dict[str, bytes]]:
@@ -332,8 +361,7 @@ def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None)
     if not explicit.any():
         # Nothing to predict: the kinds' bodies are alike, and the first needs the lower version.
         return kinds[0], out
-    kind, coordinates = _coordinates(shell, tri, links, new,
-                                     tuple((k, m) for k in kinds for m in (MODES if mode is None else (mode,))))
+    kind, coordinates = _coordinates(shell, tri, links, new, codings(kinds, mode))
     return kind, {**out, **coordinates}
 
 
@@ -341,7 +369,7 @@ def shell_walk_fields(shell: Shell, mode: int | None = None, kind: GroupKind = G
     """The fields of ``shell`` (a shell tree whose links are a depth-first walk, as
     ``groups.shells.spanning_walk`` makes them) as a ``kind`` body (SHELL_WALK, spec §9.13, or
     SHELL_WALK_MULTI, §9.14), by name in body order; its explicit corners in ``mode``, or in whichever
-    of the four compresses smallest."""
+    of the modes the encoder tries compresses smallest."""
     return _fields(shell, (kind,), mode)[1]
 
 
