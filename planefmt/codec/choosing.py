@@ -342,18 +342,17 @@ def _shells_for(obj: _Object, plans: dict[int, ShellPlan], planes: np.ndarray,
         # tables) and whose connectivity took 40-69 % of theirs, the file 0.58-0.97 of theirs, on the
         # twelve corpus meshes of bench/shell_bits.py: where it may be written, no tree is made to
         # be outbid.
-        # Kind 10 (spec §9.14) is kind 9 with its corners predicted by averaged parallelograms: smaller on
-        # irregular surfaces (ballA.off's coordinates 4 % smaller at draco-14's error), larger on regular
-        # tessellations whose single parallelograms repeat exactly (torus.STL, capsule.obj); the walk's
-        # coder picks kind and mode together.
+        # A walk is sized here as the first walk kind allowed (kind 9), its mode as deflate ranks them:
+        # _walk_kinds codes the kept shells in whichever kind and mode Brotli finds smaller, and the trials
+        # of the codings not kept do not pay for it.
         options = []
         trees = [layout for layout in TREE_KINDS if layout in SHELL_LAYOUTS]
-        walks = tuple(layout for layout in trees if layout in shellwalk.WALK_KINDS)
+        walks = [layout for layout in trees if layout in shellwalk.WALK_KINDS]
         if trees:
             tree, source = shell_tree(shell, plan.walk)
             if walks:
-                trees = [shellwalk.shell_walk_choice(tree, walks)[0]]
-                bodies = {trees[0]: shellwalk.shell_walk_body(tree, trees[0])}
+                trees = walks[:1]
+                bodies = {trees[0]: shellwalk.shell_walk_body(tree, trees[0], decide=False)}
             else:
                 bodies = shellfields.shell_tree_bodies(tree)
             options += [(layout, tree, plan.points[source], bodies[layout]) for layout in trees]
@@ -525,4 +524,15 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     if best is None:
         raise GeometryError(f"no coding keeps the source's structure with corners within the tolerance "
                             f"{tolerance:g}: {why}", code="TOLERANCE_NOT_MET")
-    return best[1], best[2]
+    return [_walk_kinds(o) for o in best[1]], best[2]
+
+
+def _walk_kinds(obj: _Object) -> _Object:
+    """``obj`` with each shell walk in whichever allowed walk kind and mode codes it smallest (spec §9.13, §9.14:
+    kind 10 is kind 9 with its corners predicted by averaged parallelograms, smaller on irregular
+    surfaces, ballA.off's coordinates 4 % at draco-14's error, larger on regular tessellations whose
+    single parallelograms repeat exactly, torus.STL and capsule.obj). The corners are the same in
+    either kind, so the bound measured holds."""
+    walks = tuple(layout for layout in shellwalk.WALK_KINDS if layout in SHELL_LAYOUTS)
+    return replace(obj, groups=tuple(replace(g, kind=shellwalk.shell_walk_choice(g.shell, walks)[0])
+                                     if g.kind in walks else g for g in obj.groups))

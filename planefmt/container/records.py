@@ -377,7 +377,7 @@ def encode_group(g: PartGroup, compress: bool, major: int = 1, brotli_allowed: b
         raise PlnError("sealed groups need version 3.1", code="UNKNOWN_GROUP_KIND")
     if g.shell is not None and major < 3:
         raise PlnError("shell groups need version 3.2", code="UNKNOWN_GROUP_KIND")
-    body = group_body(g) if major >= 2 else _body(g)
+    body = group_body(g, brotli_allowed) if major >= 2 else _body(g)
     method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9,
                           brotli_allowed=brotli_allowed and major >= 4)
     if major >= 3:
@@ -391,8 +391,9 @@ def _roles(g: PartGroup) -> bytes:
     return np.packbits(np.asarray(g.bounding, dtype=bool), bitorder="little").tobytes()
 
 
-def group_body(g: PartGroup) -> bytes:
-    """The raw (uncompressed) GRUP body of versions 2 to 4 (spec §9.2): references, roles, kind data."""
+def group_body(g: PartGroup, decide: bool = True) -> bytes:
+    """The raw (uncompressed) GRUP body of versions 2 to 4 (spec §9.2): references, roles, kind data
+    (``decide`` False: a shell walk's mode as deflate ranks them, for a size trial)."""
     refs = np.asarray(g.refs, dtype=np.int64)
     gaps = np.diff(refs, prepend=0)
     if len(refs) and gaps[1:].min(initial=0) < 0:
@@ -417,7 +418,7 @@ def group_body(g: PartGroup) -> bytes:
                 varint.encode([len(facets)]),
                 varint.encode(np.column_stack([gaps, facets[:, 1:]]).astype(np.uint64))]
     elif g.kind in (GroupKind.SHELL, *TREE_KINDS) and g.shell is not None:
-        out.append(shell_kind_data(g.kind, g.shell))
+        out.append(shell_kind_data(g.kind, g.shell, decide))
     elif g.kind == GroupKind.COPY:
         out.append(varint.encode([g.source]))
     else:

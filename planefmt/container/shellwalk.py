@@ -241,7 +241,7 @@ def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, averaged: bool = Fa
 
 
 def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray,
-                 options: tuple[tuple[GroupKind, int], ...]) -> tuple[GroupKind, dict[str, bytes]]:
+                 options: tuple[tuple[GroupKind, int], ...], decide: bool = True) -> tuple[GroupKind, dict[str, bytes]]:
     """The kind (SHELL_WALK or SHELL_WALK_MULTI) and the mode, grid, tables and coordinates of a
     walk's explicit corners, in whichever of the ``(kind, mode)`` options compresses smallest
     (:func:`_smallest`)."""
@@ -270,7 +270,7 @@ def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarr
             prediction = predict_averaged(v, *averaged, prediction)
         fields.append({"mode": bytes([m]), "grid": grid, "tables": tables if m & MODE_TABLES else b"",
                        "coordinates": varint.encode(varint.zigzag((v - prediction)[explicit].T))})
-    best = _smallest(fields)
+    best = _smallest(fields, decide)
     return options[fields.index(best)][0], best
 
 
@@ -286,16 +286,16 @@ RANK_LEVEL, RANK_TOP, RANK_CLOSE = 6, 2, 1.10
 RANK_DENSEST_BYTES = 64 * 1024
 
 
-def _smallest(options: list[dict[str, bytes]]) -> dict[str, bytes]:
+def _smallest(options: list[dict[str, bytes]], decide: bool = True) -> dict[str, bytes]:
     """Of candidate coordinate fields, the one whose body compresses smallest, as deflate ranks them,
     with Brotli (the writer's coder) deciding between the best ``RANK_TOP`` where deflate finds them
-    within ``RANK_CLOSE`` of the best."""
+    within ``RANK_CLOSE`` of the best, if ``decide`` (else deflate's best: a size to compare codings by)."""
     if len(options) == 1:
         return options[0]
     sizes = [len(zlib.compress(f["tables"] + f["coordinates"], RANK_LEVEL)) for f in options]
     order = np.argsort(sizes, kind="stable")[:RANK_TOP]
     close = [options[i] for i in order if sizes[i] <= RANK_CLOSE * sizes[order[0]]]
-    if len(close) == 1:
+    if len(close) == 1 or not decide:
         return close[0]
     return min(close, key=lambda f: _brotli_size(f["tables"] + f["coordinates"]))
 
@@ -337,7 +337,8 @@ def codings(kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[tupl
                  if mode is not None or k == GroupKind.SHELL_WALK or not m & MODE_PARALLELOGRAM)
 
 
-def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[GroupKind, dict[str, bytes]]:
+def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
+            decide: bool = True) -> tuple[GroupKind, dict[str, bytes]]:
     common = surface_fields(shell)
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
@@ -361,7 +362,7 @@ def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None)
     if not explicit.any():
         # Nothing to predict: the kinds' bodies are alike, and the first needs the lower version.
         return kinds[0], out
-    kind, coordinates = _coordinates(shell, tri, links, new, codings(kinds, mode))
+    kind, coordinates = _coordinates(shell, tri, links, new, codings(kinds, mode), decide)
     return kind, {**out, **coordinates}
 
 
@@ -373,19 +374,19 @@ def shell_walk_fields(shell: Shell, mode: int | None = None, kind: GroupKind = G
     return _fields(shell, (kind,), mode)[1]
 
 
-def shell_kind_data(kind: GroupKind, shell: Shell) -> bytes:
+def shell_kind_data(kind: GroupKind, shell: Shell, decide: bool = True) -> bytes:
     """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11), SHELL_TREE_PARALLELOGRAM (§9.12),
-    SHELL_WALK (§9.13) or SHELL_WALK_MULTI (§9.14) group."""
+    SHELL_WALK (§9.13) or SHELL_WALK_MULTI (§9.14) group (``decide``: :func:`shell_walk_body`'s)."""
     if kind == GroupKind.SHELL:
         return _shell_body(shell)
     if kind in WALK_KINDS:
-        return shell_walk_body(shell, kind)
+        return shell_walk_body(shell, kind, decide)
     return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
 
 
 #: The last few bodies made, by the shell they were made of (kept alive here, so an id is not
-#: reused while its entry stands) and by kind, with the kind :func:`shell_walk_choice` chose: an
-#: encode sizes, writes and verifies one shell several times.
+#: reused while its entry stands) and by kind and whether Brotli decided the mode, with the kind
+#: :func:`shell_walk_choice` chose: an encode sizes, writes and verifies one shell several times.
 _BODIES: collections.OrderedDict[int, tuple[Shell, dict]] = collections.OrderedDict()
 
 
@@ -408,17 +409,20 @@ def shell_walk_choice(shell: Shell, kinds: tuple[GroupKind, ...] = WALK_KINDS) -
     if kinds not in bodies:
         kind, fields = _fields(shell, kinds)
         bodies[kinds] = kind
-        bodies[kind] = b"".join(fields.values())
-    return bodies[kinds], bodies[bodies[kinds]]
+        bodies[kind, True] = b"".join(fields.values())
+    return bodies[kinds], bodies[bodies[kinds], True]
 
 
-def shell_walk_body(shell: Shell, kind: GroupKind = GroupKind.SHELL_WALK) -> bytes:
+def shell_walk_body(shell: Shell, kind: GroupKind = GroupKind.SHELL_WALK, decide: bool = True) -> bytes:
     """The kind data of ``shell`` as a ``kind`` group (SHELL_WALK, spec §9.13, or SHELL_WALK_MULTI,
-    §9.14), its coordinates in the mode that compresses smallest."""
+    §9.14), its coordinates in the mode that compresses smallest (``decide`` False: as deflate ranks
+    them, for a size to compare codings by; :func:`shell_walk_choice` decides again)."""
     bodies = _held(shell)
-    if kind not in bodies:
-        bodies[kind] = b"".join(_fields(shell, (kind,))[1].values())
-    return bodies[kind]
+    if (kind, True) in bodies:
+        return bodies[kind, True]
+    if (kind, decide) not in bodies:
+        bodies[kind, decide] = b"".join(_fields(shell, (kind,), decide=decide)[1].values())
+    return bodies[kind, decide]
 
 
 def check_shell_walk(shell: Shell, bounding: np.ndarray, kind: GroupKind = GroupKind.SHELL_WALK) -> None:

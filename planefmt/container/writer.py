@@ -209,7 +209,7 @@ class Writer:
                           bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
                           facets=facets, shell=shell)
         if self._bodies is not None and kind != GroupKind.COPY:
-            key = (int(kind), hashlib.sha256(records.group_body(group)).digest())
+            key = (int(kind), hashlib.sha256(records.group_body(group, self._brotli)).digest())
             if key in self._bodies:
                 group = PartGroup(index=index, object=obj, kind=int(GroupKind.COPY), refs=group.refs,
                                   bounding=bounding, source=self._bodies[key])
