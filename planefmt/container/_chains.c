@@ -183,6 +183,101 @@ done:
 }
 
 
+static PyObject *
+parallelograms(PyObject *self, PyObject *args)
+{
+    /* A kind 10 walk's parallelograms (spec/pln.md §9.14): triangles (3T), explicit (V, 0 or 1), and
+     * out start (V + 1) and terms (at least 12V): corner k's are terms rows start[k] .. start[k + 1] - 1,
+     * (a, b, c) each.  A directed edge's far corner comes from a map filled in triangle order, the first
+     * triangle with an edge keeping it; one more pass over the triangles takes each corner's first four.
+     * Returns the number of rows; ValueError for a corner outside 0 .. V - 1. */
+    PyObject *objs[4];
+    static const char *names[4] = {"triangles", "explicit", "start", "terms"};
+    Py_buffer views[4];
+    int held = 0;
+    int64_t rows = 0;
+    if (!PyArg_ParseTuple(args, "OOOO", &objs[0], &objs[1], &objs[2], &objs[3]))
+        return NULL;
+    for (; held < 4; held++)
+        if (int64_view(objs[held], &views[held], held >= 2, names[held]) < 0)
+            goto done;
+    int64_t cells = views[0].len / 8, t = cells / 3, v = views[1].len / 8;
+    if (cells % 3 || views[2].len / 8 != v + 1 || views[3].len / 8 < 12 * v) {
+        PyErr_SetString(PyExc_ValueError, "parallelograms: the arrays do not match");
+        goto done;
+    }
+    const int64_t *tri = views[0].buf, *explicit = views[1].buf;
+    int64_t *start = views[2].buf, *terms = views[3].buf;
+    for (int64_t i = 0; i < cells; i++)
+        if (tri[i] < 0 || tri[i] >= v) {
+            PyErr_SetString(PyExc_ValueError, "parallelograms: a corner outside the corners");
+            goto done;
+        }
+    int64_t size = 16;
+    while (size < 2 * cells)
+        size *= 2;
+    int64_t *keys = malloc(sizeof(int64_t) * 3 * (size_t)size);
+    int64_t *counts = calloc((size_t)(v > 0 ? v : 1), sizeof(int64_t));
+    if (!keys || !counts) {
+        free(keys);
+        free(counts);
+        PyErr_NoMemory();
+        goto done;
+    }
+    int64_t *keys_b = keys + size, *far = keys_b + size, mask = size - 1;
+    Py_BEGIN_ALLOW_THREADS
+    for (int64_t k = 0; k < size; k++)
+        keys[k] = -1;
+    for (int64_t j = 0; j < t; j++)
+        for (int s = 0; s < 3; s++) {
+            int64_t a = tri[3 * j + s], b = tri[3 * j + (s + 1) % 3];
+            uint64_t h = ((uint64_t)a * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)b * 0xC2B2AE3D27D4EB4FULL);
+            int64_t k = (int64_t)(h >> 24) & mask;
+            while (keys[k] >= 0 && (keys[k] != a || keys_b[k] != b))
+                k = (k + 1) & mask;
+            if (keys[k] < 0) {
+                keys[k] = a;
+                keys_b[k] = b;
+                far[k] = tri[3 * j + (s + 2) % 3];
+            }
+        }
+    for (int64_t j = 0; j < t; j++)
+        for (int s = 0; s < 3; s++) {
+            int64_t k = tri[3 * j + s], a = tri[3 * j + (s + 1) % 3], b = tri[3 * j + (s + 2) % 3];
+            if (counts[k] >= 4 || !explicit[k] || a >= k || b >= k || !explicit[a] || !explicit[b])
+                continue;
+            uint64_t h = ((uint64_t)b * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)a * 0xC2B2AE3D27D4EB4FULL);
+            int64_t q = (int64_t)(h >> 24) & mask;
+            while (keys[q] >= 0 && (keys[q] != b || keys_b[q] != a))
+                q = (q + 1) & mask;
+            if (keys[q] < 0)
+                continue;
+            int64_t c = far[q];
+            if (c >= k || !explicit[c])
+                continue;
+            int64_t *row = terms + 3 * (4 * k + counts[k]++);
+            row[0] = a;
+            row[1] = b;
+            row[2] = c;
+        }
+    start[0] = 0;
+    for (int64_t k = 0; k < v; k++) {
+        for (int64_t i = 0; i < 3 * counts[k]; i++)
+            terms[3 * rows + i] = terms[12 * k + i];
+        rows += counts[k];
+        start[k + 1] = rows;
+    }
+    Py_END_ALLOW_THREADS
+    free(keys);
+    free(counts);
+done:
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&views[i]);
+    if (PyErr_Occurred())
+        return NULL;
+    return PyLong_FromLongLong(rows);
+}
+
 /* A shell walk's open edges (spec/pln.md §9.13): directed edges of the decoded surface that no
  * second triangle has closed yet.  Each entry sits on a stack of its directed edge (a hash map
  * from edge to the newest entry) and on two doubly linked lists, of the entries starting and of
@@ -506,6 +601,9 @@ static PyMethodDef methods[] = {
      "average(value, pointer, plus, minus, offset, start, a, b, c, limit): one axis of a kind 10 walk's "
      "corners (spec §9.14) in place: the floor average of parallelograms a + b - c where a corner has "
      "some, resolve()'s rule elsewhere (OverflowError past limit, ValueError for a term not before)."},
+    {"parallelograms", parallelograms, METH_VARARGS,
+     "parallelograms(triangles, explicit, start, terms): a kind 10 walk's parallelograms (spec §9.14) into "
+     "start (V + 1) and terms (rows a, b, c; at least 12V entries); returns the number of rows."},
     {"walk", walk, METH_VARARGS,
      "walk(symbols, escapes, corners, triangles, links): decode a shell walk (spec §9.13) into triangles "
      "(3T int64) and links (T int64) in place; returns (reason, triangle), reason 0 where the walk is valid."},

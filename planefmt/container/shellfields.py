@@ -12,9 +12,9 @@ from ..model import FREE, MAX_GRID, GroupKind, Shell
 from . import schema, varint
 
 try:
-    from ._chains import average as _average, resolve as _resolve_forward
+    from ._chains import average as _average, parallelograms as _parallelograms, resolve as _resolve_forward
 except ImportError:  # built without a C compiler: pointer jumping in numpy does the same, more slowly
-    _average = _resolve_forward = None
+    _average = _parallelograms = _resolve_forward = None
 
 #: A kind 10 corner's parallelograms (spec §9.14): at most this many, the first in triangle order.
 MAX_PARALLELOGRAMS = 4
@@ -303,9 +303,16 @@ def parallelograms(triangles: np.ndarray, explicit: np.ndarray) -> tuple[np.ndar
     ``start[k]:start[k + 1]``) and ``terms`` (rows ``(a, b, c)``, predicting a + b - c): for each
     triangle in order and each place of k in it, the edge (a, b) opposite k and the far corner c of
     that edge (the third corner of the first triangle that has (b, a)), where a, b and c are
-    explicit and numbered below k; the first :data:`MAX_PARALLELOGRAMS` of each corner."""
+    explicit and numbered below k; the first :data:`MAX_PARALLELOGRAMS` of each corner. In C (a hash
+    map of directed edges, two passes over the triangles) where the extension was built; else sorts."""
     tri = np.asarray(triangles, dtype=np.int64)
     v = len(explicit)
+    if _parallelograms is not None and MAX_PARALLELOGRAMS == 4:
+        start = np.zeros(v + 1, dtype=np.int64)
+        terms = np.zeros(12 * v, dtype=np.int64)
+        rows = _parallelograms(np.ascontiguousarray(tri.reshape(-1)), np.asarray(explicit, dtype=np.int64), start,
+                               terms)
+        return start, terms[:3 * rows].reshape(-1, 3)
     k, a, b = (np.roll(tri, -s, axis=1).reshape(-1) for s in range(3))
     # Far corners: the edges sorted by (start, end), stable, so the first of a run is the first triangle's.
     key = k * v + a
