@@ -1,14 +1,16 @@
 """Where a shell's bytes go on the corpus: version 3.2's layout (§9.10) against the shell trees of
-versions 3.3 and 3.4 (§9.11, §9.12) and 4.1's shell walk (§9.13, the default choice since), at
-draco-14's error, with draco-14 measured in the same run (issues 30, 31).
+versions 3.3 and 3.4 (§9.11, §9.12), 4.1's shell walk (§9.13) and 4.2's choice of it or the walk with
+multi-parallelograms (§9.14, the default since), at draco-14's error, with draco-14 measured in the
+same run (issues 30, 31).
 
 For each mesh, at draco-14's measured error on it (``D14_ERROR``: the
 certified measure of ``bench/compare.py``, as docs/benchmarks.md records it,
 to two digits), the default encoder (``codec.encode_scene``, shell scheme,
-deflate) writes the file three times: with version 3.2's shell layout only
+deflate) writes the file four times: with version 3.2's shell layout only
 (``planefmt.codec.choosing.SHELL_LAYOUTS = (GroupKind.SHELL,)``, what the encoder wrote before
-3.3), with kinds 6 to 8 (a shell tree of kind 7 or 8 where smaller, labelled 3.4) and with its
-default choice (a shell walk of kind 9 where smaller, labelled 4.1). Printed per
+3.3), with kinds 6 to 8 (a shell tree of kind 7 or 8 where smaller, labelled 3.4), with kinds 6 to 9
+(a shell walk of kind 9 where smaller, labelled 4.1) and with its default choice (kind 9 or 10,
+labelled 4.2). Printed per
 mesh: triangles; draco-14's bytes (DracoPy, quantization 14, compression
 level 10); each file's bytes, its ratio to draco-14 and its plane table's
 bytes; bits per triangle of each field of the shell body, each field
@@ -21,7 +23,7 @@ more than the body, which is compressed whole):
 * 3.4 (kinds 7 and 8 alike): ``links`` (each triangle's parent and edge), ``codes`` (a root's
   three corners, an attached triangle's third), ``faces`` (0 on the
   parent's plane), ``flags``, ``picks``, ``coordinates`` (residuals);
-* 4.1 (kind 9): ``symbols`` (each triangle's children and third corner's code), ``escapes`` (a
+* 4.1 and 4.2 (kinds 9 and 10): ``symbols`` (each triangle's children and third corner's code), ``escapes`` (a
   root's codes, corner steps), ``faces``, ``flags``, ``picks``, ``mode``, ``grid``, ``tables``,
   ``coordinates``; its connectivity (``symbols`` + ``escapes``) against 3.4's (``links`` +
   ``codes``) is printed in bits per triangle;
@@ -70,8 +72,8 @@ D14_ERROR = {
 def shell_fields(group) -> dict[str, bytes]:
     """The fields of a shell group's kind data by name: spec §9.10's, §9.11's, §9.12's or §9.13's."""
     shell = group.shell
-    if group.kind == GroupKind.SHELL_WALK:
-        return shellwalk.shell_walk_fields(shell)
+    if group.kind in shellwalk.WALK_KINDS:
+        return shellwalk.shell_walk_fields(shell, None, group.kind)
     if group.kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM):
         return shellfields.shell_tree_fields(shell, group.kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
     fc = np.asarray(shell.facets, dtype=np.int64)
@@ -115,12 +117,16 @@ def describe(data: bytes, triangles: int) -> dict:
         for name, field in shell_fields(g).items():
             bits[name] = bits.get(name, 0.0) + 8.0 * (len(brotli.compress(field, quality=11)) if field else 0) / triangles
     trees = [g.shell.links for g in groups if g.kind in (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM,
-                                                         GroupKind.SHELL_WALK)]
+                                                         *shellwalk.WALK_KINDS)]
     depth = max(map(tree_depth, trees), default=0)
     return dict(bytes=len(data), planes=pln_parts(data)["planes"], bits=bits,
                 named=sum(int((~np.asarray(g.shell.explicit)).sum()) for g in groups),
                 corners=sum(len(g.shell.explicit) for g in groups), depth=depth,
                 rounds=math.ceil(math.log2(depth + 1)) + 1 if trees else 0)
+
+
+#: The shell kinds of versions 3.2 to 3.4 (spec §9.10 to §9.12).
+LAYOUTS_3_4 = (GroupKind.SHELL, GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM)
 
 
 def measure(rel: str) -> dict:
@@ -129,7 +135,8 @@ def measure(rel: str) -> dict:
     scene, v, f = load(os.path.join(CORPUS, rel))
     draco = len(DracoPy.encode(v, f, quantization_bits=14, compression_level=10))
     row = dict(mesh=rel, triangles=len(f), draco=draco)
-    for name, layouts in (("3.2", (GroupKind.SHELL,)), ("3.4", codec.SHELL_KINDS[:-1]), ("4.1", codec.SHELL_KINDS)):
+    for name, layouts in (("3.2", (GroupKind.SHELL,)), ("3.4", LAYOUTS_3_4), ("4.1", LAYOUTS_3_4 + (GroupKind.SHELL_WALK,)),
+                          ("4.2", codec.SHELL_KINDS)):
         data, enc, dec = encoded(scene, D14_ERROR[rel], layouts)
         row[name] = dict(describe(data, len(f)), encode=enc, decode=dec)
     return row
@@ -141,7 +148,7 @@ def main(argv: list[str]) -> int:
         r = measure(rel)
         rows.append(r)
         print(f"{r['mesh']}: {r['triangles']} triangles, draco-14 {r['draco']} B", flush=True)
-        for name in ("3.2", "3.4", "4.1"):
+        for name in ("3.2", "3.4", "4.1", "4.2"):
             x = r[name]
             fields = " ".join(f"{k} {b:.1f}" for k, b in x["bits"].items())
             b = x["bits"]
@@ -152,7 +159,7 @@ def main(argv: list[str]) -> int:
     cad = [r for r in rows if r["mesh"].startswith("cad/")]
     if cad:
         print("CAD median pln@d14 / draco-14: " + ", ".join(
-            f"{name} {statistics.median(r[name]['bytes'] / r['draco'] for r in cad):.2f}" for name in ("3.2", "3.4", "4.1")))
+            f"{name} {statistics.median(r[name]['bytes'] / r['draco'] for r in cad):.2f}" for name in ("3.2", "3.4", "4.1", "4.2")))
     return 0
 
 
