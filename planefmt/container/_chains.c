@@ -96,6 +96,14 @@ done:
 }
 
 
+/* Where directed edge (a, b) starts probing in a table of mask + 1 slots. */
+static int64_t
+edge_hash(int64_t a, int64_t b, int64_t mask)
+{
+    uint64_t h = ((uint64_t)a * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)b * 0xC2B2AE3D27D4EB4FULL);
+    return (int64_t)(h >> 24) & mask;
+}
+
 static PyObject *
 average(PyObject *self, PyObject *args)
 {
@@ -231,8 +239,7 @@ parallelograms(PyObject *self, PyObject *args)
     for (int64_t j = 0; j < t; j++)
         for (int s = 0; s < 3; s++) {
             int64_t a = tri[3 * j + s], b = tri[3 * j + (s + 1) % 3];
-            uint64_t h = ((uint64_t)a * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)b * 0xC2B2AE3D27D4EB4FULL);
-            int64_t k = (int64_t)(h >> 24) & mask;
+            int64_t k = edge_hash(a, b, mask);
             while (keys[k] >= 0 && (keys[k] != a || keys_b[k] != b))
                 k = (k + 1) & mask;
             if (keys[k] < 0) {
@@ -246,8 +253,7 @@ parallelograms(PyObject *self, PyObject *args)
             int64_t k = tri[3 * j + s], a = tri[3 * j + (s + 1) % 3], b = tri[3 * j + (s + 2) % 3];
             if (counts[k] >= 4 || !explicit[k] || a >= k || b >= k || !explicit[a] || !explicit[b])
                 continue;
-            uint64_t h = ((uint64_t)b * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)a * 0xC2B2AE3D27D4EB4FULL);
-            int64_t q = (int64_t)(h >> 24) & mask;
+            int64_t q = edge_hash(b, a, mask);
             while (keys[q] >= 0 && (keys[q] != b || keys_b[q] != a))
                 q = (q + 1) & mask;
             if (keys[q] < 0)
@@ -333,8 +339,7 @@ open_init(Open *o, int64_t triangles, int64_t corners)
 static int64_t
 open_slot(const Open *o, int64_t a, int64_t b)
 {
-    uint64_t h = ((uint64_t)a * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)b * 0xC2B2AE3D27D4EB4FULL);
-    int64_t k = (int64_t)(h >> 24) & o->mask;
+    int64_t k = edge_hash(a, b, o->mask);
     while (o->keys[k] >= 0 && (o->keys[k] != a || o->keys_b[k] != b))
         k = (k + 1) & o->mask;
     return k;
