@@ -23,7 +23,7 @@ PINS = CORPUS / "gltf_scene" / "pins.glb"
 def encoded(path, tolerance: float, copies: bool = True, monkeypatch=None) -> bytes:
     scene, _ = registry.read(str(path))
     if not copies:
-        monkeypatch.setattr(encoding, "_repeats", lambda placed: False)
+        monkeypatch.setattr(encoding, "_repeats", lambda placed, decide=True: False)
     buf = io.BytesIO()
     codec.encode_scene(scene, buf, tolerance=tolerance)
     return buf.getvalue()

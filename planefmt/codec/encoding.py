@@ -250,7 +250,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     by_node = {i: (o, a) for i, o, a in zip(meshes, objects, offsets)}
     placed = {i: _placed(o, global_index[a:a + len(o.triplets)], compact) for i, (o, a) in by_node.items()}
     version = _version(objects, major) if compact else (1, 0)
-    if version[0] == 4 and _repeats([p for groups in placed.values() for p in groups]):
+    if version[0] == 4 and _repeats([p for groups in placed.values() for p in groups], verify):
         version = max(version, records.KIND_VERSION[int(GroupKind.COPY)])
     header = Header(version=version, lossy=choice.lossy, coding=stored,
                     quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
@@ -289,10 +289,11 @@ def _placed(o: _Object, refs: np.ndarray, compact: bool) -> list[tuple[GroupSpec
     return out
 
 
-def _repeats(placed: list[tuple[GroupSpec, np.ndarray, np.ndarray, np.ndarray]]) -> bool:
+def _repeats(placed: list[tuple[GroupSpec, np.ndarray, np.ndarray, np.ndarray]], decide: bool = True) -> bool:
     """Whether two of the groups ``placed`` (group, references, role bits, local references) have one
     kind, one common body and one kind data: the writer of version 4.2 writes the later a copy (spec
-    §9.15)."""
+    §9.15). ``decide``: :func:`records.group_body`'s (a size trial's writer asks for no Brotli decision,
+    so neither does this)."""
     # Only groups of one kind on the same references and role bits can repeat: their bodies alone are made.
     alike: dict[tuple, list] = {}
     for p, refs, bounding, _ in placed:
@@ -301,7 +302,8 @@ def _repeats(placed: list[tuple[GroupSpec, np.ndarray, np.ndarray, np.ndarray]])
         if len(groups) > 1:
             bodies = [records.group_body(PartGroup(index=0, object=0, kind=kind, refs=np.zeros(0, dtype=np.uint32),
                                                    bounding=np.zeros(0, dtype=bool), cells=p.cells, tree=p.tree,
-                                                   vertex_planes=p.vertex_planes, facets=p.facets, shell=p.shell))
+                                                   vertex_planes=p.vertex_planes, facets=p.facets, shell=p.shell),
+                                         decide)
                       for p in groups]
             if len(set(bodies)) < len(bodies):
                 return True

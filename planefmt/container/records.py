@@ -370,14 +370,17 @@ def decode_object(payload: bytes, expected_index: int, major: int = 1) -> Object
 
 # spec §9 Part groups ------------------------------------------------------------------
 
-def encode_group(g: PartGroup, compress: bool, major: int = 1, brotli_allowed: bool = True) -> bytes:
+def encode_group(g: PartGroup, compress: bool, major: int = 1, brotli_allowed: bool = True,
+                 body: bytes | None = None) -> bytes:
     """The GRUP payload; ``major`` 2 and 3 write the varint body of spec §9.2, 3 with the varint
-    head of 3.0 (spec §9.1, §9.2; version 1's u32 body: Appendix A.1)."""
+    head of 3.0 (spec §9.1, §9.2; version 1's u32 body: Appendix A.1). ``body``: the raw body of
+    versions 2 to 4, where the caller has made it already."""
     if g.facets is not None and major < 3:
         raise PlnError("sealed groups need version 3.1", code="UNKNOWN_GROUP_KIND")
     if g.shell is not None and major < 3:
         raise PlnError("shell groups need version 3.2", code="UNKNOWN_GROUP_KIND")
-    body = group_body(g, brotli_allowed) if major >= 2 else _body(g)
+    if body is None:
+        body = group_body(g, brotli_allowed) if major >= 2 else _body(g)
     method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9,
                           brotli_allowed=brotli_allowed and major >= 4)
     if major >= 3:

@@ -208,14 +208,17 @@ class Writer:
         group = PartGroup(index=index, object=obj, kind=int(kind), refs=refs.astype(np.uint32),
                           bounding=bounding, cells=cells, tree=tree, extra=extra, vertex_planes=vertex_planes,
                           facets=facets, shell=shell)
+        body = None
         if self._bodies is not None and kind != GroupKind.COPY:
-            key = (int(kind), hashlib.sha256(records.group_body(group, self._brotli)).digest())
+            body = records.group_body(group, self._brotli)
+            key = (int(kind), hashlib.sha256(body).digest())
             if key in self._bodies:
                 group = PartGroup(index=index, object=obj, kind=int(GroupKind.COPY), refs=group.refs,
                                   bounding=bounding, source=self._bodies[key])
+                body = None
             else:
                 self._bodies[key] = index
-        self._emit(schema.GRUP, records.encode_group(group, self._compress, self._major, self._brotli), index)
+        self._emit(schema.GRUP, records.encode_group(group, self._compress, self._major, self._brotli, body), index)
         self._groups.append(len(refs))
         return index
 
