@@ -17,7 +17,7 @@ import sys
 import numpy as np
 
 import planefmt
-from planefmt import GroupKind
+from planefmt import UP_AXIS, GroupKind
 from planefmt.container import records
 
 #: Kinds whose summary has a volume (README.md): solids, and sealed surfaces, closed as a rule.
@@ -137,7 +137,7 @@ def describe(path: str) -> dict:
                         for o in r.objects],
             "groups": [_group(g) for g in groups],
             "colours": colours,
-            "metadata": r.metadata,
+            "metadata": {**r.metadata, **({UP_AXIS: r.header.up_axis} if r.header.up_axis else {})},
             "findings": sorted({code for code, _ in r.findings}),
             "geometry": _geometry(groups, r.objects, r.header.version),
         }

@@ -18,7 +18,7 @@ import numpy as np
 
 from planefmt import chunk_bytes
 from planefmt.container import records, schema
-from planefmt.model import Coding, Header, Quantization, Units
+from planefmt.model import UP_AXIS, Coding, Header, Quantization, Units
 
 Layout = list[tuple[bytes, bytes]]
 
@@ -44,16 +44,24 @@ def box(lo, hi) -> np.ndarray:
     return t
 
 
+def compact(layout: Layout) -> bool:
+    """Whether ``layout``'s chunks after PHDR have varint lengths: its header says version 5 (spec §4.1)."""
+    return bool(layout) and layout[0][0] == schema.PHDR and layout[0][1][:1] >= b"\x05"
+
+
 def frame(layout: Layout, signature: bytes = schema.SIGNATURE) -> bytes:
-    return signature + b"".join(chunk_bytes(t, p) for t, p in layout)
+    """``layout`` framed as its header's version frames it: PHDR with a u32 length, the rest as §4.1 says."""
+    short = compact(layout)
+    return signature + b"".join(chunk_bytes(t, p, short and i > 0) for i, (t, p) in enumerate(layout))
 
 
 def offsets(layout: Layout) -> list[int]:
     """Byte offset of each chunk of ``layout`` in the framed file."""
+    short = compact(layout)
     out, pos = [], len(schema.SIGNATURE)
-    for _, payload in layout:
+    for i, (t, payload) in enumerate(layout):
         out.append(pos)
-        pos += 12 + len(payload)
+        pos += len(chunk_bytes(t, payload, short and i > 0)) if t else 12 + len(payload)
     return out
 
 
@@ -174,6 +182,11 @@ def header_json(h: Header, counts: tuple[int, int, int] | None) -> dict:
         "error_bound": optional_float(h.error_bound),
         "counts": None if counts is None else dict(zip(("planes", "objects", "groups"), counts)),
     }
+
+
+def metadata_json(h: Header, metadata: dict[str, str]) -> dict[str, str]:
+    """What a reader reports as the file's metadata: its mETA chunks, and version 5's up axis (spec §5)."""
+    return {**metadata, **({UP_AXIS: h.up_axis} if h.up_axis is not None else {})}
 
 
 def dumps(obj, indent: int = 0) -> str:

@@ -292,9 +292,9 @@ def _():
 
 # -- header (spec §5) --------------------------------------------------------------------------
 
-@case("xhdr_major5", "UNSUPPORTED_VERSION", "version 5.0")
+@case("xhdr_major6", "UNSUPPORTED_VERSION", "version 6.0")
 def _():
-    return file(cube(PHDR=header(version=(5, 0))))
+    return file(cube(PHDR=header(version=(6, 0))))
 
 
 @case("xhdr_predicted_v1", "UNSUPPORTED_CODING", "coding 3 (predicted, version 2.0) in a version 1.0 header")
@@ -1827,3 +1827,105 @@ def _():
       "source's varint")
 def _():
     return copies_file([(0, CUBE_REFS), (COPY, CUBE_REFS + b"\x80")])
+
+
+# -- version 5.0: varint chunk lengths, the up axis in the header, groups without references -----
+
+V50 = (5, 0)
+
+
+def v5_layout(*extra: tuple[bytes, bytes], up_axis: str | None = None, groups: list[bytes] | None = None) -> Layout:
+    """The cube of spec/pln-1.md §12 in a version 5.0 file (float32, as a convex group, or ``groups``),
+    chunks ``extra`` after PHDR, before iNDX."""
+    groups = [grup_v5(np.arange(6), 0)] if groups is None else groups
+    layout = [(schema.PHDR, header(version=V50, up_axis=up_axis, group_count=len(groups))), *extra,
+              (schema.OBJT, records.encode_object(ObjectRecord(0, "cube", None, None), 5)),
+              (schema.PLNS, records.encode_planes(0, CUBE, dataclasses.replace(SPEC_HEADER, version=V50), False))]
+    return layout + [(schema.GRUP, g) for g in groups]
+
+
+def grup_v5(refs: np.ndarray, kind: int, shell=None, index: int = 0) -> bytes:
+    refs = np.asarray(refs, dtype=np.uint32)
+    return records.encode_group(PartGroup(index, 0, kind, refs, np.zeros(len(refs), bool), shell=shell), False, 5)
+
+
+def v5_file(layout: Layout, index: bool = True) -> bytes:
+    return frame(finish(layout, index, 5))
+
+
+def _v5_length(data: bytes, chunk: int, length: bytes) -> bytes:
+    """``data`` (a version 5 file) with the one-byte length of its chunk number ``chunk`` replaced by ``length``."""
+    at = offsets(finish(v5_layout(), False, 5))[chunk] + 4
+    return data[:at] + length + data[at + 1:]
+
+
+V5_FILE = v5_file(v5_layout(), index=False)
+
+
+@case("xv50_length_not_minimal", "BAD_CHUNK_LENGTH", "version 5.0: the OBJT length, 8, written as the two-byte "
+      "varint 88 00: not minimal (spec §4.1)")
+def _():
+    return _v5_length(V5_FILE, 1, b"\x88\x00")
+
+
+@case("xv50_length_past_5_bytes", "CHUNK_TOO_LONG", "version 5.0: the OBJT length a varint whose fifth byte has "
+      "bit 7 set (88 80 80 80 80 00): longer than a varint32 length may be", also=("LIMIT_EXCEEDED", "TRUNCATED"))
+def _():
+    return _v5_length(V5_FILE, 1, b"\x88\x80\x80\x80\x80\x00")
+
+
+@case("xv50_length_2_31", "CHUNK_TOO_LONG", "version 5.0: the OBJT length 2^31 (80 80 80 80 08), above the 2^31-1 "
+      "maximum", also=("LIMIT_EXCEEDED", "TRUNCATED"))
+def _():
+    return _v5_length(V5_FILE, 1, b"\x80\x80\x80\x80\x08")
+
+
+@case("xv50_truncated_length", "TRUNCATED", "version 5.0: the file ends after the GRUP type and the first byte of "
+      "a two-byte length varint")
+def _():
+    at = offsets(finish(v5_layout(), False, 5))[3] + 4
+    return V5_FILE[:at] + b"\x80"
+
+
+@case("xv50_u32_framing", "CRC_MISMATCH", "a version 5.0 header followed by chunks framed as version 4 frames "
+      "them (u32 lengths): the OBJT's u32 length 8 read as the varint 08 leaves 00 00 00 in its payload and its "
+      "CRC wrong")
+def _():
+    layout = finish(v5_layout(), False, 5)
+    return schema.SIGNATURE + b"".join(chunk_bytes(t, p) for t, p in layout)
+
+
+@case("xv50_meta_up_axis", "BAD_METADATA", "version 5.0: a mETA chunk up_axis = Z, which a version 5 file says "
+      "in its header (spec §10.3)")
+def _():
+    return v5_file(v5_layout((schema.META, b"up_axis\x00Z")))
+
+
+@case("xv50_up_axis_3", "BAD_HEADER_VALUE", "version 5.0: bits 4-5 of the header's units byte 3, no up axis "
+      "(spec §5)")
+def _():
+    layout = v5_layout()
+    phdr = bytearray(layout[0][1])
+    phdr[7] = 0x31
+    return v5_file([(schema.PHDR, bytes(phdr))] + layout[1:])
+
+
+@case("xv50_header_short", "BAD_PAYLOAD", "version 5.0: a PHDR of 7 bytes, under the 8 of the fixed part")
+def _():
+    layout = v5_layout()
+    return v5_file([(schema.PHDR, layout[0][1][:7])] + layout[1:])
+
+
+@case("xv50_convex_no_refs", "BAD_GROUP_STRUCTURE", "version 5.0: a convex group (kind 0) without references: "
+      "only shells and copies may have none (spec §9.2)")
+def _():
+    body = b"\x00"
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=0, compression=0, raw_size=len(body), body=body))
+    return v5_file(v5_layout(groups=[group]))
+
+
+@case("xv50_colours_no_refs", "BAD_COLOURS", "version 5.0: the open pyramid as a shell without references and a "
+      "cOLR of count 0 for it: a group without references has no colour (spec §10.1)")
+def _():
+    colours = schema.ColoursHead.build(dict(group=0, count=0))
+    return v5_file(v5_layout(groups=[grup_v5(np.zeros(0), GroupKind.SHELL, SHELL_PYRAMID)]) + [(schema.COLR, colours)])

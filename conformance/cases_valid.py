@@ -27,7 +27,7 @@ from planefmt.model import (UP_AXIS, Coding, Colours, GroupKind, Header, Metadat
                             Quantization, Shell, Units)
 
 from . import reference
-from .build import (CUBE, SPEC_HEADER, box, finish, frame, header_json, rounded, shell_json, stored_header, stored_planes,
+from .build import (CUBE, SPEC_HEADER, box, finish, frame, header_json, metadata_json, rounded, shell_json, stored_header, stored_planes,
                     world_matrices)
 
 #: Relative tolerance of geometry comparisons (see README.md).
@@ -285,7 +285,7 @@ def expected(case: ValidCase, header: Header, geo: dict) -> dict:
         "findings_optional": sorted(set(case.findings_optional)),
         "geometry": geo,
     }
-    metadata = {op.key: op.value for op in case.ops if isinstance(op, Meta)}
+    metadata = metadata_json(header, {op.key: op.value for op in case.ops if isinstance(op, Meta)})
     if metadata:
         # Only here: the results of the cases before mETA stay as they were.
         result["metadata"] = metadata
@@ -485,6 +485,7 @@ V34_CUBE = dataclasses.replace(SPEC_HEADER, version=(3, 4))
 V40_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 0))
 V41_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 1))
 V42_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 2))
+V50_CUBE = dataclasses.replace(SPEC_HEADER, version=(5, 0))
 
 
 def _explicit_walk(mesh, edge_two_first: bool = False) -> Shell:
@@ -873,6 +874,34 @@ CASES = [
                Obj("solid", None, translation(0.0, 3.0, 0.0)), Group(2, GroupKind.CONVEX, tuple(range(6))),
                Obj("solid twin", None, translation(2.0, 3.0, 0.0)), Group(3, GroupKind.CONVEX, tuple(range(6)))),
               decoded_bbox=True),
+    ValidCase("walk_planeless_v5_0", "version 5.0: the icosphere of shell_walk_sphere_v4_1 as a shell walk without "
+              "references (spec §9.2: m = 0) in a file without planes (coding 0, no PLNS), its grid in f32 (origin 0, "
+              "step 0.25), the up axis Z in the header's units byte (spec §5), varint chunk lengths (spec §4.1) and "
+              "no index: a 9-byte PEND", dataclasses.replace(V50_CUBE, up_axis="Z"),
+              (Obj("sphere"), Group(0, GroupKind.SHELL_WALK, (), shell=WALK_SPHERE)), decoded_bbox=True, index=False),
+    ValidCase("scene_up_axis_v5_0", "version 5.0: a root, the cube as a convex group in one colour, and the torus of "
+              "shell_walk_torus_v4_1 as a shell walk with multi-parallelograms on one reference (for its colour) "
+              "placed twice, the second a copy (kind 11); up axis Y in the header, counts, and an index: iNDX "
+              "offsets of varint-framed chunks and a 17-byte PEND (spec §4.4)", dataclasses.replace(V50_CUBE, up_axis="Y"),
+              (Obj("root"), Obj("cube", 0, translation(0.0, 0.0, 2.0)), Planes(CUBE),
+               Group(1, GroupKind.CONVEX, tuple(range(6))),
+               Colour(0, np.tile(np.array([[20, 120, 220, 255]], dtype=np.uint8), (6, 1))),
+               Obj("torus", 0, translation(3.0, 0.0, 0.0)),
+               Group(2, GroupKind.SHELL_WALK_MULTI, (4,), shell=WALK_TORUS),
+               Colour(1, np.array([[250, 200, 0, 255]], dtype=np.uint8)),
+               Obj("torus twin", 0, translation(-3.0, 0.0, 0.0)),
+               Group(3, GroupKind.SHELL_WALK_MULTI, (4,), shell=WALK_TORUS)),
+              decoded_bbox=True),
+    ValidCase("shells_v5_0", "version 5.0, written to a pipe (no counts): shells with explicit corners on f32 grids "
+              "(spec §9.10: 16 bytes) of kinds 6 (the mixed cube), 7 (the mixed cube as a tree), 8 (the box) and 6 "
+              "again without references (the open pyramid, m = 0)", V50_CUBE,
+              (Obj("shells"), Planes(CUBE), Group(0, GroupKind.SHELL, tuple(range(6)), shell=SHELL_MIXED),
+               Obj("tree", None, translation(2.0, 0.0, 0.0)),
+               Group(1, GroupKind.SHELL_TREE, tuple(range(6)), shell=TREE_MIXED),
+               Obj("box", None, translation(4.0, 0.0, 0.0)),
+               Group(2, GroupKind.SHELL_TREE_PARALLELOGRAM, tuple(range(6)), shell=TREE_BOX),
+               Obj("pyramid", None, translation(6.0, 0.0, 0.0)), Group(3, GroupKind.SHELL, (), shell=SHELL_PYRAMID)),
+              decoded_bbox=True, stream=True),
     ValidCase("scene_transforms_v4_0", "version 4.0: three cubes under a root, with transforms coded entry by entry "
               "(spec §8): a translation by (2.5, -1, 0.125) (codes 1, 0 and f32), a rotation by 30 degrees about z "
               "with a translation by 0.1 (f64 entries), and a mirror with -0.0 (an f32); a cOLR of one colour for "

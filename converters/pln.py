@@ -34,7 +34,7 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
           delta: float | None = None, tau: float | None = None, compress: bool = True,
-          compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 4) -> list[str]:
+          compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 5) -> list[str]:
     """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane.
 
     Returns what the encoder gave up (its :class:`PlnWarning` lines): with

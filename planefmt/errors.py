@@ -28,6 +28,7 @@ _CATALOGUE = [
     Code("CRC_MISMATCH", "error", "a chunk's CRC-32 does not match its type and payload"),
     Code("BAD_CHUNK_TYPE", "error", "a chunk type tag is not four ASCII letters"),
     Code("CHUNK_TOO_LONG", "error", "a chunk length exceeds 2^31-1 or the reader's limit"),
+    Code("BAD_CHUNK_LENGTH", "error", "a version 5 chunk length that is not a minimal varint"),
     Code("UNKNOWN_CRITICAL_CHUNK", "error", "a critical chunk type this reader does not know"),
     Code("UNKNOWN_ANCILLARY_CHUNK", "info", "an ancillary chunk type this reader skipped"),
     Code("CHUNK_ORDER", "error", "a chunk appears where the spec does not allow it"),

@@ -123,6 +123,7 @@ class Header:
     object_count: int | None = None
     group_count: int | None = None
     extra: bytes = b""  # trailing PHDR bytes of a newer minor version, kept verbatim
+    up_axis: str | None = None  # version 5: the world axis that points up, "Y" or "Z" (spec §5); before, mETA
 
     @property
     def diagonal(self) -> float:

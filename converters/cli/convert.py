@@ -61,12 +61,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="deflate or Brotli-compress plane and group payloads, whichever is smaller, where that "
                         "saves bytes (spec §6; the default)")
     g.add_argument("--compact", action=argparse.BooleanOptionalAction, default=True,
-                   help="write version 4.0 (spec/pln.md; the default): bit-packed or predicted plane codes, "
+                   help="write version 5.0 (spec/pln.md; the default): bit-packed or predicted plane codes, "
                         "whichever is smaller, varint group bodies and chunk heads, transforms entry by entry. "
                         "--no-compact writes version 1.0, for readers of 1.x only")
-    g.add_argument("--major", type=int, choices=[3, 4], default=4,
-                   help="4 (the default): version 4.0; 3: the lowest of versions 3.0 to 3.4 that holds the file, "
-                        "for readers of 3.x (deflate only, transforms as 16 doubles)")
+    g.add_argument("--major", type=int, choices=[3, 4, 5], default=5,
+                   help="5 (the default): version 5.0; 4: the lowest of versions 4.0 to 4.2 that holds the file, "
+                        "for readers of 4.x (32-bit chunk lengths, a mETA up axis, float64 shell grids); 3: the "
+                        "lowest of 3.0 to 3.4, for readers of 3.x (deflate only, transforms as 16 doubles)")
     g.add_argument("--allow-open", action="store_true",
                    help="store a closed mesh that planes cannot close as an open surface (distance and area "
                         "kept, not watertight; marked lossy) instead of failing")

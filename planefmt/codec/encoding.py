@@ -23,8 +23,8 @@ from ..errors import GeometryError, PlnError
 from ..geometry.planes import transform_points
 from ..groups.shells import reordered, reordered_tree
 from ..groups.solids import FLAT_STRATEGIES, STRATEGIES, Splitter
-from ..model import (BSP_MAX_SPLIT, TREE_KINDS, UP_AXIS, Coding, GroupKind, Header, Mesh, Node, PartGroup, Quantization,
-                     Scene, Units)
+from ..model import (BSP_MAX_SPLIT, FREE, TREE_KINDS, UP_AXIS, Coding, GroupKind, Header, Mesh, Node, PartGroup, Quantization,
+                     Scene, Shell, Units)
 from .choosing import _Choice, _choose, _choose_shells
 from .decoding import SHELL_KINDS
 from .preparing import LOSSLESS_TOLERANCE, _Object, _diagonal, _prepare, _world_transforms
@@ -119,13 +119,13 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
 def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, tolerance: float = 1e-6,
                  coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
                  delta: float | None = None, tau: float | None = None, compress: bool = True,
-                 compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 4) -> Header:
+                 compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 5) -> Header:
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
     One object per node, keeping name, parent and transform; each node's
     mesh is encoded in its local coordinates (a mesh several nodes share is
     stored once per node: the format has no shared part groups). The scene's
-    ``up_axis``, if any, is a mETA chunk (spec §10.3). One coding serves the whole
+    ``up_axis``, if any, is in the header (spec §5; a mETA chunk before version 5, §10.3). One coding serves the whole
     file; the tolerance is a fraction of the diagonal of the decoded scene's
     world bbox, and errors are measured in world coordinates. Identical
     planes (after coding) are stored once, written just before the first
@@ -134,16 +134,17 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
 
     ``compress`` (the default, as ``pln convert``): payloads deflated or Brotli-compressed, whichever
     is smaller, where that saves bytes. ``compact`` (the default, as ``pln convert``; False writes
-    version 1.0): a version 4.0 file (spec/pln.md): quantized planes in whichever of the bit-packed
+    version 1.0): a version 5.0 file (spec/pln.md; ``major`` 4: 4.0 to 4.2, with 32-bit chunk lengths,
+    a mETA up axis and float64 shell grids): quantized planes in whichever of the bit-packed
     and the predicted coding takes fewer bytes, group references, cells and trees as varints, chunk
     heads as varints, transforms entry by entry, a group's one colour once. The planes and the
     decoded surface are those of the version 1 file. A scene with sealed or shell groups is written
-    as version 4.0 whatever ``compact`` says: version 1.0 has no such kinds. ``major`` 3 writes, for
+    as version ``major`` whatever ``compact`` says: version 1.0 has no such kinds. ``major`` 3 writes, for
     readers of 3.x, the lowest version 3.0 to 3.4 that holds the file (spec Appendix A.3): deflate
     only, transforms as 16 doubles, a colour per reference.
     """
-    if major not in (3, 4):
-        raise PlnError(f"version {major}.x cannot be written: 3 or 4 (or 1.0 with compact=False)",
+    if major not in (3, 4, 5):
+        raise PlnError(f"version {major}.x cannot be written: 3, 4 or 5 (or 1.0 with compact=False)",
                        code="UNSUPPORTED_VERSION")
     # Each encode starts cold, so that an encode repeated on the same scene (a benchmark's) costs what
     # the first did.
@@ -223,11 +224,16 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     """Write the scene's ``objects`` (those of nodes ``meshes``) in the chosen coding; its header."""
     if major == 3:
         objects = [replace(o, groups=tuple(_as_tree(g) for g in o.groups)) for o in objects]
+    if major >= 5 and compact:
+        objects = [_unreferenced(o) for o in objects]
     sealed = any(g.kind == GroupKind.SEALED for o in objects for g in o.groups)
     shells = any(g.kind in SHELL_KINDS for o in objects for g in o.groups)
     compact = compact or sealed or shells
-    table = quantize.roundtrip(np.concatenate([o.triplets for o in objects]), choice.coding,
-                               choice.quantization)
+    coding, quantization = choice.coding, choice.quantization
+    if not any(len(o.triplets) for o in objects):
+        # No plane to code: the coding without an h range in the header.
+        coding, quantization = Coding.FLOAT32, None
+    table = quantize.roundtrip(np.concatenate([o.triplets for o in objects]).reshape(-1, 3), coding, quantization)
     # Rows identical after coding are one plane; the plane table is in first-use order, so each
     # object's new planes are the next block of it. Coding is idempotent: the writer re-codes
     # these rows to the same values.
@@ -243,24 +249,24 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     rank[order] = np.arange(len(order))
     global_index = rank[inverse.reshape(-1)]
     rows = table[first[order]]
-    stored = choice.coding
+    stored = coding
     if compact and stored.quantized:
-        stored = min((Coding.QUANTIZED, Coding.PREDICTED), key=lambda c: _table_bytes(rows, c, choice.quantization,
-                                                                                       compress))
+        stored = min((Coding.QUANTIZED, Coding.PREDICTED), key=lambda c: _table_bytes(rows, c, quantization, compress))
     by_node = {i: (o, a) for i, o, a in zip(meshes, objects, offsets)}
     placed = {i: _placed(o, global_index[a:a + len(o.triplets)], compact) for i, (o, a) in by_node.items()}
     version = _version(objects, major) if compact else (1, 0)
     if version[0] == 4 and _repeats([p for groups in placed.values() for p in groups], verify):
         version = max(version, records.KIND_VERSION[int(GroupKind.COPY)])
     header = Header(version=version, lossy=choice.lossy, coding=stored,
-                    quantization=choice.quantization, units=scene.units, bbox=choice.bbox,
+                    quantization=quantization, units=scene.units, bbox=choice.bbox,
                     tolerance=float(tolerance), error_bound=choice.error_bound,
                     plane_count=len(rows), object_count=len(scene.nodes),
-                    group_count=sum(len(o.groups) for o in objects))
+                    group_count=sum(len(o.groups) for o in objects),
+                    up_axis=scene.up_axis if version[0] >= 5 else None)
     # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
     index = True if not compact else None
     with _writer(target, header, compress, index, verify) as w:
-        if scene.up_axis is not None:
+        if scene.up_axis is not None and version[0] < 5:
             w.add_metadata(UP_AXIS, scene.up_axis)
         for i, node in enumerate(scene.nodes):
             obj_index = w.add_object(node.name, node.parent, node.transform)
@@ -268,7 +274,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                 continue
             o, a = by_node[i]
             refs = global_index[a:a + len(o.triplets)]
-            if refs.max() >= w.plane_count:
+            if len(refs) and refs.max() >= w.plane_count:
                 w.add_planes(rows[w.plane_count:refs.max() + 1])
             for p, group_refs, bounding, local in placed[i]:
                 k = w.add_group(obj_index, p.kind, group_refs, bounding, cells=p.cells, tree=p.tree,
@@ -276,6 +282,26 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                 if o.plane_colours is not None:
                     w.add_colours(k, o.plane_colours[local])
     return header
+
+
+def _unreferenced(o: _Object) -> _Object:
+    """``o`` without planes where its groups are shell trees or walks over explicit corners only and no
+    colour rides on a plane: their triangles' planes name no corner, so all may be free, and version 5
+    lets such a group have no reference (spec §9.2), where 4 kept one (for its colour: a plane block
+    and a 16-byte h range in the header)."""
+    if o.plane_colours is not None or not all(
+            g.kind in TREE_KINDS and g.shell is not None and np.all(g.shell.explicit) for g in o.groups):
+        return o
+
+    def free(shell: Shell) -> Shell:
+        facets = np.array(shell.facets, dtype=np.int64)
+        facets[:, 0] = FREE
+        return replace(shell, facets=facets)
+
+    none = np.zeros(0, dtype=np.int64)
+    return replace(o, triplets=o.triplets[:0], face_plane=None,
+                   groups=tuple(replace(g, refs=none, bounding=np.zeros(0, dtype=bool), shell=free(g.shell))
+                                for g in o.groups))
 
 
 def _placed(o: _Object, refs: np.ndarray, compact: bool) -> list[tuple[GroupSpec, np.ndarray, np.ndarray, np.ndarray]]:

@@ -149,8 +149,8 @@ def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str
         except GeometryError as exc:
             lost.append(f"part group {g.index} lost: {exc.reason}")
     colours = {r.group: r.rgba for r in got.records if isinstance(r, Colours)}
-    up = [r.value for r in got.records if isinstance(r, Metadata) and r.key == UP_AXIS]
-    return _assemble(objects, parts, got.header.units, colours, up[0] if up else None), lost
+    up = [got.header.up_axis] + [r.value for r in got.records if isinstance(r, Metadata) and r.key == UP_AXIS]
+    return _assemble(objects, parts, got.header.units, colours, next((u for u in up if u), None)), lost
 
 
 #: Face colour of decoded triangles whose group has no cOLR, in an object where others have one.

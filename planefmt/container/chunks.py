@@ -34,12 +34,14 @@ class Limits:
     max_objects: int = 1 << 24
 
 
-def chunk_bytes(ctype: bytes, payload: bytes) -> bytes:
-    """Frame ``payload`` as one chunk: type, length, payload, CRC-32 (spec §4.1)."""
+def chunk_bytes(ctype: bytes, payload: bytes, compact: bool = False) -> bytes:
+    """Frame ``payload`` as one chunk: type, length, payload, CRC-32 (spec §4.1); ``compact``: the
+    length as a varint32, as version 5 frames every chunk after PHDR."""
     if len(ctype) != 4:
         raise ValueError("chunk type must be 4 bytes")
     crc = crc32(payload, crc32(ctype))
-    return ctype + len(payload).to_bytes(4, "little") + payload + crc.to_bytes(4, "little")
+    length = schema.Varint32.build(len(payload)) if compact else len(payload).to_bytes(4, "little")
+    return ctype + length + payload + crc.to_bytes(4, "little")
 
 
 def is_ancillary(ctype: bytes) -> bool:
@@ -78,6 +80,12 @@ class RawChunk:
     type: bytes
     payload: bytes
     offset: int
+    framing: int = 12  # bytes of type, length and CRC
+
+    @property
+    def end(self) -> int:
+        """The offset of the byte after the chunk."""
+        return self.offset + self.framing + len(self.payload)
 
     @property
     def name(self) -> str:
@@ -89,13 +97,16 @@ class ChunkStream:
 
     Works on non-seekable streams (pipes, sockets): it never seeks unless asked
     to, tracks its own byte offset, and reads payloads in bounded blocks.
+    ``compact``: lengths are varint32s (version 5, every chunk after PHDR).
     """
 
-    def __init__(self, fp: BinaryIO, *, file: str | None, limits: Limits, start: int = 0) -> None:
+    def __init__(self, fp: BinaryIO, *, file: str | None, limits: Limits, start: int = 0,
+                 compact: bool = False) -> None:
         self.fp = fp
         self.file = file
         self.limits = limits
         self.offset = start
+        self.compact = compact
         self._size = _stream_size(fp)
 
     def remaining(self) -> int | None:
@@ -153,13 +164,13 @@ class ChunkStream:
     def next_chunk(self) -> RawChunk:
         """Read the next chunk; raise a located ``FormatError`` if it is damaged."""
         start = self.offset
-        head = self.read_exact(8, chunk=None, what="chunk head")
+        head = self.read_exact(4 if self.compact else 8, chunk=None, what="chunk head")
         ctype = head[:4]
         name = type_name(ctype)
         if not valid_type(ctype):
             raise FormatError(f"chunk type {ctype!r} is not four ASCII letters", code="BAD_CHUNK_TYPE",
                               file=self.file, offset=start)
-        length = int.from_bytes(head[4:], "little")
+        length = self._compact_length(name, start) if self.compact else int.from_bytes(head[4:], "little")
         if length > schema.MAX_CHUNK_LENGTH:
             raise FormatError(f"declared length {length} exceeds 2^31-1", code="CHUNK_TOO_LONG",
                               file=self.file, chunk=name, offset=start)
@@ -172,7 +183,21 @@ class ChunkStream:
         if crc != int.from_bytes(tail, "little"):
             raise ChecksumError(f"CRC mismatch (stored {int.from_bytes(tail, 'little'):08x}, computed {crc:08x})",
                                 file=self.file, chunk=name, offset=start)
-        return RawChunk(ctype, payload, start)
+        return RawChunk(ctype, payload, start, self.offset - start - length)
+
+    def _compact_length(self, name: str, start: int) -> int:
+        """A version 5 length: a minimal varint32 of at most 5 bytes, read a byte at a time (spec §4.1)."""
+        value = 0
+        for n in range(schema.LENGTH_VARINT_BYTES):
+            b = self.read_exact(1, chunk=None, what="chunk head")[0]
+            value |= (b & 0x7F) << 7 * n
+            if b < 0x80:
+                if n and not b:
+                    raise FormatError("the chunk length is not a minimal varint", code="BAD_CHUNK_LENGTH",
+                                      file=self.file, chunk=name, offset=start)
+                return value
+        raise FormatError("the chunk length's varint runs past 5 bytes", code="CHUNK_TOO_LONG",
+                          file=self.file, chunk=name, offset=start)
 
     def at_eof(self) -> bool:
         """True if nothing follows; consumes at most one byte."""

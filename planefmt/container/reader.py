@@ -70,7 +70,9 @@ class Reader:
                                   chunk=first.name, offset=first.offset)
             self._count(first)
             self.header, found = self._located(lambda raw: records.decode_header(raw.payload), first)
-            self._after_header = first.offset + 12 + len(first.payload)
+            self._after_header = first.end
+            # Version 5 frames every chunk after PHDR with a varint length (spec §4.1).
+            self._stream.compact = self._compact = self.header.version[0] >= 5
             self.findings.extend(found)
         except BaseException:
             self.close()
@@ -91,9 +93,9 @@ class Reader:
 
     @property
     def up_axis(self) -> str | None:
-        """The world axis that points up, ``"Y"`` or ``"Z"`` (spec §10.3), None where the file does not
-        say; known once the first object, plane block or part group has been read."""
-        return self.metadata.get(UP_AXIS)
+        """The world axis that points up, ``"Y"`` or ``"Z"`` (spec §5, §10.3), None where the file does not
+        say; before version 5, known once the first object, plane block or part group has been read."""
+        return self.header.up_axis or self.metadata.get(UP_AXIS)
 
     @property
     def planes(self) -> np.ndarray:
@@ -150,7 +152,7 @@ class Reader:
     # -- dispatch --------------------------------------------------------------------------
 
     def _count(self, raw: RawChunk) -> None:
-        self.chunk_stats[raw.name] += len(raw.payload) + 12
+        self.chunk_stats[raw.name] += len(raw.payload) + raw.framing
         self.chunk_counts[raw.name] += 1
 
     def _located(self, fn, raw: RawChunk):
@@ -198,6 +200,8 @@ class Reader:
                 raise FormatError("mETA after an OBJT, PLNS or GRUP chunk: metadata precedes the geometry",
                                   code="BAD_METADATA")
             meta = records.decode_metadata(raw.payload)
+            if meta.key == UP_AXIS and self.header.version[0] >= 5:
+                raise FormatError("a version 5 file says its up axis in the header, not in mETA", code="BAD_METADATA")
             if meta.key in self.metadata:
                 raise FormatError(f"a second mETA {meta.key}", code="BAD_METADATA")
             self.metadata[meta.key] = meta.value
@@ -266,8 +270,7 @@ class Reader:
                 code="COUNT_MISMATCH")
         self._done = True
         if not self._stream.at_eof():
-            raise FormatError("bytes follow the PEND chunk", code="TRAILING_DATA",
-                              offset=raw.offset + len(raw.payload) + 12)
+            raise FormatError("bytes follow the PEND chunk", code="TRAILING_DATA", offset=raw.end)
 
     def _append_planes(self, triplets: np.ndarray) -> None:
         n = self._plane_count + len(triplets)
@@ -287,23 +290,25 @@ class Reader:
             raise PlnError("random access needs a seekable file", code="BAD_INDEX", file=self.name)
         end = self._fp.seek(0, os.SEEK_END) - self._base
         major = self.header.version[0]
-        stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
-        if major >= 3 and end >= 12:
-            # A version 3 file without an index ends in an empty PEND (spec §4.4).
-            self._fp.seek(self._base + end - 12)
-            if self._fp.read(12) == chunk_bytes(schema.PEND, b""):
-                raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - 12)
-        if end < 20:
+        stream = ChunkStream(self._fp, file=self.name, limits=self.limits, compact=self._compact)
+        # The two PEND chunks a file can end in (spec §4.4): empty (no index), or the index's offset.
+        empty = chunk_bytes(schema.PEND, b"", self._compact)
+        last = len(empty) + schema.END_SIZE
+        if major >= 3 and end >= len(empty):
+            self._fp.seek(self._base + end - len(empty))
+            if self._fp.read(len(empty)) == empty:
+                raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - len(empty))
+        if end < last:
             raise FormatError("file too short to end with PEND", code="TRUNCATED", file=self.name)
-        stream.seek(self._base + end - 20)
-        stream.offset = end - 20
+        stream.seek(self._base + end - last)
+        stream.offset = end - last
         raw = stream.next_chunk()
         if raw.type != schema.PEND:
             raise FormatError("the file does not end with a PEND chunk", code="MISSING_END", file=self.name,
-                              offset=end - 20)
+                              offset=end - last)
         index_offset = self._located(lambda r: records.decode_end(r.payload, major), raw)
-        if not index_offset or index_offset >= end - 20:
-            raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - 20)
+        if not index_offset or index_offset >= end - last:
+            raise FormatError("the file has no index", code="BAD_INDEX", file=self.name, offset=end - last)
         stream.seek(self._base + index_offset)
         stream.offset = index_offset
         raw = stream.next_chunk()
@@ -331,7 +336,7 @@ class Reader:
         sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
         sub._payloads, sub._sources = {}, {}
         sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
-        stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
+        stream = ChunkStream(self._fp, file=self.name, limits=self.limits, compact=self._compact)
         for i in np.flatnonzero(np.isin(types[: pos + 1], [schema.OBJT, schema.PLNS])).tolist() + [int(pos)]:
             offset = int(entries["offset"][i])
             stream.seek(self._base + offset)

@@ -24,14 +24,17 @@ from .shellfields import _decode_shell, _decode_shell_tree
 from .shellwalk import decode_shell_walk, shell_kind_data
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2}
+VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 0}
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
-CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3)}
+CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3), 5: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
 KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3),
                 int(GroupKind.SHELL_TREE_PARALLELOGRAM): (3, 4), int(GroupKind.SHELL_WALK): (4, 1),
                 int(GroupKind.SHELL_WALK_MULTI): (4, 2), int(GroupKind.COPY): (4, 2)}
+#: Kinds whose groups may have no reference in version 5 (spec §9.2): shells of free triangles over
+#: explicit corners, and copies of them.
+UNREFERENCED_KINDS = frozenset({int(GroupKind.SHELL), *map(int, TREE_KINDS), int(GroupKind.COPY)})
 
 
 def _kind(value: int) -> GroupKind | int:
@@ -67,8 +70,12 @@ def encode_header(h: Header) -> bytes:
         version_major=h.version[0], version_minor=h.version[1], flags=flags, coding=int(h.coding),
         bits_nu=q.bits_nu if q else 0, bits_phi=q.bits_phi if q else 0, bits_h=q.bits_h if q else 0,
         units=int(h.units), extra=h.extra)
+    if h.version[0] >= 5:
+        fields["units"] = int(h.units) | schema.UP_AXIS_CODES.index(h.up_axis) << schema.UP_AXIS_SHIFT
+    elif h.up_axis is not None:
+        raise PlnError("before version 5 the up axis is a mETA chunk, not a header field", code="BAD_HEADER_VALUE")
     if h.version[0] >= 3:
-        return schema.Header3.build(dict(
+        return (schema.Header5 if h.version[0] >= 5 else schema.Header3).build(dict(
             fields, h_range=[q.h_min, q.h_max] if h.coding.quantized else None,
             bbox=None if h.bbox is None else [*_f32_toward(bbox[0], -math.inf, "a bounding box coordinate"),
                                               *_f32_toward(bbox[1], math.inf, "a bounding box coordinate")],
@@ -101,7 +108,7 @@ def _f32_up(value: float, name: str) -> float:
 
 def header_size(major: int) -> int:
     """The smallest PHDR payload of a version ``major`` file."""
-    return schema.HEADER3_FIXED if major >= 3 else schema.HEADER_SIZE
+    return schema.HEADER5_FIXED if major >= 5 else schema.HEADER3_FIXED if major >= 3 else schema.HEADER_SIZE
 
 
 def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
@@ -110,7 +117,7 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
         raise FormatError("PHDR is too short to hold a version", code="BAD_PAYLOAD")
     major, minor = payload[0], payload[1]
     if major not in VERSIONS:
-        raise VersionError(f"major version {major} is not supported (this reader reads 1.x, 2.x, 3.x and 4.x)")
+        raise VersionError(f"major version {major} is not supported (this reader reads 1.x to 5.x)")
     if len(payload) < header_size(major):
         raise FormatError(f"PHDR is {len(payload)} bytes, version {major} needs {header_size(major)}",
                           code="BAD_PAYLOAD")
@@ -119,10 +126,11 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
         findings.append(("NEWER_MINOR_VERSION", f"file is version {major}.{minor}; read as {major}.{VERSIONS[major]}"))
     if major >= 3:
         # The coding decides which fields follow the fixed part, so it is checked before they are read.
-        if payload[4] not in CODINGS[major]:
-            raise VersionError(f"triplet coding {payload[4]} is not supported in a version {major} file",
+        at = 3 if major >= 5 else 4
+        if payload[at] not in CODINGS[major]:
+            raise VersionError(f"triplet coding {payload[at]} is not supported in a version {major} file",
                                code="UNSUPPORTED_CODING")
-        r = _parse(schema.Header3, payload, "PHDR")
+        r = _parse(schema.Header5 if major >= 5 else schema.Header3, payload, "PHDR")
         h_min, h_max = r.h_range if r.h_range is not None else (0.0, 0.0)
         bbox_min, bbox_max = (r.bbox[:3], r.bbox[3:]) if r.bbox is not None else (None, None)
         counts = r.counts or cs.Container(plane_count=0, object_count=0, group_count=0)
@@ -137,9 +145,15 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
     if coding.quantized:
         q = Quantization(r.bits_nu, r.bits_phi, r.bits_h, h_min, h_max)
         quantize.check_quantization(q)
-    units = Units(r.units) if r.units in Units._value2member_map_ else None
+    code, up_axis = r.units, None
+    if major >= 5:
+        code, up = r.units & schema.UNITS_MASK, r.units >> schema.UP_AXIS_SHIFT & 3
+        if up >= len(schema.UP_AXIS_CODES):
+            raise FormatError(f"unknown up axis code {up}", code="BAD_HEADER_VALUE")
+        up_axis = schema.UP_AXIS_CODES[up]
+    units = Units(code) if code in Units._value2member_map_ else None
     if units is None:
-        raise FormatError(f"unknown units code {r.units}", code="BAD_HEADER_VALUE")
+        raise FormatError(f"unknown units code {code}", code="BAD_HEADER_VALUE")
     bbox = None
     if r.flags & schema.FLAG_BBOX_KNOWN:
         bbox = np.array([bbox_min, bbox_max], dtype=np.float64)
@@ -154,7 +168,7 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
         version=(major, minor), lossy=bool(r.flags & schema.FLAG_LOSSY), coding=coding, quantization=q,
         units=units, bbox=bbox, tolerance=r.tolerance, error_bound=r.error_bound,
         plane_count=counts.plane_count if known else None, object_count=counts.object_count if known else None,
-        group_count=counts.group_count if known else None, extra=bytes(r.extra),
+        group_count=counts.group_count if known else None, extra=bytes(r.extra), up_axis=up_axis,
     )
     return header, findings
 
@@ -380,7 +394,7 @@ def encode_group(g: PartGroup, compress: bool, major: int = 1, brotli_allowed: b
     if g.shell is not None and major < 3:
         raise PlnError("shell groups need version 3.2", code="UNKNOWN_GROUP_KIND")
     if body is None:
-        body = group_body(g, brotli_allowed) if major >= 2 else _body(g)
+        body = group_body(g, brotli_allowed, major) if major >= 2 else _body(g)
     method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9,
                           brotli_allowed=brotli_allowed and major >= 4)
     if major >= 3:
@@ -394,8 +408,8 @@ def _roles(g: PartGroup) -> bytes:
     return np.packbits(np.asarray(g.bounding, dtype=bool), bitorder="little").tobytes()
 
 
-def group_body(g: PartGroup, decide: bool = True) -> bytes:
-    """The raw (uncompressed) GRUP body of versions 2 to 4 (spec §9.2): references, roles, kind data
+def group_body(g: PartGroup, decide: bool = True, major: int = 4) -> bytes:
+    """The raw (uncompressed) GRUP body of versions 2 to 5 (spec §9.2): references, roles, kind data
     (``decide`` False: a shell walk's mode as deflate ranks them, for a size trial)."""
     refs = np.asarray(g.refs, dtype=np.int64)
     gaps = np.diff(refs, prepend=0)
@@ -421,7 +435,7 @@ def group_body(g: PartGroup, decide: bool = True) -> bytes:
                 varint.encode([len(facets)]),
                 varint.encode(np.column_stack([gaps, facets[:, 1:]]).astype(np.uint64))]
     elif g.kind in (GroupKind.SHELL, *TREE_KINDS) and g.shell is not None:
-        out.append(shell_kind_data(g.kind, g.shell, decide))
+        out.append(shell_kind_data(g.kind, g.shell, decide, major))
     elif g.kind == GroupKind.COPY:
         out.append(varint.encode([g.source]))
     else:
@@ -469,7 +483,7 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
         findings.append(("SKIPPED_GROUP_KIND", f"group {head.index} has kind {head.kind} of a newer minor version"))
     body = unpack(head.compression, bytes(head.body), head.raw_size, limits, major)
     if major >= 2:
-        group = _decode_compact(head, body, planes, limits, kinds)
+        group = _decode_compact(head, body, planes, limits, kinds, major)
         return group, findings
     if len(body) < 4:
         raise FormatError("group body is shorter than its reference count", code="BAD_PAYLOAD")
@@ -502,22 +516,22 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
     return group, findings
 
 
-def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: frozenset[int]) -> PartGroup:
-    """A version 2 or 3 group body (spec §9.2)."""
+def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: frozenset[int], major: int) -> PartGroup:
+    """A group body of versions 2 to 5 (spec §9.2)."""
     raw = np.frombuffer(body, dtype=np.uint8)
     (count,), pos = varint.decode(raw, 1, "group reference count")
     count = int(count)
     if count > limits.max_refs_per_group:
         raise LimitError(f"group declares {count} references, the limit is {limits.max_refs_per_group}")
-    if count == 0:
+    if count == 0 and not (major >= 5 and head.kind not in kinds - UNREFERENCED_KINDS):
         raise FormatError(f"group {head.index} references no planes", code="BAD_GROUP_STRUCTURE")
     gaps, used = varint.decode(raw[pos:], count, "group references")
     pos += used
-    if gaps.max() >= planes:
+    if count and gaps.max() >= planes:
         raise FormatError(f"group {head.index} references a plane past the {planes} defined",
                           code="BAD_PLANE_REFERENCE")
     refs = np.cumsum(gaps.astype(np.int64))
-    if refs[-1] >= planes:
+    if count and refs[-1] >= planes:
         raise FormatError(f"group {head.index} references plane {int(refs[-1])}, only {planes} defined",
                           code="BAD_PLANE_REFERENCE")
     bounding, pos = varint.bit_field(raw, pos, count, "group body", "role bits")
@@ -527,11 +541,11 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
     if head.kind not in kinds:
         extra = rest.tobytes()
     elif head.kind == GroupKind.SHELL:
-        shell = _decode_shell(rest, bounding)
+        shell = _decode_shell(rest, bounding, major)
     elif head.kind in (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI):
-        shell = decode_shell_walk(rest, bounding, head.kind == GroupKind.SHELL_WALK_MULTI)
+        shell = decode_shell_walk(rest, bounding, head.kind == GroupKind.SHELL_WALK_MULTI, major)
     elif head.kind in TREE_KINDS:
-        shell = _decode_shell_tree(rest, bounding, head.kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
+        shell = _decode_shell_tree(rest, bounding, head.kind == GroupKind.SHELL_TREE_PARALLELOGRAM, major)
     elif head.kind == GroupKind.CELLS:
         cells = _decode_compact_cells(rest, count, limits)
     elif head.kind == GroupKind.BSP:
@@ -700,7 +714,7 @@ def decode_colours(payload: bytes, group_refs: dict[int, int], major: int = 1) -
         r = _parse(schema.Colours, payload, "cOLR")
         if len(payload) != 8 + 4 * r.count:
             raise FormatError("cOLR size does not match its count", code="BAD_COLOURS")
-    if head.group not in group_refs or group_refs[head.group] != head.count:
+    if head.group not in group_refs or group_refs[head.group] != head.count or not head.count:
         raise FormatError(f"cOLR for group {head.group} does not match a preceding group's references",
                           code="BAD_COLOURS")
     rgba = np.frombuffer(bytes(payload[8:]), dtype=np.uint8).reshape(-1, 4)

@@ -16,6 +16,7 @@ import os
 from dataclasses import dataclass, field
 from typing import BinaryIO
 
+import construct as cs
 import numpy as np
 
 from ..errors import FormatError, PlnError
@@ -109,7 +110,7 @@ class _Salvager:
                     break
                 pos = nxt
                 continue
-            pos = chunk.offset + len(chunk.payload) + 12
+            pos = chunk.end
             if chunk.type == schema.PEND:
                 if pos != len(self.data):
                     self.lose("TRAILING_DATA", f"{len(self.data) - pos} bytes after PEND ignored", pos)
@@ -127,26 +128,42 @@ class _Salvager:
             self.lose("COUNT_MISMATCH", f"part groups {self.groups}..{h.group_count - 1} lost", None)
         return self.out
 
+    def _heads(self, pos: int) -> list[tuple[int, int]]:
+        """(length, head bytes) of each framing that may stand at ``pos``: PHDR's u32, version 5's varint
+        after it, and both while no header is known (spec §4.1)."""
+        ctype = self.data[pos:pos + 4]
+        if len(ctype) < 4 or not valid_type(ctype):
+            return []
+        h = self.out.header
+        out = []
+        if ctype == schema.PHDR or h is None or h.version[0] < 5:
+            if pos + 8 <= len(self.data):
+                out.append((int.from_bytes(self.data[pos + 4:pos + 8], "little"), 8))
+        if ctype != schema.PHDR and (h is None or h.version[0] >= 5):
+            try:
+                length = schema.Varint32.parse(self.data[pos + 4:pos + 4 + schema.LENGTH_VARINT_BYTES])
+                out.append((length, 4 + len(schema.Varint32.build(length))))
+            except cs.ConstructError:
+                pass
+        return out
+
     def _framed(self, pos: int) -> int | None:
         """Where the next chunk starts if a valid type and a length that fits stand at ``pos``."""
-        head = self.data[pos:pos + 8]
-        if len(head) < 8 or not valid_type(head[:4]):
-            return None
-        after = pos + 12 + int.from_bytes(head[4:], "little")
-        return after if after <= len(self.data) else None
+        for length, head in self._heads(pos):
+            after = pos + head + length + 4
+            if after <= len(self.data):
+                return after
+        return None
 
     def _chunk_at(self, pos: int) -> RawChunk | None:
-        head = self.data[pos:pos + 8]
-        if len(head) < 8 or not valid_type(head[:4]):
-            return None
-        length = int.from_bytes(head[4:], "little")
-        end = pos + 8 + length
-        if length > self.limits.max_chunk_length or end + 4 > len(self.data):
-            return None
-        payload = self.data[pos + 8:end]
-        if crc32(payload, crc32(head[:4])) != int.from_bytes(self.data[end:end + 4], "little"):
-            return None
-        return RawChunk(head[:4], payload, pos)
+        for length, head in self._heads(pos):
+            end = pos + head + length
+            if length > self.limits.max_chunk_length or end + 4 > len(self.data):
+                continue
+            payload = self.data[pos + head:end]
+            if crc32(payload, crc32(self.data[pos:pos + 4])) == int.from_bytes(self.data[end:end + 4], "little"):
+                return RawChunk(self.data[pos:pos + 4], payload, pos, head + 4)
+        return None
 
     def _resync(self, start: int) -> int | None:
         """The first offset >= start where a known chunk type begins an intact chunk."""

@@ -67,6 +67,8 @@ ChunkTail = cs.Struct(
     "crc" / cs.Int32ul,
 )
 MAX_CHUNK_LENGTH = 2**31 - 1
+#: Version 5 frames every chunk after PHDR with a varint32 length (spec §4.1): at most 5 bytes.
+LENGTH_VARINT_BYTES = 5
 
 # spec §4.2 Chunk types
 PHDR = b"PHDR"
@@ -211,6 +213,16 @@ ShellGrid = cs.Struct(
     "step" / cs.Float64l,
 )
 SHELL_GRID_BYTES = 32
+# spec §9.10, version 5: the same grid in float32
+ShellGrid5 = cs.Struct(
+    "origin" / cs.Array(3, cs.Float32l),
+    "step" / cs.Float32l,
+)
+
+
+def shell_grid(major: int) -> tuple[cs.Struct, int]:
+    """The grid of a shell group's explicit corners in a version ``major`` file, and its size."""
+    return (ShellGrid5, 16) if major >= 5 else (ShellGrid, SHELL_GRID_BYTES)
 # spec §9.11 Shell tree (kind 7) and §9.12 (kind 8, explicit corners predicted by parallelograms)
 # data: corner and triangle counts, links, corner codes, face codes (varints), one flag bit per
 # corner, picks (varints), then where a corner is explicit the same ShellGrid and zigzag varint
@@ -257,8 +269,7 @@ END_SIZE = 8
 # spec §5 Header of version 3: a fixed part, then only the fields the coding and flags call for
 HEADER3_FIXED = 9
 CODINGS_WITH_RANGE = (2, 3)
-Header3 = cs.Struct(
-    *HEADER_FIXED,
+_HEADER_FIELDS = (
     "h_range" / cs.If(lambda this: this.coding in CODINGS_WITH_RANGE, cs.Array(2, cs.Float64l)),
     "bbox" / cs.If(cs.this.flags & FLAG_BBOX_KNOWN, cs.Array(6, cs.Float32l)),
     "tolerance" / cs.Float32l,
@@ -270,6 +281,14 @@ Header3 = cs.Struct(
     )),
     "extra" / cs.GreedyBytes,
 )
+Header3 = cs.Struct(*HEADER_FIXED, *_HEADER_FIELDS)
+# spec §5 Header of version 5: flags in one byte, and the units byte holds the up axis in bits 4 and 5
+HEADER5_FIXED = 8
+Header5 = cs.Struct(*(f if f.name != "flags" else "flags" / cs.Int8ul for f in HEADER_FIXED), *_HEADER_FIELDS)
+UNITS_MASK = 0x0F
+UP_AXIS_SHIFT = 4
+#: The up axis codes of version 5's units byte (spec §5): 0 not said, then the axes of spec §10.3.
+UP_AXIS_CODES = (None, "Y", "Z")
 
 # spec §7.1 Plane table head of version 3
 PlaneBlock3 = cs.Struct(

@@ -80,7 +80,18 @@ def check_shell(shell: Shell, bounding: np.ndarray) -> None:
         raise bad("corners are not numbered in order of first use, or one is unused")
 
 
-def _shell_body(shell: Shell) -> bytes:
+def grid_bytes(shell: Shell, major: int) -> bytes:
+    """A shell's grid as a version ``major`` file stores it (spec §9.10): float64, or float32 from
+    version 5 on, where origin and step must be float32 values (``groups.shells`` makes them so)."""
+    struct, _ = schema.shell_grid(major)
+    values = [*(float(x) for x in shell.origin), float(shell.step)]
+    if major >= 5 and np.any(np.asarray(values, dtype=np.float32).astype(np.float64) != values):
+        raise FormatError("a version 5 shell grid's origin and step must be float32 values",
+                          code="BAD_GROUP_STRUCTURE")
+    return struct.build(dict(origin=values[:3], step=values[3]))
+
+
+def _shell_body(shell: Shell, major: int = 4) -> bytes:
     """The kind data of a SHELL group (spec §9.10)."""
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
@@ -92,13 +103,13 @@ def _shell_body(shell: Shell) -> bytes:
            varint.encode(np.asarray(shell.vertex_planes, dtype=np.uint64).reshape(-1))]
     if explicit.any():
         grid = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
-        out += [schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step))),
+        out += [grid_bytes(shell, major),
                 varint.encode(varint.zigzag(np.diff(grid, axis=0, prepend=np.zeros((1, 3), dtype=np.int64))))]
     out += [varint.encode(np.diff(planar, prepend=0)), varint.encode(codes)]
     return b"".join(out)
 
 
-def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
+def _decode_shell(raw: np.ndarray, bounding: np.ndarray, major: int = 4) -> Shell:
     """The corners and triangles of a SHELL body (spec §9.10), checked."""
     (v, t, u), pos = varint.decode(raw, 3, "shell counts")
     v, t, u = int(v), int(t), int(u)
@@ -114,7 +125,7 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
     pos += used
     origin, step, grid = np.zeros(3), 0.0, np.zeros((0, 3), dtype=np.int64)
     if e:
-        origin, step, deltas, pos = _read_grid(raw, pos, e, "shell group", "shell corner coordinates")
+        origin, step, deltas, pos = _read_grid(raw, pos, e, "shell group", "shell corner coordinates", major)
         steps = varint.unzigzag(deltas).reshape(-1, 3)
     gaps, used = varint.decode(raw[pos:], t - u, "shell face references")
     pos += used
@@ -150,15 +161,21 @@ def _decode_shell(raw: np.ndarray, bounding: np.ndarray) -> Shell:
 # spec 3.3 §8.10 Shell trees ----------------------------------------------------------------------
 
 def _read_grid(raw: np.ndarray, pos: int, explicit: int, label: str,
-               field: str) -> tuple[np.ndarray, float, np.ndarray, int]:
+               field: str, major: int = 4) -> tuple[np.ndarray, float, np.ndarray, int]:
     """A shell body's grid (spec §9.10) at ``pos`` and the ``3 * explicit`` coordinate varints after it
     (``field`` in messages): ``(origin, step, raw coordinate varints, position after them)``."""
-    if len(raw) < pos + schema.SHELL_GRID_BYTES:
-        raise FormatError(f"{label}: the body ends inside its grid", code="BAD_PAYLOAD")
-    g = schema.ShellGrid.parse(raw[pos:pos + schema.SHELL_GRID_BYTES].tobytes())
-    pos += schema.SHELL_GRID_BYTES
+    origin, step, pos = read_grid(raw, pos, label, major)
     deltas, used = varint.decode(raw[pos:], 3 * explicit, field)
-    return np.array(g.origin, dtype=np.float64), float(g.step), deltas, pos + used
+    return origin, step, deltas, pos + used
+
+
+def read_grid(raw: np.ndarray, pos: int, label: str, major: int) -> tuple[np.ndarray, float, int]:
+    """The grid of a version ``major`` shell body at ``pos`` (spec §9.10): origin, step, position after it."""
+    struct, size = schema.shell_grid(major)
+    if len(raw) < pos + size:
+        raise FormatError(f"{label}: the body ends inside its grid", code="BAD_PAYLOAD")
+    g = struct.parse(raw[pos:pos + size].tobytes())
+    return np.array(g.origin, dtype=np.float64), float(g.step), pos + size
 
 
 def resolve_chains(value: np.ndarray, pointer: np.ndarray, offset: np.ndarray) -> np.ndarray:
@@ -408,16 +425,16 @@ def check_shell_tree(shell: Shell, bounding: np.ndarray, parallelogram: bool = F
                           "planes in ascending order)", code="BAD_GROUP_STRUCTURE")
 
 
-def _shell_tree_body(shell: Shell, parallelogram: bool = False) -> bytes:
+def _shell_tree_body(shell: Shell, parallelogram: bool = False, major: int = 4) -> bytes:
     """The kind data of a SHELL_TREE group (spec §9.11), or with ``parallelogram`` of a
     SHELL_TREE_PARALLELOGRAM group (§9.12)."""
-    return b"".join(shell_tree_fields(shell, parallelogram).values())
+    return b"".join(shell_tree_fields(shell, parallelogram, major).values())
 
 
-def shell_tree_fields(shell: Shell, parallelogram: bool = False) -> dict[str, bytes]:
+def shell_tree_fields(shell: Shell, parallelogram: bool = False, major: int = 4) -> dict[str, bytes]:
     """The fields of a SHELL_TREE body (spec §9.11), or a SHELL_TREE_PARALLELOGRAM one (§9.12), by
     name, in body order."""
-    common, coordinates = _tree_fields(shell)
+    common, coordinates = _tree_fields(shell, major)
     return {**common, **coordinates(parallelogram)}
 
 
@@ -462,7 +479,7 @@ def surface_fields(shell: Shell) -> dict[str, bytes]:
     return out
 
 
-def _tree_fields(shell: Shell):
+def _tree_fields(shell: Shell, major: int = 4):
     """The fields of a shell tree's body up to the picks, and a function of ``parallelogram`` giving
     the grid and the coordinates (none without explicit corners)."""
     explicit = np.asarray(shell.explicit, dtype=bool)
@@ -487,12 +504,12 @@ def _tree_fields(shell: Shell):
         base = _predict(g_all, _tree_predictors(links, tri, explicit, np.where(root, 3, 1), new, parallelogram))
         # Axis by axis: each axis's residuals deflate as one run (CAD/box.STL: 7.5 kB against 8.8 kB
         # interleaved).
-        return {"grid": schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step))),
+        return {"grid": grid_bytes(shell, major),
                 "coordinates": varint.encode(varint.zigzag((g_all - base)[explicit].T))}
     return out, coordinates
 
 
-def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: bool = False) -> Shell:
+def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: bool = False, major: int = 4) -> Shell:
     """The corners and triangles of a SHELL_TREE body (spec §9.11), or with ``parallelogram`` of a
     SHELL_TREE_PARALLELOGRAM body (§9.12), checked."""
     def bad(reason: str) -> FormatError:
@@ -550,12 +567,12 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: boo
         raise bad(f"{int(new.sum())} corners are named anew, not {v}")
     if ((tri[:, 0] == tri[:, 1]) | (tri[:, 1] == tri[:, 2]) | (tri[:, 0] == tri[:, 2])).any():
         raise bad("a triangle names one corner twice")
-    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, parallelogram)
+    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, parallelogram, major=major)
 
 
 def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, links: np.ndarray,
               faces: np.ndarray, explicit: np.ndarray, new: np.ndarray, parallelogram: bool | None,
-              averaged: bool = False) -> Shell:
+              averaged: bool = False, major: int = 4) -> Shell:
     """A shell tree's body from its faces' checks on (spec §9.11 and §9.12; §9.13 with
     ``parallelogram`` None, whose mode byte and tables come before the coordinates; §9.14 with
     ``averaged`` too, whose corners parallelograms average where they can): ``tri`` and
@@ -604,11 +621,7 @@ def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, 
             mode = int(raw[pos])
             pos += 1
             parallelogram = bool(mode & 1)
-        if len(raw) < pos + schema.SHELL_GRID_BYTES:
-            raise FormatError("shell tree: the body ends inside its grid", code="BAD_PAYLOAD")
-        g = schema.ShellGrid.parse(raw[pos:pos + schema.SHELL_GRID_BYTES].tobytes())
-        origin, step = np.array(g.origin, dtype=np.float64), float(g.step)
-        pos += schema.SHELL_GRID_BYTES
+        origin, step, pos = read_grid(raw, pos, "shell tree", major)
         tables = None
         if mode & 2:
             tables, pos = _read_tables(raw, pos, e)

@@ -21,7 +21,7 @@ import numpy as np
 from ..errors import FormatError, LimitError
 from ..model import GroupKind, Shell
 from . import schema, varint
-from .shellfields import (_predict, _shell_body, _shell_tree_body, _tree_parents, _tree_predictors, code_stream,
+from .shellfields import (_predict, _shell_body, grid_bytes, _shell_tree_body, _tree_parents, _tree_predictors, code_stream,
                           parallelograms, predict_averaged, same_tree, surface_fields, tree_rest)
 
 try:
@@ -219,7 +219,7 @@ def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray,
     return tri, links
 
 
-def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, averaged: bool = False) -> Shell:
+def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, averaged: bool = False, major: int = 4) -> Shell:
     """The corners and triangles of a SHELL_WALK body (spec §9.13), or with ``averaged`` of a
     SHELL_WALK_MULTI body (§9.14), checked."""
     (v, t, x), pos = varint.decode(raw, 3, "shell walk counts")
@@ -237,11 +237,12 @@ def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, averaged: bool = Fa
     explicit, pos = varint.bit_field(raw, pos, v, "shell walk: the body", "corner flags")
     tri, links = _walk(symbols, escapes, v)
     _, new, _ = code_stream(tri, links == 0)
-    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None, averaged)
+    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None, averaged, major)
 
 
 def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray,
-                 options: tuple[tuple[GroupKind, int], ...], decide: bool = True) -> tuple[GroupKind, dict[str, bytes]]:
+                 options: tuple[tuple[GroupKind, int], ...], decide: bool = True,
+                 major: int = 4) -> tuple[GroupKind, dict[str, bytes]]:
     """The kind (SHELL_WALK or SHELL_WALK_MULTI) and the mode, grid, tables and coordinates of a
     walk's explicit corners, in whichever of the ``(kind, mode)`` options compresses smallest
     (:func:`_smallest`)."""
@@ -261,7 +262,7 @@ def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarr
     terms = {p: _tree_predictors(links, tri, explicit, per, new, p)
              for p in {bool(m & MODE_PARALLELOGRAM) for _, m in options}}
     averaged = parallelograms(tri, explicit) if any(k == GroupKind.SHELL_WALK_MULTI for k, _ in options) else None
-    grid = schema.ShellGrid.build(dict(origin=[float(x) for x in shell.origin], step=float(shell.step)))
+    grid = grid_bytes(shell, major)
     fields = []
     for kind, m in options:
         v = indices if m & MODE_TABLES else values
@@ -338,7 +339,7 @@ def codings(kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[tupl
 
 
 def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
-            decide: bool = True) -> tuple[GroupKind, dict[str, bytes]]:
+            decide: bool = True, major: int = 4) -> tuple[GroupKind, dict[str, bytes]]:
     common = surface_fields(shell)
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
@@ -362,7 +363,7 @@ def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
     if not explicit.any():
         # Nothing to predict: the kinds' bodies are alike, and the first needs the lower version.
         return kinds[0], out
-    kind, coordinates = _coordinates(shell, tri, links, new, codings(kinds, mode), decide)
+    kind, coordinates = _coordinates(shell, tri, links, new, codings(kinds, mode), decide, major)
     return kind, {**out, **coordinates}
 
 
@@ -374,14 +375,15 @@ def shell_walk_fields(shell: Shell, mode: int | None = None, kind: GroupKind = G
     return _fields(shell, (kind,), mode)[1]
 
 
-def shell_kind_data(kind: GroupKind, shell: Shell, decide: bool = True) -> bytes:
+def shell_kind_data(kind: GroupKind, shell: Shell, decide: bool = True, major: int = 4) -> bytes:
     """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11), SHELL_TREE_PARALLELOGRAM (§9.12),
-    SHELL_WALK (§9.13) or SHELL_WALK_MULTI (§9.14) group (``decide``: :func:`shell_walk_body`'s)."""
+    SHELL_WALK (§9.13) or SHELL_WALK_MULTI (§9.14) group in a version ``major`` file (``decide``:
+    :func:`shell_walk_body`'s)."""
     if kind == GroupKind.SHELL:
-        return _shell_body(shell)
+        return _shell_body(shell, major)
     if kind in WALK_KINDS:
-        return shell_walk_body(shell, kind, decide)
-    return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM)
+        return shell_walk_body(shell, kind, decide, major)
+    return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM, major)
 
 
 #: The last few bodies made, by the shell they were made of (kept alive here, so an id is not
@@ -403,26 +405,30 @@ def _held(shell: Shell) -> dict:
 
 
 def shell_walk_choice(shell: Shell, kinds: tuple[GroupKind, ...] = WALK_KINDS) -> tuple[GroupKind, bytes]:
-    """Whichever of ``kinds`` (shell walk kinds) codes ``shell`` smallest, and its kind data. Shells
-    are frozen and their arrays never written to, so a body made once for a shell object is its body."""
+    """Whichever of ``kinds`` (shell walk kinds) codes ``shell`` smallest, and its kind data (in a
+    version 4 file: the grid's width is the same for every kind). Shells are frozen and their arrays
+    never written to, so a body made once for a shell object is its body."""
     bodies = _held(shell)
     if kinds not in bodies:
         kind, fields = _fields(shell, kinds)
         bodies[kinds] = kind
-        bodies[kind, True] = b"".join(fields.values())
-    return bodies[kinds], bodies[bodies[kinds], True]
+        bodies[kind, True, 4] = b"".join(fields.values())
+    return bodies[kinds], bodies[bodies[kinds], True, 4]
 
 
-def shell_walk_body(shell: Shell, kind: GroupKind = GroupKind.SHELL_WALK, decide: bool = True) -> bytes:
+def shell_walk_body(shell: Shell, kind: GroupKind = GroupKind.SHELL_WALK, decide: bool = True,
+                    major: int = 4) -> bytes:
     """The kind data of ``shell`` as a ``kind`` group (SHELL_WALK, spec §9.13, or SHELL_WALK_MULTI,
-    §9.14), its coordinates in the mode that compresses smallest (``decide`` False: as deflate ranks
-    them, for a size to compare codings by; :func:`shell_walk_choice` decides again)."""
+    §9.14) in a version ``major`` file, its coordinates in the mode that compresses smallest (``decide``
+    False: as deflate ranks them, for a size to compare codings by; :func:`shell_walk_choice` decides
+    again)."""
     bodies = _held(shell)
-    if (kind, True) in bodies:
-        return bodies[kind, True]
-    if (kind, decide) not in bodies:
-        bodies[kind, decide] = b"".join(_fields(shell, (kind,), decide=decide)[1].values())
-    return bodies[kind, decide]
+    width = 5 if major >= 5 else 4
+    if (kind, True, width) in bodies:
+        return bodies[kind, True, width]
+    if (kind, decide, width) not in bodies:
+        bodies[kind, decide, width] = b"".join(_fields(shell, (kind,), decide=decide, major=major)[1].values())
+    return bodies[kind, decide, width]
 
 
 def check_shell_walk(shell: Shell, bounding: np.ndarray, kind: GroupKind = GroupKind.SHELL_WALK) -> None:

@@ -21,7 +21,7 @@ import numpy as np
 from . import records, schema, shellfields, shellwalk
 from .chunks import chunk_bytes, is_ancillary, valid_type
 from ..errors import PlnError
-from ..model import (TREE_KINDS, Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record,
+from ..model import (TREE_KINDS, UP_AXIS, Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record,
                     Shell, UnknownChunk)
 
 def _read_umask() -> int:
@@ -128,7 +128,8 @@ class Writer:
     def _emit(self, ctype: bytes, payload: bytes, ordinal: int | None = None) -> None:
         if ordinal is not None:
             self._entries.append((self._pos, ctype, ordinal))
-        self._emit_raw(chunk_bytes(ctype, payload))
+        # Version 5 frames every chunk after PHDR with a varint length (spec §4.1).
+        self._emit_raw(chunk_bytes(ctype, payload, self._major >= 5 and ctype != schema.PHDR))
 
     def add_object(self, name: str, parent: int | None = None, transform: np.ndarray | None = None) -> int:
         """Start object ``name``; returns its index. ``transform``: 4x4 local -> parent."""
@@ -166,9 +167,10 @@ class Writer:
         (version 3.2 and later) ``shell`` (spec §9.10).
         """
         refs = np.asarray(refs, dtype=np.int64).reshape(-1)
-        if len(refs) == 0:
-            raise PlnError("a part group needs at least one plane", code="BAD_GROUP_STRUCTURE")
-        if refs.min() < 0 or refs.max() >= self._planes:
+        if len(refs) == 0 and not (self._major >= 5 and int(kind) in records.UNREFERENCED_KINDS):
+            raise PlnError("a part group needs at least one plane (version 5: but for shells and copies)",
+                           code="BAD_GROUP_STRUCTURE")
+        if len(refs) and (refs.min() < 0 or refs.max() >= self._planes):
             raise PlnError(f"references must lie in 0..{self._planes - 1}: planes are written before "
                            f"the groups that use them", code="BAD_PLANE_REFERENCE")
         if not 0 <= obj < self._objects:
@@ -210,7 +212,7 @@ class Writer:
                           facets=facets, shell=shell)
         body = None
         if self._bodies is not None and kind != GroupKind.COPY:
-            body = records.group_body(group, self._brotli)
+            body = records.group_body(group, self._brotli, self._major)
             key = (int(kind), hashlib.sha256(body).digest())
             if key in self._bodies:
                 group = PartGroup(index=index, object=obj, kind=int(GroupKind.COPY), refs=group.refs,
@@ -225,13 +227,16 @@ class Writer:
     def add_colours(self, group: int, rgba: np.ndarray) -> None:
         """Attach one RGBA8 colour per reference of an already written group (cOLR)."""
         rgba = np.asarray(rgba, dtype=np.uint8).reshape(-1, 4)
-        if not 0 <= group < len(self._groups) or self._groups[group] != len(rgba):
+        if not 0 <= group < len(self._groups) or self._groups[group] != len(rgba) or not len(rgba):
             raise PlnError("colours need a written group and one colour per reference", code="BAD_COLOURS")
         self._emit(schema.COLR, records.encode_colours(Colours(group, rgba), self._major))
 
     def add_metadata(self, key: str, value: str) -> None:
         """Write a mETA chunk (spec §10.3): ``key`` = ``value``, each key once, before any object,
-        plane or group. ``add_metadata(planefmt.UP_AXIS, "Z")`` records that +z points up."""
+        plane or group. ``add_metadata(planefmt.UP_AXIS, "Z")`` records that +z points up (version 5:
+        ``Header.up_axis`` does)."""
+        if key == UP_AXIS and self._major >= 5:
+            raise PlnError("a version 5 file says its up axis in the header (Header.up_axis)", code="BAD_METADATA")
         if self._entries:
             raise PlnError("metadata is written before the first object, plane block and part group",
                            code="BAD_METADATA")

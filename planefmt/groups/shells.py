@@ -172,12 +172,14 @@ def encode_shell(plan: ShellPlan, omega: np.ndarray, h: np.ndarray, budget: floa
         k = np.flatnonzero(named)
         named[k[~(np.linalg.norm(corners(omega, h, triple[k]) - p[k], axis=1) <= budget)]] = False
     explicit = ~named
-    step = 2.0 * budget / math.sqrt(3.0)
+    # Origin and step are float32 values, which version 5 stores (spec §9.10): the step rounded down
+    # keeps half a cell's diagonal within the budget, and any origin does.
+    step = _f32_down(2.0 * budget / math.sqrt(3.0))
     origin = np.zeros(3)
     grid = np.zeros((0, 3), dtype=np.int64)
     if explicit.any():
         q = p[explicit]
-        origin = q.min(axis=0)
+        origin = _f32_down(q.min(axis=0))
         span = float((q.max(axis=0) - origin).max())
         if span / step >= MAX_GRID:
             raise GeometryError(f"a shell spans {span:g} model units, more than {MAX_GRID:.3g} steps of "
@@ -185,6 +187,13 @@ def encode_shell(plan: ShellPlan, omega: np.ndarray, h: np.ndarray, budget: floa
         grid = np.rint((q - origin) / step).astype(np.int64)
     return Shell(explicit=explicit, vertex_planes=triple[named], grid=grid, origin=origin, step=step,
                  facets=plan.facets)
+
+
+def _f32_down(x):
+    """``x`` rounded down to float32 values, as float64."""
+    x = np.asarray(x, dtype=np.float64)
+    f = x.astype(np.float32)
+    return np.where(f.astype(np.float64) > x, np.nextafter(f, np.float32(-np.inf)), f).astype(np.float64)[()]
 
 
 def reordered(shell: Shell, local: np.ndarray) -> Shell:
