@@ -246,21 +246,13 @@ def draco_connectivity(v: np.ndarray, f: np.ndarray) -> int:
 def pln_parts(data: bytes) -> dict:
     """Where a .pln file's bytes go: plane table, part groups and the rest, each with its chunk framing."""
     from planefmt.container import reader
-    from planefmt.container.chunks import ChunkStream, Limits
 
-    stream = ChunkStream(io.BytesIO(data), file=None, limits=Limits())
-    stream.read_signature()
-    sizes = {b"PLNS": 0, b"GRUP": 0}
-    while stream.offset < len(data):
-        chunk = stream.next_chunk()
-        if chunk.type in sizes:
-            sizes[chunk.type] += stream.offset - chunk.offset
     with reader.Reader(io.BytesIO(data)) as r:
         for _ in r:
             pass
         q, coding = r.header.quantization, r.header.coding
     widths = f" {q.bits_nu}/{q.bits_phi}/{q.bits_h}" if coding.quantized else ""
-    planes, groups = sizes[b"PLNS"], sizes[b"GRUP"]
+    planes, groups = r.chunk_stats["PLNS"], r.chunk_stats["GRUP"]
     return {"planes": planes, "groups": groups, "rest": len(data) - planes - groups,
             "plane_count": r.plane_count, "group_count": r.group_count, "coding": coding.name.lower() + widths}
 

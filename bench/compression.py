@@ -26,19 +26,16 @@ from compare import CORPUS, load  # noqa: E402
 
 from planefmt import codec  # noqa: E402
 from planefmt.container import records, schema  # noqa: E402
-from planefmt.container.chunks import ChunkStream, Limits  # noqa: E402
+from planefmt.container.chunks import Limits, chunks_of  # noqa: E402
 from planefmt.model import TREE_KINDS  # noqa: E402
 
 MESH_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf", ".usd", ".usda", ".usdz", ".usdc")
 
 
 def payload_bytes(data: bytes) -> tuple[int, int]:
-    """(PLNS and GRUP payload bytes as stored, the same payloads deflated alone) of a version 4 file."""
+    """(PLNS and GRUP payload bytes as stored, the same payloads deflated alone) of a version 4 or 5 file."""
     stored = deflated = 0
-    stream = ChunkStream(io.BytesIO(data), file=None, limits=Limits())
-    stream.read_signature()
-    while stream.offset < len(data):
-        chunk = stream.next_chunk()
+    for chunk in chunks_of(data):
         if chunk.type == schema.GRUP:
             head = schema.GroupHead3.parse(chunk.payload)
             body, level = bytes(head.body), records.SHELL_TREE_LEVEL if head.kind in TREE_KINDS else 9

@@ -131,7 +131,7 @@ def test_compact_files_decode_to_the_surface_of_version_1_files(name, tolerance)
         groups = [rec for rec in recs if hasattr(rec, "refs")]
         planes = np.concatenate([rec.triplets for rec in recs if hasattr(rec, "triplets")])
         tables[compact] = (header.quantization, planes[np.lexsort(planes.T)])
-    assert header.version == (4, 0)
+    assert header.version == (5, 0)
     # The version 1 file is a second encoding: the same widths and the same planes, in another order.
     assert tables[True][0] == tables[False][0]
     np.testing.assert_array_equal(tables[True][1], tables[False][1])

@@ -28,7 +28,7 @@ def test_encode_scene_defaults_are_the_command_lines(cube_scene: Scene, tmp_path
     library = tmp_path / "library.pln"
     header = planefmt.encode_scene(cube_scene, library)
     assert main(["convert", str(CUBE), str(tmp_path / "cli.pln")]) == 0
-    assert header.version == (4, 0)
+    assert header.version == (5, 0)
     assert library.read_bytes() == (tmp_path / "cli.pln").read_bytes()
 
 

@@ -101,11 +101,11 @@ def _grid_cube(n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(box.vertices, dtype=np.float64), np.asarray(box.faces)
 
 
-def test_sealed_files_are_version_4_0_and_decode_as_encoded(no_tree) -> None:
+def test_sealed_files_are_version_5_0_and_decode_as_encoded(no_tree) -> None:
     v, f = shapes.ring(12)
     buf = io.BytesIO()
     header = codec.encode_scene(Scene(nodes=(Node(name="ring", mesh=Mesh(v, f)),)), buf, tolerance=TOL, scheme="paper")
-    assert header.version == (4, 0)
+    assert header.version == (5, 0)
     with planefmt.open(io.BytesIO(buf.getvalue())) as r:
         groups = list(r.part_groups())
     assert [g.kind for g in groups] == [GroupKind.SEALED]

@@ -178,7 +178,7 @@ def test_major_3_writes_a_walk_as_the_smaller_shell_tree(tmp_path):
     from planefmt_converters import registry
 
     scene, _ = registry.read(str(CORPUS / "cad" / "plate_holes.STL"))
-    four = codec.encode_scene(scene, tmp_path / "4.pln", tolerance=3.5e-5)
+    four = codec.encode_scene(scene, tmp_path / "4.pln", tolerance=3.5e-5, major=4)
     three = codec.encode_scene(scene, tmp_path / "3.pln", tolerance=3.5e-5, major=3)
     assert four.version == (4, 1) and three.version in ((3, 3), (3, 4))
     with planefmt.open(tmp_path / "3.pln") as r:

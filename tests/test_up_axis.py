@@ -56,9 +56,9 @@ def plns(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 def test_pln_stores_the_source_up_axis(plns: dict[str, Path]) -> None:
     for name, axis in (("bolt", "Z"), ("scene", "Y")):
         with planefmt.open(plns[name]) as r:
-            records = list(r)
-            assert r.up_axis == axis and r.metadata == {"up_axis": axis}
-        assert records[0] == planefmt.Metadata("up_axis", axis)  # before any object: a stream knows it first
+            # Version 5: in the header, so a stream knows it before any record.
+            assert r.header.version == (5, 0) and r.header.up_axis == axis and r.up_axis == axis
+            assert not any(isinstance(rec, planefmt.Metadata) for rec in r)
 
 
 @pytest.mark.parametrize("suffix,axis", [(".usda", "Z"), (".usdc", "Z"), (".glb", "Y"), (".gltf", "Y")])
@@ -104,12 +104,15 @@ TETRA = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.0]]), np.array(
 
 @pytest.mark.parametrize("axis", ["Y", "Z", None])
 def test_scene_up_axis_survives_encoding_from_a_trickling_stream(axis: str | None) -> None:
-    buf = io.BytesIO()
-    codec.encode_scene(Scene((Node("t", mesh=TETRA),), up_axis=axis), buf)
-    data = buf.getvalue()
-    assert (b"mETA" in data) == (axis is not None)  # a scene that does not say writes nothing
-    assert codec.decode_scene(TrickleReader(data)).up_axis == axis
-    assert codec.salvage_scene(io.BytesIO(data))[0].up_axis == axis
+    for major in (4, 5):
+        buf = io.BytesIO()
+        codec.encode_scene(Scene((Node("t", mesh=TETRA),), up_axis=axis), buf, major=major)
+        data = buf.getvalue()
+        # Version 4: a mETA chunk where the scene says; version 5: the header's units byte, never mETA.
+        assert (b"mETA" in data) == (axis is not None and major == 4)
+        assert planefmt.open(io.BytesIO(data)).header.up_axis == (axis if major == 5 else None)
+        assert codec.decode_scene(TrickleReader(data)).up_axis == axis
+        assert codec.salvage_scene(io.BytesIO(data))[0].up_axis == axis
 
 
 def test_writer_refuses_metadata_a_reader_would_reject() -> None:

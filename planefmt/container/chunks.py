@@ -11,6 +11,7 @@ import io
 import os
 import stat
 from dataclasses import dataclass
+from collections.abc import Iterator
 from typing import BinaryIO
 
 from ..errors import ChecksumError, FormatError, LimitError, TruncatedError
@@ -206,6 +207,18 @@ class ChunkStream:
     def seek(self, offset: int) -> None:
         self.fp.seek(offset)
         self.offset = offset
+
+
+def chunks_of(data: bytes, *, limits: Limits | None = None) -> Iterator[RawChunk]:
+    """Every chunk of an in-memory file, framed as its header's version frames them (spec §4.1: varint
+    lengths after a version 5 PHDR); framing checked, payloads not."""
+    stream = ChunkStream(io.BytesIO(data), file=None, limits=limits or Limits())
+    stream.read_signature()
+    while stream.offset < len(data):
+        chunk = stream.next_chunk()
+        if chunk.type == schema.PHDR and chunk.payload[:1] >= b"\x05":
+            stream.compact = True
+        yield chunk
 
 
 def _stream_size(fp: BinaryIO) -> int | None:
