@@ -50,7 +50,8 @@ def test_spec_reader_conforms_at_container_level(case: Case):
 BY_COMMAND = ["valid/cube_float32.pln", "valid/cube_v3.pln", "valid/shell_mixed_v3_2.pln",
               "valid/shell_tree_mixed_v3_3.pln", "invalid/xv3_shell_code_back.pln",
               "invalid/xv3_tree_third_unnamed.pln", "invalid/xcrc_and_payload.pln",
-              "valid/shell_walk_sphere_v4_1.pln", "invalid/xv41_left_none.pln"]
+              "valid/shell_walk_sphere_v4_1.pln", "invalid/xv41_left_none.pln",
+              "valid/walk_planeless_v5_0.pln", "invalid/xv50_length_not_minimal.pln"]
 
 
 @pytest.mark.parametrize("path", BY_COMMAND)
@@ -68,7 +69,8 @@ def test_spec_reader_reports_no_geometry():
 
 
 #: The error codes of spec/pln.md §12.2 that a container reader raises.
-CODES = {"BAD_SIGNATURE", "TEXT_MODE_DAMAGE", "TRUNCATED", "BAD_CHUNK_TYPE", "CHUNK_TOO_LONG", "CRC_MISMATCH",
+CODES = {"BAD_SIGNATURE", "TEXT_MODE_DAMAGE", "TRUNCATED", "BAD_CHUNK_TYPE", "BAD_CHUNK_LENGTH", "CHUNK_TOO_LONG",
+         "CRC_MISMATCH",
          "UNKNOWN_CRITICAL_CHUNK", "MISSING_HEADER", "DUPLICATE_HEADER", "CHUNK_ORDER", "TRAILING_DATA",
          "UNSUPPORTED_VERSION", "UNSUPPORTED_CODING", "BAD_HEADER_VALUE", "COUNT_MISMATCH", "BAD_PAYLOAD",
          "BAD_COMPRESSION", "SIZE_MISMATCH", "LIMIT_EXCEEDED", "BAD_TRIPLET", "PLANE_INDEX_MISMATCH",
@@ -78,26 +80,43 @@ CODES = {"BAD_SIGNATURE", "TEXT_MODE_DAMAGE", "TRUNCATED", "BAD_CHUNK_TYPE", "CH
 VALID = [c for c in CASES if c.expected == "ok"]
 
 
+def chunk_heads(data: bytes):
+    """(offset, head size, payload length) of each chunk of a valid file: the first chunk's length a
+    u32, every later one's a varint in a version 5 file (spec §4.1), a u32 before."""
+    out, pos = [], 8
+    varint = len(data) > 16 and data[16] >= 5  # PHDR's version_major
+    while pos + 8 <= len(data):
+        if varint and pos > 8:
+            n, i = 0, 0
+            while True:
+                byte = data[pos + 4 + i]
+                n |= (byte & 0x7F) << (7 * i)
+                i += 1
+                if not byte & 0x80:
+                    break
+            head = 4 + i
+        else:
+            n, head = struct.unpack_from("<I", data, pos + 4)[0], 8
+        out.append((pos, head, n))
+        pos += head + n + 4
+    return out
+
+
 def damaged(data: bytes, seed: int):
     """Deterministic damage to a valid file: truncations, and byte changes inside a chunk's payload
     with the chunk's CRC made right again, so that they reach the payload's checks."""
     rng = random.Random(seed)
-    chunks, pos = [], 8
-    while pos + 8 <= len(data):
-        n = struct.unpack_from("<I", data, pos + 4)[0]
-        if n and pos + 12 + n <= len(data):
-            chunks.append((pos, n))
-        pos += 12 + n
+    chunks = [(pos, head, n) for pos, head, n in chunk_heads(data) if n]
     for _ in range(20):
         yield data[:rng.randrange(len(data))]
     for _ in range(200):
-        start, n = rng.choice(chunks)
+        start, head, n = rng.choice(chunks)
         b = bytearray(data)
         for _ in range(rng.choice((1, 1, 2, 3))):
-            k = start + 8 + rng.randrange(n)
+            k = start + head + rng.randrange(n)
             b[k] = rng.choice((0, 1, 0x7F, 0x80, 0xFF, b[k] ^ (1 << rng.randrange(8)), rng.randrange(256)))
-        crc = zlib.crc32(bytes(b[start:start + 4] + b[start + 8:start + 8 + n]))
-        b[start + 8 + n:start + 12 + n] = struct.pack("<I", crc)
+        crc = zlib.crc32(bytes(b[start:start + 4] + b[start + head:start + head + n]))
+        b[start + head + n:start + head + n + 4] = struct.pack("<I", crc)
         yield bytes(b)
 
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0, 4.1 and 4.2), written from
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2 and 5.0), written from
 spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
 
     python conformance/independent/plnspec.py FILE
@@ -32,6 +32,13 @@ source group's index, checked in §9.15's order (the varint and nothing after it
 not a copy; a skipped source skips the copy; the same references and role bits), and listed as
 stored with "source" (conformance/README.md, the groups row).
 
+Version 5.0 was added from the 5.0 text of §4.1, §4.4, §5, §9.2, §9.10-§9.14, §10.1, §10.3, §12, §13
+and Appendix A.5: every chunk after the first framed with a varint32 length (varint_head; the first,
+PHDR, keeps its u32), the header's 8-byte fixed part with the up axis in bits 4-5 of units, reported
+as the metadata "up_axis" (as the 5.0 goldens expect) and an mETA up_axis rejected, groups without
+references in kinds 6 to 11 (and in skipped kinds), a cOLR of count 0 rejected, and shell grids of
+four f32 (grid). Versions 1.0 to 4.2 are read as before (A.5).
+
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
 comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
 """
@@ -59,7 +66,8 @@ OBJECT_LIMIT = 1 << 24
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 # §10.3: the values of the keywords the spec defines
 META_VALUES = {"up_axis": ("Y", "Z")}
-NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 2}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.2"
+NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 2, 5: 0}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.2, 5.0"
+UP_AXES = {1: "Y", 2: "Z"}  # §5, version 5: bits 4-5 of units (0 not said, 3 BAD_HEADER_VALUE)
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
 PI_F32 = np.frombuffer(struct.pack("<I", 0x40490FDB), "<f4")[0]
@@ -373,24 +381,28 @@ class Reader:
         after_index = False
         while True:
             offset = pos
-            # §4.1 framing
-            if len(d) - pos < 8:
-                fail("TRUNCATED", "no PEND" if pos == len(d) else "inside a chunk head")
-            ctype = d[pos:pos + 4]
-            if not all(0x41 <= b <= 0x5A or 0x61 <= b <= 0x7A for b in ctype):
-                fail("BAD_CHUNK_TYPE", repr(ctype))
-            length = struct.unpack_from("<I", d, pos + 4)[0]
-            if length > 0x7FFFFFFF:
-                fail("CHUNK_TOO_LONG", str(length))
+            # §4.1 framing: the first chunk (PHDR) with a u32 length in every version; every later
+            # chunk of a version 5 file with a varint32 length (by place, not by type: SPEC_NOTES 52)
+            if self.header is not None and self.major >= 5:
+                ctype, length, head = self.varint_head(pos)
+            else:
+                if len(d) - pos < 8:
+                    fail("TRUNCATED", "no PEND" if pos == len(d) else "inside a chunk head")
+                ctype = d[pos:pos + 4]
+                self.check_type(ctype)
+                length = struct.unpack_from("<I", d, pos + 4)[0]
+                head = 8
+                if length > 0x7FFFFFFF:
+                    fail("CHUNK_TOO_LONG", str(length))
             if length > CHUNK_LIMIT:
                 fail("LIMIT_EXCEEDED", f"chunk length {length}")
-            if len(d) - pos - 8 < length + 4:
+            if len(d) - pos - head < length + 4:
                 fail("TRUNCATED", f"inside {ctype!r}")
-            payload = d[pos + 8:pos + 8 + length]
-            crc = struct.unpack_from("<I", d, pos + 8 + length)[0]
+            payload = d[pos + head:pos + head + length]
+            crc = struct.unpack_from("<I", d, pos + head + length)[0]
             if zlib.crc32(ctype + payload) != crc:
                 fail("CRC_MISMATCH", repr(ctype))
-            pos += 12 + length
+            pos += head + length + 4
             # §4.3 place, in the order of §12.1 item 3.2
             if self.header is None and ctype != b"PHDR":  # SPEC_NOTES 2: ancillary ones too
                 fail("MISSING_HEADER", repr(ctype))
@@ -426,26 +438,72 @@ class Reader:
             else:
                 self.finding("UNKNOWN_ANCILLARY_CHUNK")
 
+    @staticmethod
+    def check_type(ctype: bytes):
+        if not all(0x41 <= b <= 0x5A or 0x61 <= b <= 0x7A for b in ctype):
+            fail("BAD_CHUNK_TYPE", repr(ctype))
+
+    def varint_head(self, pos: int) -> tuple[bytes, int, int]:
+        """§4.1, version 5: the type, then the length as a varint32 of at most 5 bytes. Steps 1-3:
+        the input ending inside the type (TRUNCATED), the type (BAD_CHUNK_TYPE), the input ending
+        inside the varint (TRUNCATED), then the varint: not minimal, BAD_CHUNK_LENGTH; a fifth byte
+        with bit 7 set, or a length above 2^31 - 1, CHUNK_TOO_LONG (not §2.2's BAD_PAYLOAD:
+        SPEC_NOTES 53). Returns the type, the length and the head's size (4 + the varint's)."""
+        d = self.data
+        if len(d) - pos < 4:
+            fail("TRUNCATED", "no PEND" if pos == len(d) else "inside a chunk type")
+        ctype = d[pos:pos + 4]
+        self.check_type(ctype)
+        length = 0
+        for i in range(5):
+            at = pos + 4 + i
+            if at >= len(d):
+                fail("TRUNCATED", f"inside the length of {ctype!r}")
+            b = d[at]
+            length |= (b & 0x7F) << (7 * i)
+            if not b & 0x80:
+                if i > 0 and b == 0:
+                    fail("BAD_CHUNK_LENGTH", f"the length of {ctype!r} not minimal")
+                if length > 0x7FFFFFFF:
+                    fail("CHUNK_TOO_LONG", str(length))
+                return ctype, length, 5 + i
+        fail("CHUNK_TOO_LONG", f"the length of {ctype!r} longer than 5 bytes")
+
     # §5 and A.1
     def phdr(self, p: bytes):
         if len(p) < 2:
             fail("BAD_PAYLOAD", "PHDR under 2 bytes")
         major, minor = p[0], p[1]
-        if major not in (1, 2, 3, 4):
+        if major not in (1, 2, 3, 4, 5):
             fail("UNSUPPORTED_VERSION", f"{major}.{minor}")
         self.major, self.minor = major, minor
-        if major >= 3:  # §5 (4) and A.3 (3): the same layout
+        if major >= 5:
+            self.phdr_v5(p)
+        elif major >= 3:  # A.5 (4) and A.3 (3): the same layout
             self.phdr_v3(p)
         else:
             self.phdr_v1(p)
         if minor > NEWEST_MINOR[major]:
             self.finding("NEWER_MINOR_VERSION")
 
+    def phdr_v5(self, p: bytes):
+        """§5, version 5: an 8-byte fixed part, flags a u8, the up axis in bits 4-5 of units."""
+        if len(p) < 8:
+            fail("BAD_PAYLOAD", "PHDR under 8 bytes")
+        c = Cursor(p, 2)
+        flags = c.u8()
+        self.phdr_rest(c, flags)
+
     def phdr_v3(self, p: bytes):
+        """A.5 (and A.3): a 9-byte fixed part, flags a u16, units the unit alone."""
         if len(p) < 9:
             fail("BAD_PAYLOAD", "PHDR under 9 bytes")
         c = Cursor(p, 2)
         flags = c.u16()
+        self.phdr_rest(c, flags)
+
+    def phdr_rest(self, c: Cursor, flags: int):
+        """§5 from coding on, the same in versions 3 to 5 but for the units byte."""
         coding = c.u8()
         if coding > 3:
             fail("UNSUPPORTED_CODING", str(coding))
@@ -485,6 +543,9 @@ class Reader:
                            bbox if flags & 4 else None, tolerance, error_bound, counts)
 
     def header_checks(self, flags, coding, bits, units, h_range, bbox, tolerance, error_bound, counts):
+        up_axis = 0
+        if self.major >= 5:  # §5: bits 0-3 the unit, bits 4-5 the up axis, bits 6-7 ignored
+            units, up_axis = units & 0x0F, (units >> 4) & 3
         if coding >= 2:
             if any(not 1 <= b <= 32 for b in bits):
                 fail("UNSUPPORTED_CODING", f"widths {bits}")
@@ -492,8 +553,8 @@ class Reader:
                 fail("BAD_HEADER_VALUE", f"h range {h_range}")
             if not math.isfinite(h_range[1] - h_range[0]):  # SPEC_NOTES 9: a range too wide for §7.3
                 fail("BAD_HEADER_VALUE", f"h range {h_range}: h_max - h_min overflows")
-        if units > 7:
-            fail("BAD_HEADER_VALUE", f"units {units}")
+        if units > 7 or up_axis == 3:
+            fail("BAD_HEADER_VALUE", f"units {units}, up axis {up_axis}")
         if bbox is not None:
             if not all(math.isfinite(v) for v in bbox) or any(bbox[i] > bbox[i + 3] for i in range(3)):
                 fail("BAD_HEADER_VALUE", f"bbox {bbox}")
@@ -504,6 +565,8 @@ class Reader:
         self.bits = bits if coding >= 2 else (0, 0, 0)
         self.h_range = h_range if coding >= 2 else (0.0, 0.0)
         self.counts = counts
+        if up_axis:  # reported as the file's metadata (the v5 goldens; SPEC_NOTES 55)
+            self.metadata["up_axis"] = UP_AXES[up_axis]
         self.header = {
             "version": [self.major, self.minor],
             "lossy": bool(flags & 1),
@@ -688,6 +751,8 @@ class Reader:
 
     # §9
     def kinds(self) -> set[int]:
+        if self.major >= 5:
+            return set(range(12))  # §9.3: kinds 0-11 in 5.0
         if self.major >= 4:
             # §9.3: kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later: SPEC_NOTES 29)
             return set(range(9 + min(self.minor, 1) + 2 * (self.minor >= 2)))
@@ -723,7 +788,7 @@ class Reader:
         if self.major == 1:
             refs, roles = self.common_body_v1(b)
         else:
-            refs, roles = self.common_body(b)
+            refs, roles = self.common_body(b, kind, skipped)
         group = {"index": index, "object": obj, "kind": kind, "refs": refs,
                  "bounding": [i for i, r in enumerate(roles) if r]}
         if skipped:
@@ -777,13 +842,16 @@ class Reader:
             fail("BAD_GROUP_STRUCTURE", "role bits other than the source's")
         return s, False
 
-    def common_body(self, b: Cursor) -> tuple[list[int], list[int]]:
-        """§9.2 (versions 2 and 3)."""
+    def common_body(self, b: Cursor, kind: int, skipped: bool) -> tuple[list[int], list[int]]:
+        """§9.2 (versions 2 to 5)."""
         m = b.varint("ref_count")
         if m > REF_LIMIT:
             fail("LIMIT_EXCEEDED", f"ref_count {m}")
-        if m == 0:
-            fail("BAD_GROUP_STRUCTURE", "ref_count 0")
+        # version 5: m = 0 in kinds 0-5 only; a skipped kind of a newer minor version "decides for
+        # itself", which a reader that skips it cannot know, so it is accepted (SPEC_NOTES 56).
+        # Versions 2 to 4 (A.5): in every kind, skipped ones included.
+        if m == 0 and (self.major < 5 or (not skipped and kind <= 5)):
+            fail("BAD_GROUP_STRUCTURE", f"ref_count 0 in a group of kind {kind}")
         diffs = b.varints(m, "the references")
         n = len(self.planes)
         refs, total = [], 0
@@ -933,8 +1001,7 @@ class Reader:
         origin = step = None
         steps = []
         if e:
-            ox, oy, oz, step = struct.unpack("<4d", b.take(32, "the grid"))
-            origin = [ox, oy, oz]
+            origin, step = self.grid(b)
             steps = b.varints(3 * e, "the coordinates")
         faces = b.varints(t - u, "the faces")
         codes = b.varints(3 * t, "the corner codes")
@@ -979,6 +1046,16 @@ class Reader:
             fail("BAD_GROUP_STRUCTURE", f"{n} corners used of {v}")
         return {"explicit": explicit, "vertex_planes": named, "grid": grid,
                 "origin": origin, "step": step, "facets": facets}
+
+    def grid(self, b: Cursor) -> tuple[list[float], float]:
+        """§9.10-§9.14: origin x, y, z and step, f32 each in version 5 (widened exactly), f64 each in
+        versions 3 and 4 (A.5); kinds 9 and 10 too, though §9.13's table still says 32 bytes
+        (SPEC_NOTES 54)."""
+        if self.major >= 5:
+            ox, oy, oz, step = struct.unpack("<4f", b.take(16, "the grid"))
+        else:
+            ox, oy, oz, step = struct.unpack("<4d", b.take(32, "the grid"))
+        return [ox, oy, oz], step
 
     # §9.11 (added at version 3.3, from §9.11 and the sections it refers to)
     def shell_tree(self, b: Cursor, refs: list[int], roles: list[int], parallelogram: bool = False) -> dict:
@@ -1096,8 +1173,7 @@ class Reader:
             if walk:
                 mode = b.u8("the mode")  # its bits 2-7 are checked with the rest (SPEC_NOTES 31)
                 parallelogram = bool(mode & 1)
-            ox, oy, oz, step = struct.unpack("<4d", b.take(32, "the grid"))
-            origin = [ox, oy, oz]
+            origin, step = self.grid(b)
             if mode & 2:
                 tables = [self.value_table(b, e_count, "xyz"[a]) for a in range(3)]
             residuals = b.varints(3 * e_count, "the coordinates")
@@ -1349,6 +1425,8 @@ class Reader:
             fail("BAD_COLOURS", f"group {group} not read yet")
         if count != self.group_refs[group]:
             fail("BAD_COLOURS", f"{count} colours for {self.group_refs[group]} references")
+        if count == 0:  # version 5: a group without references has no colour (before: m >= 1)
+            fail("BAD_COLOURS", "a count of 0")
         if one:  # reported expanded, as the per-reference form would be (SPEC_NOTES 28)
             colours = [list(rgba) for _ in range(count)]
         else:
@@ -1369,6 +1447,8 @@ class Reader:
         except UnicodeDecodeError:
             fail("BAD_METADATA", "value not UTF-8")
         key = keyword.decode("ascii")
+        if self.major >= 5 and key == "up_axis":  # §10.3: version 5 says it in the header
+            fail("BAD_METADATA", "up_axis in a version 5 file")
         if key in self.metadata:
             fail("BAD_METADATA", f"{key} twice")
         if key in META_VALUES and text not in META_VALUES[key]:
