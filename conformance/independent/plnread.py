@@ -8,8 +8,8 @@ the Python 3.11 standard library, and for the Brotli payloads of version
 4.0 (compression method 2) the PyPI package `brotli` (1.2 bounds the output
 of each call; with 1.1 the stored bytes are given one at a time), imported only when such a payload is met: files of versions 1.0 to 3.4, and
 4.0 files without Brotli payloads, need nothing else.  It reads versions
-1.0, 2.0, 3.0 to 3.4, 4.0, 4.1 and 4.2 (pln.md §13: files of major versions 1, 2, 3
-and 4, each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
+1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2 and 5.0 (pln.md §13: files of major versions 1 to 5,
+each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
 was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
 text and the golden files' JSON, not planefmt's shell code; its version 3.3
@@ -73,6 +73,18 @@ looks back, it keeps each group's kind and whether it was skipped, besides
 the references and role bits it reports anyway (its output has no geometry,
 so it keeps no surface).
 
+Version 5.0 (pln.md §4.1, §5, §9.2, §9.10-§9.14, §10.1, §10.3 and Appendix
+A.5, added from that text) is version 4.2 with four changes: every chunk
+after PHDR has its length as a minimal varint32 of at most 5 bytes, read a
+byte at a time (BAD_CHUNK_LENGTH where not minimal; CHUNK_TOO_LONG for a
+fifth byte with bit 7 set or a length above 2^31 - 1); the header's fixed
+part is 8 bytes, flags a u8, and its units byte holds the unit (bits 0-3,
+reported as "units") and the up axis (bits 4-5: 0 none, 1 Y, 2 Z, reported
+in "metadata" as a mETA up_axis is; a mETA up_axis is BAD_METADATA there);
+groups of kinds 6 to 11 may have no references (and then no cOLR: a count
+of 0 is BAD_COLOURS); and a shell's grid is four f32 (16 bytes), widened
+exactly.
+
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
 a code it never raises; a file whose last chunk is not PEND is TRUNCATED or
@@ -111,10 +123,14 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0, 2.0, 3.4 and 4.2; pln.md §13: a reader of 4.2 reads major versions 1 to 4)
-READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2}
+# (1.0, 2.0, 3.4, 4.2 and 5.0; pln.md §13: a reader of 5.0 reads major versions 1 to 5)
+READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 0}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
+# pln.md §4.1, version 5: every chunk after PHDR has its length as a minimal
+# varint32 of at most 5 bytes (PHDR keeps its u32 length in every version)
+VARINT_LENGTH_MAJOR = 5
+LENGTH_VARINT_MAX_BYTES = 5
 
 # §10.3 limits (the reference reader's defaults)
 LIMIT_CHUNK = 256 * 1024 * 1024
@@ -150,6 +166,9 @@ KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3), 
 MULTI_PARALLELOGRAMS = 4  # pln.md §9.14: a corner has at most four parallelograms
 SHELL_COORD_LIMIT = 2**52  # pln-3 §8.9: each grid step and coordinate of magnitude at most 2^52
 SHELL_GRID_BYTES = 32  # pln-3 §8.9: origin x, y, z and step s, f64 each
+F32_GRID_MAJOR = 5  # pln.md §9.10-§9.14: version 5's grids are f32 each, 16 bytes (Appendix A.5)
+NO_REFS_MAJOR = 5  # pln.md §9.2: in version 5, m may be 0 in kinds 6 to 11
+LAST_KIND_NEEDING_REFS = 5  # pln.md §9.2: m = 0 in kinds 0 to 5 is BAD_GROUP_STRUCTURE
 
 F32_PI = struct.unpack("<f", struct.pack("<I", 0x40490FDB))[0]  # §7.1
 F32_2PI = struct.unpack("<f", struct.pack("<I", 0x40C90FDB))[0]
@@ -166,6 +185,8 @@ V3_NO_PARENT = 0  # pln-3 §8.1: parent 0 for a root, otherwise the parent's ind
 MAX_NAME_LENGTH = 65535  # pln-3 §8.1: name_length at most 65535 (the u16 of §8.1)
 
 V3_HEADER_FIXED = 9  # pln-3 §5: version_major .. units, no reserved bytes
+V5_HEADER_FIXED = 8  # pln.md §5: version 5's flags are a u8, so coding is at offset 3
+UP_AXES = {0: None, 1: "Y", 2: "Z"}  # pln.md §5, version 5: bits 4-5 of units; 3 is BAD_HEADER_VALUE
 PEND_PAYLOAD_V1 = 8  # §4.4
 PEND_PAYLOADS_V3 = (0, 8)  # pln-3 §4.4: empty without an index, else the u64 offset
 CHUNK_FRAME = 12  # §4.1: type, length, crc around a payload
@@ -612,18 +633,24 @@ class Reader:
         first = True
         while True:
             offset = self.pos
-            head = self.f.read(8)
-            if len(head) < 8:
-                if not head:
-                    raise PlnError("TRUNCATED", "input ends before PEND", offset=offset)
-                raise PlnError("TRUNCATED", "input ends inside a chunk head", offset=offset)
-            self.pos += 8
-            ctype = head[:4]
-            length = u32(head, 4)
-            name = ctype.decode("latin-1")
-            if not all(is_letter(c) for c in ctype):
-                raise PlnError("BAD_CHUNK_TYPE", "chunk type %r is not four ASCII letters" % ctype,
-                               name, offset)
+            # pln.md §4.1: PHDR, the first chunk, has a u32 length in every
+            # version; every later chunk of a version 5 file a varint32
+            if not first and self.major >= VARINT_LENGTH_MAJOR:
+                ctype, length = self.read_varint_head(offset)
+                name = ctype.decode("latin-1")
+            else:
+                head = self.f.read(8)
+                if len(head) < 8:
+                    if not head:
+                        raise PlnError("TRUNCATED", "input ends before PEND", offset=offset)
+                    raise PlnError("TRUNCATED", "input ends inside a chunk head", offset=offset)
+                self.pos += 8
+                ctype = head[:4]
+                length = u32(head, 4)
+                name = ctype.decode("latin-1")
+                if not all(is_letter(c) for c in ctype):
+                    raise PlnError("BAD_CHUNK_TYPE", "chunk type %r is not four ASCII letters" % ctype,
+                                   name, offset)
             if length > MAX_CHUNK_LENGTH:
                 raise PlnError("CHUNK_TOO_LONG", "length %d above 2^31-1" % length, name, offset)
             if length > LIMIT_CHUNK:
@@ -675,6 +702,38 @@ class Reader:
                     e.chunk, e.offset = name, offset
                 raise
 
+    def read_varint_head(self, offset):
+        """pln.md §4.1, version 5: the 4-byte type, then the length as a
+        varint32 read a byte at a time, checked in the order of §4.1: the
+        input ends inside the type (TRUNCATED); a type that is not four
+        letters (BAD_CHUNK_TYPE); the input ends inside the varint
+        (TRUNCATED); a varint that is not minimal, a last byte 0x00 after
+        others (BAD_CHUNK_LENGTH); a fifth byte with bit 7 set
+        (CHUNK_TOO_LONG, without reading further).  A length above 2^31 - 1
+        is left to the caller (CHUNK_TOO_LONG)."""
+        ctype = self.f.read(4)
+        if len(ctype) < 4:
+            if not ctype:
+                raise PlnError("TRUNCATED", "input ends before PEND", offset=offset)
+            raise PlnError("TRUNCATED", "input ends inside a chunk type", offset=offset)
+        self.pos += 4
+        name = ctype.decode("latin-1")
+        if not all(is_letter(c) for c in ctype):
+            raise PlnError("BAD_CHUNK_TYPE", "chunk type %r is not four ASCII letters" % ctype, name, offset)
+        length = 0
+        for n in range(LENGTH_VARINT_MAX_BYTES):
+            b = self.f.read(1)
+            if not b:
+                raise PlnError("TRUNCATED", "input ends inside the length varint", name, offset)
+            self.pos += 1
+            b = b[0]
+            length |= (b & 0x7F) << (7 * n)
+            if not b & 0x80:
+                if n > 0 and b == 0:
+                    raise PlnError("BAD_CHUNK_LENGTH", "the length varint is not minimal", name, offset)
+                return ctype, length
+        raise PlnError("CHUNK_TOO_LONG", "the length varint's fifth byte has bit 7 set", name, offset)
+
     def read_signature(self):
         sig = b""
         while len(sig) < 8:
@@ -694,12 +753,14 @@ class Reader:
     # -- §5 header ---------------------------------------------------------
 
     def read_header(self, p):
-        # pln.md §5 step 2: a major version other than 1, 2, 3 or 4
-        if len(p) >= 1 and p[0] not in READER_VERSIONS:
+        # pln.md §5 step 1, a payload under 2 bytes (BAD_PAYLOAD, raised by
+        # the parsers below), before step 2, a major version other than 1 to 5
+        if len(p) >= 2 and p[0] not in READER_VERSIONS:
             raise PlnError("UNSUPPORTED_VERSION", "major version %d" % p[0])
         # the layout is chosen by the major version: that of §5 for 1 and 2
-        # (pln-2 §5), the compact one of pln-3 §5 for 3 and 4 (pln.md §5);
-        # every field is read (BAD_PAYLOAD) before any value is checked
+        # (pln-2 §5), the compact one of pln-3 §5 for 3 to 5 (pln.md §5;
+        # version 5's flags a u8, Appendix A.5); every field is read
+        # (BAD_PAYLOAD) before any value is checked
         if len(p) >= 1 and p[0] >= 3:
             fields = self.parse_header_v3(p)
         else:
@@ -727,6 +788,14 @@ class Reader:
         else:
             bn = bp = bh = 0
             h_min = h_max = 0.0
+        # pln.md §5 step 7: version 5's units byte holds the unit in bits 0-3
+        # and the up axis in bits 4-5 (bits 6-7 ignored); before, the unit alone
+        up_axis = None
+        if major >= 5:
+            unit, axis = units & 0x0F, (units >> 4) & 0x03
+            if unit > 7 or axis not in UP_AXES:
+                raise PlnError("BAD_HEADER_VALUE", "units byte 0x%02X: unit %d, up axis %d" % (units, unit, axis))
+            units, up_axis = unit, UP_AXES[axis]
         if units > 7:
             raise PlnError("BAD_HEADER_VALUE", "units %d" % units)
         if flags & FLAG_BBOX_KNOWN:
@@ -744,6 +813,10 @@ class Reader:
         self.h_range = (h_min, h_max)
         self.flags = flags
         self.counts = (plane_count, object_count, group_count)
+        if up_axis is not None:
+            # reported as a mETA up_axis would be (conformance/README.md's
+            # "metadata", the expected JSON of the version 5.0 goldens)
+            self.metadata["up_axis"] = up_axis
         self.header = {
             "version": [major, minor],
             "lossy": bool(flags & FLAG_LOSSY),
@@ -777,11 +850,13 @@ class Reader:
     def parse_header_v3(self, p):
         """pln-3 §5: a 9-byte fixed part, then the fields the flags and the
         coding call for, in table order; a payload that ends inside them is
-        BAD_PAYLOAD, bytes after them are later fields and ignored."""
+        BAD_PAYLOAD, bytes after them are later fields and ignored.  pln.md
+        §5, version 5: the fixed part is 8 bytes, flags a u8."""
         c = Cursor(p, "PHDR")
-        c.need(V3_HEADER_FIXED, "the fixed part")
+        v5 = p[0] >= 5
+        c.need(V5_HEADER_FIXED if v5 else V3_HEADER_FIXED, "the fixed part")
         major, minor = c.u8("version_major"), c.u8("version_minor")
-        flags = c.u16("flags")
+        flags = c.u8("flags") if v5 else c.u16("flags")
         coding, bn, bp, bh = c.u8("coding"), c.u8("bits_nu"), c.u8("bits_phi"), c.u8("bits_h")
         units = c.u8("units")
         # pln-3 §5: the coding is checked as soon as the fixed part is read,
@@ -1051,7 +1126,7 @@ class Reader:
         c = Cursor(body, "GRUP body")
         v2 = self.major >= 2  # pln-2 §8.7: varint bodies, in major 3 too (pln-3 §8.2)
         shell = known and kind == SHELL_KIND
-        refs = self.read_refs_v2(c) if v2 else self.read_refs(c)
+        refs = self.read_refs_v2(c, kind) if v2 else self.read_refs(c)
         m = len(refs)
         roles = c.take((m + 7) // 8, "roles")
         check_bit_padding(roles, m, "GRUP roles")
@@ -1129,11 +1204,17 @@ class Reader:
         raw_size = c.varint32("raw_size")
         return index, obj, kind, method, raw_size, c.rest()
 
-    def check_ref_count(self, m):
-        if m == 0:
-            raise PlnError("BAD_GROUP_STRUCTURE", "ref_count 0")
+    def check_ref_count(self, m, kind=0):
+        """pln.md §9.2 step 2: m above the limit (LIMIT_EXCEEDED); m = 0
+        (BAD_GROUP_STRUCTURE) in every group before version 5 (Appendix
+        A.5), and in version 5 in kinds 0 to 5 only: a shell or a copy
+        (kinds 6 to 11) may have none, and a kind of a newer minor version,
+        skipped here, decides for itself."""
         if m > LIMIT_REFS:
             raise PlnError("LIMIT_EXCEEDED", "ref_count %d above %d" % (m, LIMIT_REFS))
+        if m == 0 and (self.major < NO_REFS_MAJOR or kind <= LAST_KIND_NEEDING_REFS):
+            raise PlnError("BAD_GROUP_STRUCTURE", "ref_count 0 in a group of kind %d, version %d"
+                           % (kind, self.major))
 
     def read_refs(self, c):
         """§8.2: ref_count (u32) and refs (u32 plane indices)."""
@@ -1147,11 +1228,11 @@ class Reader:
                                "reference to plane %d, %d defined" % (r, n_planes))
         return refs
 
-    def read_refs_v2(self, c):
+    def read_refs_v2(self, c, kind):
         """pln-2 §8.7: ref_count (varint) and refs as varint differences
         (non-decreasing), each difference checked before it is summed."""
         m = c.varint("ref_count")
-        self.check_ref_count(m)
+        self.check_ref_count(m, kind)
         n_planes = len(self.planes)
         refs = []
         r = 0
@@ -1342,8 +1423,7 @@ class Reader:
         origin = step = None
         steps = []
         if e:
-            origin = c.f64s(3, "grid origin")
-            step = c.f64s(1, "grid step")[0]
+            origin, step = self.read_grid(c)
             steps = [[unzigzag(c.varint("a coordinate step of explicit corner %d" % k)) for _ in range(3)]
                      for k in range(e)]
         diffs = [c.varint("the face difference of triangle %d" % k) for k in range(t - u)]
@@ -1400,6 +1480,14 @@ class Reader:
             raise PlnError("BAD_GROUP_STRUCTURE", "%d corners used, corner_count %d" % (n, v))
         return {"explicit": explicit, "vertex_planes": named, "grid": grid,
                 "origin": origin, "step": step, "facets": facets}
+
+    def read_grid(self, c):
+        """pln-3 §8.9, pln.md §9.10-§9.14: a shell's grid, origin x, y, z and
+        step s; f64 each (32 bytes) in versions 3 and 4, f32 each (16 bytes,
+        widened exactly) in version 5.  Checked by the caller."""
+        read = c.f32s if self.major >= F32_GRID_MAJOR else c.f64s
+        origin = read(3, "grid origin")
+        return origin, read(1, "grid step")[0]
 
     def read_shell_tree(self, c, m, bounding, parallelogram=False):
         """pln-3 §8.10, kind 7: corner_count V, triangle_count T; T links
@@ -1536,8 +1624,7 @@ class Reader:
             mode = c.u8("mode") if walk else 0
             if walk:
                 parallelogram = bool(mode & 1)
-            origin = c.f64s(3, "grid origin")
-            step = c.f64s(1, "grid step")[0]
+            origin, step = self.read_grid(c)
             tables = None
             if mode & 2:
                 # pln.md §9.13: per axis a count C (1 <= C <= E, checked as
@@ -1783,6 +1870,9 @@ class Reader:
         if count != self.group_refcounts[group]:
             raise PlnError("BAD_COLOURS", "%d colours for %d references"
                            % (count, self.group_refcounts[group]))
+        if count == 0:
+            # pln.md §10.1: a group without references (§9.2, version 5) has no colour
+            raise PlnError("BAD_COLOURS", "a cOLR of count 0, for group %d without references" % group)
         if one_colour:
             # reported as the per-reference form would be (SPEC_NOTES 28)
             rgba = [list(p[8:12]) for _ in range(count)]
@@ -1806,6 +1896,9 @@ class Reader:
         except UnicodeDecodeError:
             raise PlnError("BAD_METADATA", "mETA value is not UTF-8")
         key = keyword.decode("ascii")
+        if key == "up_axis" and self.major >= 5:
+            # pln.md §10.3: a version 5 file says its up axis in the header (§5)
+            raise PlnError("BAD_METADATA", "mETA up_axis in a version %d file" % self.major)
         if key in self.metadata:
             raise PlnError("BAD_METADATA", "a second mETA %s" % key)
         if key in META_VALUES and value not in META_VALUES[key]:
