@@ -22,6 +22,8 @@ export function readColours(payload, groups, major) {
   if (c.left > 0) fail('BAD_COLOURS', `${c.left} bytes after the colours`);
   if (group >= groups.length) fail('BAD_COLOURS', `group ${group} not read yet`);
   if (count !== groups[group].refs.length) fail('BAD_COLOURS', `${count} colours for ${groups[group].refs.length} references`);
+  // a group without references (version 5, §9.2) has no colour
+  if (count === 0) fail('BAD_COLOURS', 'a count of 0');
   // expanded only now that count is the group's ref_count (within the reader's limit)
   const rgba = new Uint8Array(4 * count);
   if (uniform) for (let i = 0; i < rgba.length; i += 4) rgba.set(colours, i);
@@ -57,8 +59,9 @@ export function checkIndex(payload, offset, firstAfterHeader, listed) {
 /**
  * @param {Uint8Array} payload
  * @param {Record<string, string>} metadata read so far; the new keyword is added
+ * @param {number} major the file's major version: in version 5 the up axis is the header's, not a keyword's
  */
-export function readMetadata(payload, metadata) {
+export function readMetadata(payload, metadata, major) {
   const zero = payload.indexOf(0);
   if (zero < 0) fail('BAD_METADATA', 'no 0x00 separator');
   if (zero < 1 || zero > 79) fail('BAD_METADATA', `keyword of ${zero} bytes`);
@@ -70,6 +73,7 @@ export function readMetadata(payload, metadata) {
   } catch {
     fail('BAD_METADATA', 'value not UTF-8');
   }
+  if (major >= 5 && keyword === 'up_axis') fail('BAD_METADATA', 'up_axis in a version 5 file (the header holds it, §5)');
   if (Object.hasOwn(metadata, keyword)) fail('BAD_METADATA', `keyword ${keyword} twice`);
   if (Object.hasOwn(KEYWORDS, keyword) && !KEYWORDS[keyword].includes(value)) fail('BAD_METADATA', `${keyword} = ${value}`);
   metadata[keyword] = value;

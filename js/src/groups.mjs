@@ -20,8 +20,8 @@ import { readShellWalk } from './shellwalk.mjs';
  * @property {any} data the kind data: cells, tree, a Shell (kinds 5-10), or {source} (kind 11)
  */
 
-/** The newest minor version this reader knows, per major (§5, §9.3): 4.2 (kinds 10, 11), 3.4 (kind 8). */
-export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2 };
+/** The newest minor version this reader knows, per major (§5, §9.3): 5.0, 4.2 (kinds 10, 11), 3.4 (kind 8). */
+export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2, 5: 0 };
 
 /**
  * Whether `kind` is a kind of the file's version (§9.3).
@@ -29,7 +29,8 @@ export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2 };
  */
 function kindOfVersion(kind, [major, minor]) {
   if (kind <= 4) return true;
-  // kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later minors)
+  // kinds 0-11 in 5.0; kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later minors)
+  if (major >= 5) return kind <= 11;
   if (major >= 4) return kind <= (minor >= 2 ? 11 : minor >= 1 ? 9 : 8);
   return major === 3 && kind <= 8 && minor >= kind - 4;
 }
@@ -74,14 +75,16 @@ export function readGroup(payload, ctx) {
   if (object >= ctx.objects) fail('BAD_OBJECT_REFERENCE', `object ${object} not defined`);
   let skipped = false;
   if (!kindOfVersion(kind, ctx.version)) {
-    if (ctx.version[1] <= NEWEST_MINOR[/** @type {1|2|3|4} */ (major)]) {
+    if (ctx.version[1] <= NEWEST_MINOR[/** @type {1|2|3|4|5} */ (major)]) {
       fail('UNKNOWN_GROUP_KIND', `kind ${kind} in a ${ctx.version.join('.')} file`);
     }
     skipped = true;
   }
   const body = decompress(method, rawSize, payload.subarray(c.pos), ctx.limits, ctx.codecs, major);
   const b = new Cursor(body);
-  const { refs, roles } = major === 1 ? readBodyV1(b, ctx) : readBody(b, ctx);
+  // version 5: a shell (kinds 6-10) or a copy may have no reference, and a kind this reader skips decides for itself (§9.2)
+  const none = major >= 5 && (skipped || (kind >= 6 && kind <= 11));
+  const { refs, roles } = major === 1 ? readBodyV1(b, ctx) : readBody(b, ctx, none);
   const m = refs.length;
   let data = null;
   if (!skipped && kind === 11) {
@@ -94,9 +97,13 @@ export function readGroup(payload, ctx) {
     } else if (kind === 1) data = readCells(b, m, major, ctx.limits);
     else if (kind === 2) data = readTree(b, m, major);
     else if (kind === 5) data = readSealed(b, roles);
-    else if (kind === 6) data = readShell(b, roles);
-    else if (kind === 9 || kind === 10) data = readShellWalk(b, roles, kind === 10);
-    else data = readShellTree(b, roles, kind === 8);
+    else {
+      // version 5's shell grids are f32 (16 bytes), earlier ones f64 (32 bytes): §9.10, A.5
+      const f32Grid = major >= 5;
+      if (kind === 6) data = readShell(b, roles, f32Grid);
+      else if (kind === 9 || kind === 10) data = readShellWalk(b, roles, kind === 10, f32Grid);
+      else data = readShellTree(b, roles, kind === 8, f32Grid);
+    }
   }
   return { index, object, kind, refs, roles, skipped, data };
 }
@@ -131,13 +138,14 @@ function readCopy(b, index, refs, roles, earlier) {
 }
 
 /**
- * §9.2: varint references as differences, then role bits (versions 2 to 4).
+ * §9.2: varint references as differences, then role bits (versions 2 to 5).
  * @param {Cursor} b @param {{planes: number, limits: import('./compression.mjs').Limits}} ctx
+ * @param {boolean} [none] m = 0 is allowed (version 5: shells, copies, skipped kinds)
  */
-function readBody(b, ctx) {
+function readBody(b, ctx, none = false) {
   const m = b.varint();
   if (m > ctx.limits.refs) fail('LIMIT_EXCEEDED', `${m} references`);
-  if (m === 0) fail('BAD_GROUP_STRUCTURE', 'no reference');
+  if (m === 0 && !none) fail('BAD_GROUP_STRUCTURE', 'no reference');
   // each reference takes a byte at least: more than the bytes left is a body that ends inside them
   if (m > b.left) fail('BAD_PAYLOAD', `${m} references in ${b.left} bytes`);
   const d = new Float64Array(m);

@@ -1,4 +1,4 @@
-/** The header chunk PHDR: spec §5 (versions 3 and 4) and Appendix A.1 (versions 1 and 2). */
+/** The header chunk PHDR: spec §5 (version 5), A.5 (versions 3 and 4) and A.1 (versions 1 and 2). */
 import { fail } from './errors.mjs';
 import { Cursor } from './varint.mjs';
 
@@ -9,7 +9,8 @@ import { Cursor } from './varint.mjs';
  * @property {number} coding 0 float32, 1 float64, 2 quantized, 3 predicted
  * @property {[number, number, number]} bits widths as stored for codings 2 and 3, else [0, 0, 0]
  * @property {[number, number]} h_range [h_min, h_max] for codings 2 and 3, else [0, 0]
- * @property {number} units
+ * @property {number} units the length unit, 0-7 (version 5: bits 0-3 of the units byte)
+ * @property {'Y' | 'Z' | null} up_axis version 5: bits 4-5 of the units byte (§5); null where not said and before version 5
  * @property {[[number, number, number], [number, number, number]] | null} bbox
  * @property {number} tolerance NaN if none
  * @property {number} error_bound NaN if not measured
@@ -25,17 +26,22 @@ export function parseHeader(payload) {
   if (payload.length < 2) fail('BAD_PAYLOAD', 'PHDR under 2 bytes');
   const major = payload[0];
   const minor = payload[1];
-  if (major < 1 || major > 4) fail('UNSUPPORTED_VERSION', `major version ${major}`);
+  if (major < 1 || major > 5) fail('UNSUPPORTED_VERSION', `major version ${major}`);
   const old = major < 3;
-  if (payload.length < (old ? 108 : 9)) fail('BAD_PAYLOAD', 'PHDR too short');
+  const v5 = major === 5;
+  // the fixed part: 8 bytes in version 5 (flags a u8), 9 in 3 and 4 (flags a u16), 108 in 1 and 2
+  if (payload.length < (old ? 108 : v5 ? 8 : 9)) fail('BAD_PAYLOAD', 'PHDR too short');
   c.pos = 2;
-  const flags = c.u16();
+  const flags = v5 ? c.u8() : c.u16();
   const coding = c.u8();
   // version 1 has no predicted coding (A.1); 2 to 4 have it
   if (coding > (major === 1 ? 2 : 3)) fail('UNSUPPORTED_CODING', `coding ${coding}`);
   const quantized = coding >= 2;
   const bits = /** @type {[number, number, number]} */ ([c.u8(), c.u8(), c.u8()]);
-  const units = c.u8();
+  const unitsByte = c.u8();
+  // version 5: the unit in bits 0-3, the up axis in bits 4-5, bits 6-7 ignored (§5, §2.1)
+  const units = v5 ? unitsByte & 0x0f : unitsByte;
+  const up = v5 ? (unitsByte >> 4) & 3 : 0;
   let hMin = 0;
   let hMax = 0;
   let bbox = null;
@@ -72,6 +78,7 @@ export function parseHeader(payload) {
     if (!Number.isFinite(hMin) || !Number.isFinite(hMax) || hMin > hMax) fail('BAD_HEADER_VALUE', 'h range');
   }
   if (units > 7) fail('BAD_HEADER_VALUE', `units ${units}`);
+  if (up === 3) fail('BAD_HEADER_VALUE', 'up axis 3');
   if (bbox && (bbox.some((v) => !Number.isFinite(v)) || bbox[0] > bbox[3] || bbox[1] > bbox[4] || bbox[2] > bbox[5])) {
     fail('BAD_HEADER_VALUE', 'bounding box');
   }
@@ -85,6 +92,7 @@ export function parseHeader(payload) {
     bits: quantized ? bits : [0, 0, 0],
     h_range: [hMin, hMax],
     units,
+    up_axis: up === 1 ? 'Y' : up === 2 ? 'Z' : null,
     bbox: bbox && [[bbox[0], bbox[1], bbox[2]], [bbox[3], bbox[4], bbox[5]]],
     tolerance,
     error_bound: errorBound,

@@ -93,7 +93,8 @@ function read(bytes, options) {
     chunks: c.chunks,
     planes: c.planes,
     objects,
-    metadata: c.metadata,
+    /** every mETA keyword; in a version 5 file also the header's up axis, as `up_axis` (§5, §10.3) */
+    metadata: metadataOf(c),
     findings: c.findings,
     /** container-level records, for validators: groups with refs, roles and kind data; cOLR chunks */
     container: c,
@@ -101,6 +102,19 @@ function read(bytes, options) {
     meshes,
     mesh: () => mergedMesh(objects),
   };
+}
+
+/**
+ * The file's metadata as mETA says it, with a version 5 header's up axis where mETA said it before
+ * (a version 5 file has no mETA up_axis: BAD_METADATA, so nothing is overwritten).
+ * @param {import('./reader.mjs').Container} c
+ * @returns {Record<string, string>}
+ */
+function metadataOf(c) {
+  if (!c.header.up_axis) return c.metadata;
+  const out = Object.assign(Object.create(null), c.metadata);
+  out.up_axis = c.header.up_axis;
+  return out;
 }
 
 /**

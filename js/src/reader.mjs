@@ -13,12 +13,12 @@ const KNOWN = new Set(['PHDR', 'OBJT', 'PLNS', 'GRUP', 'cOLR', 'iNDX', 'mETA', '
 /**
  * @typedef {object} Container
  * @property {import('./header.mjs').Header} header
- * @property {{type: string, offset: number, length: number}[]} chunks
+ * @property {{type: string, offset: number, length: number, size: number}[]} chunks size: the whole chunk's bytes (head, payload, CRC)
  * @property {Float64Array} planes (ν, φ, h) triplets
  * @property {import('./objects.mjs').PlnObject[]} objects
  * @property {import('./groups.mjs').Group[]} groups in file order
  * @property {{group: number, rgba: Uint8Array}[]} colours every cOLR in file order
- * @property {Record<string, string>} metadata
+ * @property {Record<string, string>} metadata every mETA chunk (a version 5 header's up axis is in header.up_axis)
  * @property {Set<string>} findings §12.3 codes
  */
 
@@ -54,7 +54,8 @@ export function readContainer(bytes, options = {}) {
   for (;;) {
     let chunk;
     try {
-      chunk = readChunk(bytes, pos, limits.chunkLength);
+      // PHDR's length is a u32 in every version; a version 5 file's later chunks have varint32 lengths (§4.1)
+      chunk = readChunk(bytes, pos, limits.chunkLength, header !== null && header.version[0] >= 5);
     } catch (err) {
       if (err instanceof PlnError) err.offset = pos;
       throw err;
@@ -66,12 +67,13 @@ export function readContainer(bytes, options = {}) {
       if (header && type === 'PHDR') fail('DUPLICATE_HEADER', 'a second PHDR');
       const critical = (chunk.type.charCodeAt(0) & 0x20) === 0;
       if (critical && !KNOWN.has(type)) fail('UNKNOWN_CRITICAL_CHUNK', type);
-      chunks.push({ type, offset, length: chunk.length });
-      pos = offset + 12 + chunk.length;
+      const size = chunk.head + chunk.length + 4;
+      chunks.push({ type, offset, length: chunk.length, size });
+      pos = offset + size;
       if (type === 'PHDR') {
         header = parseHeader(payload);
         const [major, minor] = header.version;
-        if (minor > NEWEST_MINOR[/** @type {1|2|3|4} */ (major)]) findings.add('NEWER_MINOR_VERSION');
+        if (minor > NEWEST_MINOR[/** @type {1|2|3|4|5} */ (major)]) findings.add('NEWER_MINOR_VERSION');
         continue;
       }
       const h = /** @type {import('./header.mjs').Header} */ (header);
@@ -93,7 +95,7 @@ export function readContainer(bytes, options = {}) {
         colours.push(readColours(payload, groups, h.version[0]));
       } else if (type === 'mETA') {
         if (listed.length > 0) fail('BAD_METADATA', 'mETA after an OBJT, PLNS or GRUP');
-        readMetadata(payload, metadata);
+        readMetadata(payload, metadata, h.version[0]);
       } else if (type === 'iNDX') {
         checkIndex(payload, offset, chunks[1].offset, listed);
         indexOffset = offset;
@@ -133,7 +135,7 @@ function checkEnd(payload, header, indexOffset, read) {
   if (payload.length === 8) {
     const view = new DataView(payload.buffer, payload.byteOffset, 8);
     const at = view.getUint32(4, true) * 4294967296 + view.getUint32(0, true);
-    // versions 1 and 2 write 0 for "no index"; versions 3 and 4 write an empty PEND instead
+    // versions 1 and 2 write 0 for "no index"; versions 3 to 5 write an empty PEND instead
     if (!(old && at === 0) && (at === 0 || at !== indexOffset)) fail('BAD_INDEX', `PEND index offset ${at}`);
   }
   const counts = header.counts;

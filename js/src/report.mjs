@@ -19,7 +19,8 @@ export function conformanceJson(file) {
     objects: c.objects.map((o) => ({ name: o.name, parent: o.parent, transform: o.transform })),
     groups: c.groups.map(groupJson),
     colours: c.colours.map((col) => ({ group: col.group, rgba: quads(col.rgba) })),
-    metadata: c.metadata,
+    // mETA's keywords and a version 5 header's up axis alike (conformance/README.md)
+    metadata: file.metadata,
     findings: [...c.findings],
     geometry: geometryJson(file),
   };

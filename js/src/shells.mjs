@@ -31,12 +31,15 @@ export function readVarints(b, n) {
 }
 
 /**
- * The grid of §9.10 (32 bytes), read; checked by checkGrid.
+ * The grid of §9.10, read (origin x, y, z and step: f32 each in version 5, 16 bytes; f64 each
+ * before, 32 bytes, A.5); checked by checkGrid.
  * @param {import('./varint.mjs').Cursor} b
+ * @param {boolean} [f32]
  */
-export function readGrid(b) {
-  const origin = [b.f64(), b.f64(), b.f64()];
-  return { origin, step: b.f64() };
+export function readGrid(b, f32 = false) {
+  const read = f32 ? () => b.f32() : () => b.f64();
+  const origin = [read(), read(), read()];
+  return { origin, step: read() };
 }
 
 /** @param {{origin: number[], step: number}} g */
@@ -62,9 +65,10 @@ export function checkNamed(cp, k, m) {
  * Kind 6 data, read and checked in §9.10's order.
  * @param {import('./varint.mjs').Cursor} b
  * @param {Uint8Array} roles
+ * @param {boolean} [f32Grid] version 5: the grid in f32
  * @returns {Shell}
  */
-export function readShell(b, roles) {
+export function readShell(b, roles, f32Grid = false) {
   const m = roles.length;
   const V = b.varint();
   const T = b.varint();
@@ -77,7 +81,7 @@ export function readShell(b, roles) {
   let E = 0;
   for (let k = 0; k < V; k++) E += explicit[k];
   const named = readVarints(b, 3 * (V - E));
-  const grid = E > 0 ? readGrid(b) : null;
+  const grid = E > 0 ? readGrid(b, f32Grid) : null;
   const steps = readVarints(b, 3 * E);
   const faceDiffs = readVarints(b, T - U);
   const codes = readVarints(b, 3 * T);

@@ -19,9 +19,10 @@ import { readVarints, readGrid, checkGrid, MAX_COORD } from './shells.mjs';
  * @param {import('./varint.mjs').Cursor} b
  * @param {Uint8Array} roles
  * @param {boolean} [parallelogram] kind 8 (§9.12)
+ * @param {boolean} [f32Grid] version 5: the grid in f32 (§9.10)
  * @returns {import('./shells.mjs').Shell}
  */
-export function readShellTree(b, roles, parallelogram = false) {
+export function readShellTree(b, roles, parallelogram = false, f32Grid = false) {
   const m = roles.length;
   const V = b.varint();
   const T = b.varint();
@@ -95,7 +96,7 @@ export function readShellTree(b, roles, parallelogram = false) {
   }
   if (n !== V) fail('BAD_GROUP_STRUCTURE', `${n} corners named, ${V} declared`);
 
-  return shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram });
+  return shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, f32Grid });
 }
 
 /**
@@ -114,11 +115,12 @@ export function readShellTree(b, roles, parallelogram = false) {
  * @param {Int32Array} s.parent per triangle, -1 for a root
  * @param {Int32Array} s.opposite per triangle, the parent's corner off the shared edge, -1 for a root
  * @param {Float64Array} s.faceCodes per triangle, as read
- * @param {{parallelogram: boolean, walk?: boolean, multi?: boolean}} how kind 8 (parallelogram), kind 9
- *   (walk: a mode byte decides both), kind 10 (walk and multi: §9.14's averaged parallelograms first)
+ * @param {{parallelogram: boolean, walk?: boolean, multi?: boolean, f32Grid?: boolean}} how kind 8 (parallelogram), kind 9
+ *   (walk: a mode byte decides both), kind 10 (walk and multi: §9.14's averaged parallelograms first);
+ *   f32Grid: the grid in f32 (version 5, §9.10)
  * @returns {import('./shells.mjs').Shell}
  */
-export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, walk = false, multi = false }) {
+export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, walk = false, multi = false, f32Grid = false }) {
   const m = roles.length;
   // faces: 0 the parent's (the previous triangle's for a root), 1 free, r + 2 reference r
   const face = new Int32Array(T);
@@ -176,7 +178,7 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
   // a walk's mode (§9.13): bit 0 parallelogram, bit 1 tables; bits 2-7 checked with the rest
   const mode = walk && E > 0 ? b.u8() : 0;
   if (walk) parallelogram = (mode & 1) !== 0;
-  const grid = E > 0 ? readGrid(b) : null;
+  const grid = E > 0 ? readGrid(b, f32Grid) : null;
   /** @type {{first: number, gaps: Float64Array}[] | null} per axis, as read */
   let tablesRead = null;
   if (walk && E > 0 && mode & 2) {

@@ -200,9 +200,10 @@ export class OpenEdges {
  * @param {import('./varint.mjs').Cursor} b
  * @param {Uint8Array} roles
  * @param {boolean} [multi] kind 10
+ * @param {boolean} [f32Grid] version 5: the grid in f32 (§9.10)
  * @returns {import('./shells.mjs').Shell}
  */
-export function readShellWalk(b, roles, multi = false) {
+export function readShellWalk(b, roles, multi = false, f32Grid = false) {
   const V = b.varint();
   const T = b.varint();
   const X = b.varint();
@@ -300,5 +301,5 @@ export function readShellWalk(b, roles, multi = false) {
   if (top !== 0) fail('BAD_GROUP_STRUCTURE', `${top} slots left on the stack after the last triangle`);
   if (x !== X) fail('BAD_GROUP_STRUCTURE', `${X - x} escapes left over`);
   if (n !== V) fail('BAD_GROUP_STRUCTURE', `${n} corners named, ${V} declared`);
-  return shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram: false, walk: true, multi });
+  return shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram: false, walk: true, multi, f32Grid });
 }

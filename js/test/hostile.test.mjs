@@ -22,15 +22,13 @@ function random(seed) {
   };
 }
 
-/** Offsets and lengths of the chunks of an intact file. @param {Uint8Array} b */
+/**
+ * Where the payloads of an intact file's chunks are: its chunk list as readPln reads it (a chunk
+ * head is 8 bytes, or in version 5 after PHDR 5 to 9, its length a varint, §4.1).
+ * @param {Uint8Array} b
+ */
 function chunksOf(b) {
-  const out = [];
-  for (let pos = 8; pos + 12 <= b.length;) {
-    const length = b[pos + 4] | (b[pos + 5] << 8) | (b[pos + 6] << 16) | (b[pos + 7] << 24);
-    out.push({ pos, length });
-    pos += 12 + length;
-  }
-  return out;
+  return readPln(b, { decode: false }).chunks.map((c) => ({ pos: c.offset, start: c.offset + c.size - 4 - c.length, length: c.length }));
 }
 
 /** Damage one chunk's payload (a byte set, a bit flipped, a run zeroed) and fix its CRC. */
@@ -38,13 +36,13 @@ function damage(/** @type {Uint8Array} */ bytes, /** @type {() => number} */ rnd
   const b = bytes.slice();
   const chunks = chunksOf(b).filter((c) => c.length > 0);
   const c = chunks[Math.floor(rnd() * chunks.length)];
-  const at = c.pos + 8 + Math.floor(rnd() * c.length);
+  const at = c.start + Math.floor(rnd() * c.length);
   const how = rnd();
   if (how < 0.4) b[at] = Math.floor(rnd() * 256);
   else if (how < 0.8) b[at] ^= 1 << Math.floor(rnd() * 8);
-  else b.fill(how < 0.9 ? 0 : 0xff, at, Math.min(at + 1 + Math.floor(rnd() * 8), c.pos + 8 + c.length));
-  const end = c.pos + 8 + c.length;
-  const crc = crc32(b, c.pos + 8, end, crc32(b, c.pos, c.pos + 4));
+  else b.fill(how < 0.9 ? 0 : 0xff, at, Math.min(at + 1 + Math.floor(rnd() * 8), c.start + c.length));
+  const end = c.start + c.length;
+  const crc = crc32(b, c.start, end, crc32(b, c.pos, c.pos + 4));
   new DataView(b.buffer).setUint32(end, crc, true);
   return b;
 }

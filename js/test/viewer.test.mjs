@@ -44,6 +44,7 @@ before(async () => {
   extra['brotli.pln'] = path.join(ROOT, 'conformance/valid/brotli_shell_tree_v4_0.pln');
   extra['scene4.pln'] = path.join(ROOT, 'conformance/valid/scene_transforms_v4_0.pln');
   extra['walk.pln'] = path.join(ROOT, 'conformance/valid/shell_walk_sphere_v4_1.pln');
+  extra['v5_up_z.pln'] = path.join(ROOT, 'conformance/valid/walk_planeless_v5_0.pln');
   const bad = fs.readFileSync(extra['box.pln']).subarray(0, 100);
   tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'pln-viewer-'));
   extra['truncated.pln'] = path.join(tmp, 'truncated.pln');
@@ -157,6 +158,26 @@ test('viewer: up_axis Z turns the model +z up', { skip: why ?? false, timeout: 6
   });
   assert.ok(Math.abs(rotation + Math.PI / 2) < 1e-12, `rotation ${rotation}`);
   await checkPanel('up_z.pln');
+});
+
+test('viewer: version 5.0, the header\'s up axis Z turns the model +z up as mETA\'s does; chunk bytes with varint lengths', { skip: why ?? false, timeout: 60000 }, async (t) => {
+  const stats = await open('v5_up_z.pln');
+  assert.equal(stats.version, '5.0');
+  assert.equal(stats.upAxis, 'Z');
+  assert.equal(stats.view, 'Z');
+  const rotation = await chrome.page.evaluate(() => {
+    const v = /** @type {any} */ (window).plnViewer;
+    return v.scene.children.find((/** @type {any} */ o) => o.isGroup).rotation.x;
+  });
+  assert.ok(Math.abs(rotation + Math.PI / 2) < 1e-12, `rotation ${rotation}`);
+  const want = await checkPanel('v5_up_z.pln');
+  // the chunks table: every byte after the signature in one row or another (heads of 5 to 9 bytes after PHDR)
+  const bytes = await chrome.page.$$eval('#chunks tbody tr', (trs) => trs.map((tr) => /** @type {HTMLElement} */ (tr.querySelectorAll('td')[2]).textContent));
+  assert.equal(bytes.reduce((sum, b) => sum + int(b), 0), want.size - 8, `chunk bytes ${bytes}`);
+  const px = await canvasPixels();
+  t.diagnostic(`v5_up_z.pln: canvas ${px.width}x${px.height}: ${(100 * px.off).toFixed(1)} % drawn, ${px.colours} colours`);
+  assert.ok(px.off > 0.05, `${(100 * px.off).toFixed(1)} % of the canvas drawn`);
+  assert.deepEqual(chrome.consoleErrors, []);
 });
 
 test('viewer: version 4.0, Brotli payloads decoded in the page (brotli-dec-wasm), coded transforms, one colour', { skip: why ?? false, timeout: 60000 }, async (t) => {

@@ -12,9 +12,9 @@
  * per triangle (sRGB in the file, linear in the attribute, as three.js expects). The material is a
  * MeshStandardMaterial with flat shading, both sides drawn, one per mesh (a viewer may recolour each part).
  *
- * userData of the returned group: `header`, `chunks`, `metadata` (mETA), `findings`, `groups`
+ * userData of the returned group: `header`, `chunks`, `metadata` (mETA, and a version 5 header's up axis), `findings`, `groups`
  * (per group in file order: {index, kind, kindName, object, references, triangles, source}, source
- * a copy's source group or null), `upAxis` ('Y', 'Z' or null) and `file` (readPln's result). A
+ * a copy's source group or null), `upAxis` ('Y', 'Z' or null: the header's in version 5, mETA's before) and `file` (readPln's result). A
  * mesh's userData: {groupIndex, kind, kindName, object, source}. A copy (kind 11, §9.15) is a mesh
  * of its source's triangles in the copy's object (placed by its transform), coloured by its own cOLR. The loader does not turn a Z-up file Y-up; a viewer may (§10.3).
  *
@@ -96,6 +96,7 @@ export class PLNLoader extends Loader {
       chunks: file.chunks,
       metadata: file.metadata,
       findings: [...file.findings],
+      // a version 5 header's up axis, or mETA's up_axis before version 5 (readPln's metadata holds either, §10.3)
       upAxis: file.metadata.up_axis === 'Y' || file.metadata.up_axis === 'Z' ? file.metadata.up_axis : null,
       groups: file.container.groups.map((/** @type {any} */ g) => ({
         index: g.index,

@@ -114,7 +114,7 @@ function statsOf(root, name, size) {
   for (const c of chunks) {
     const e = (chunkBytes[c.type] ??= { chunks: 0, bytes: 0 });
     e.chunks += 1;
-    e.bytes += c.length + 12;
+    e.bytes += c.size; // head (8 bytes, or 5 to 9 with a version 5 varint length), payload, CRC
   }
   const diag = header.bbox ? Math.hypot(...header.bbox[1].map((/** @type {number} */ v, /** @type {number} */ i) => v - header.bbox[0][i])) : NaN;
   return {
