@@ -1925,7 +1925,7 @@ def _():
 
 
 @case("xv50_colours_no_refs", "BAD_COLOURS", "version 5.0: the open pyramid as a shell without references and a "
-      "cOLR of count 0 for it: a group without references has no colour (spec §10.1)")
+      "cOLR of count 0 for it of 8 bytes: a group without references takes one colour, which it lacks (spec §10.1)")
 def _():
     colours = schema.ColoursHead.build(dict(group=0, count=0))
     return v5_file(v5_layout(groups=[grup_v5(np.zeros(0), GroupKind.SHELL, SHELL_PYRAMID)]) + [(schema.COLR, colours)])

@@ -203,7 +203,8 @@ def assembled(case: ValidCase, header: Header) -> bytes:
             layout.append((schema.GRUP, records.encode_group(rec, case.compress, header.version[0])))
             groups += 1
         elif isinstance(op, Colour):
-            layout.append((schema.COLR, records.encode_colours(Colours(op.group, op.rgba), header.version[0])))
+            layout.append((schema.COLR, records.encode_colours(Colours(op.group, op.rgba), header.version[0],
+                                                               len(case.groups[op.group].refs))))
         elif isinstance(op, Meta):
             layout.append((schema.META, records.encode_metadata(Metadata(op.key, op.value))))
         else:
@@ -876,9 +877,11 @@ CASES = [
               decoded_bbox=True),
     ValidCase("walk_planeless_v5_0", "version 5.0: the icosphere of shell_walk_sphere_v4_1 as a shell walk without "
               "references (spec §9.2: m = 0) in a file without planes (coding 0, no PLNS), its grid in f32 (origin 0, "
-              "step 0.25), the up axis Z in the header's units byte (spec §5), varint chunk lengths (spec §4.1) and "
-              "no index: a 9-byte PEND", dataclasses.replace(V50_CUBE, up_axis="Z"),
-              (Obj("sphere"), Group(0, GroupKind.SHELL_WALK, (), shell=WALK_SPHERE)), decoded_bbox=True, index=False),
+              "step 0.25), its triangles in the one colour of a cOLR of count 0 (spec §10.1), the up axis Z in the "
+              "header's units byte (spec §5), varint chunk lengths (spec §4.1) and no index: a 9-byte PEND",
+              dataclasses.replace(V50_CUBE, up_axis="Z"),
+              (Obj("sphere"), Group(0, GroupKind.SHELL_WALK, (), shell=WALK_SPHERE),
+               Colour(0, np.array([[230, 120, 40, 255]], dtype=np.uint8))), decoded_bbox=True, index=False),
     ValidCase("scene_up_axis_v5_0", "version 5.0: a root, the cube as a convex group in one colour, and the torus of "
               "shell_walk_torus_v4_1 as a shell walk with multi-parallelograms on one reference (for its colour) "
               "placed twice, the second a copy (kind 11); up axis Y in the header, counts, and an index: iNDX "

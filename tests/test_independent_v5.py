@@ -188,8 +188,10 @@ def test_a_shell_on_planes_beside_one_without():
                                          "grid": [[0, 0, 0], [1, 0, 0], [0, 1, 0]], "origin": [0.5, -0.25, 0.0],
                                          "step": 0.125, "facets": [[-1, 0, 1, 2]]}
     colour_none = chunks + [(b"cOLR", struct.pack("<II", 1, 0))]
-    assert error(pln(colour_none)) == "BAD_COLOURS"  # §10.1: a count of 0
-    assert error(pln(chunks + [(b"cOLR", struct.pack("<II", 1, 0) + bytes(4))])) == "BAD_COLOURS"  # one colour too
+    assert error(pln(colour_none)) == "BAD_COLOURS"  # §10.1: a count of 0 without its one colour
+    # §10.1: a count of 0 with one colour is the colour of every triangle of a group without references
+    one = read(pln(chunks + [(b"cOLR", struct.pack("<II", 1, 0) + bytes([9, 8, 7, 255]))], index=True))
+    assert "error" not in one and one["colours"][-1] == {"group": 1, "rgba": [[9, 8, 7, 255]]}, one
 
 
 # --- framing (§4.1) -------------------------------------------------------------------------------

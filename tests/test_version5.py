@@ -63,10 +63,12 @@ def test_random_access_through_the_index_of_a_version_5_file() -> None:
 def test_a_shell_of_explicit_corners_needs_no_plane() -> None:
     buf = io.BytesIO()
     with planefmt.Writer(buf, dataclasses.replace(V5, coding=Coding.FLOAT32)) as w:
-        w.add_group(w.add_object("pyramid"), GroupKind.SHELL, np.zeros(0, np.int64), shell=_pyramid())
+        k = w.add_group(w.add_object("pyramid"), GroupKind.SHELL, np.zeros(0, np.int64), shell=_pyramid())
+        w.add_colours(k, np.array([[10, 20, 30, 255]], np.uint8))  # one colour for all its triangles
     scene = codec.decode_scene(io.BytesIO(buf.getvalue()))
     mesh = scene.nodes[0].mesh
     assert len(mesh.faces) == 4 and np.allclose(mesh.vertices.max(axis=0), [1.0, 1.0, 1.0])
+    assert (mesh.face_colours == [10, 20, 30, 255]).all()
     assert b"PLNS" not in buf.getvalue()
 
 
@@ -92,7 +94,7 @@ def test_the_writer_refuses_what_a_version_5_reader_would() -> None:
         planefmt.Writer(io.BytesIO(), dataclasses.replace(V5, version=(4, 2), up_axis="Z"))
 
 
-@pytest.mark.parametrize("mesh", ["cad/plate_holes.STL", "usd/bolt.usda"])
+@pytest.mark.parametrize("mesh", ["cad/plate_holes.STL", "usd/bolt.usda", "usd/wheelNormalGeo.usda"])
 def test_version_5_is_smaller_than_4_and_decodes_to_the_same_surface(mesh: str) -> None:
     scene, _ = registry.read(str(CORPUS / mesh))
     files = {}
@@ -109,6 +111,9 @@ def test_version_5_is_smaller_than_4_and_decodes_to_the_same_surface(mesh: str) 
         assert (na.mesh is None) == (nb.mesh is None)
         if na.mesh is not None:
             assert np.array_equal(na.mesh.faces, nb.mesh.faces)
+            # A colour rides on a group without references as it did on its one plane.
+            assert (na.mesh.face_colours is None) == (nb.mesh.face_colours is None)
+            assert na.mesh.face_colours is None or np.array_equal(na.mesh.face_colours, nb.mesh.face_colours)
             # The same corners up to the grid: version 5's origin and step are float32 values.
             step = np.ptp(na.mesh.vertices, axis=0).max() * 3e-5
             assert np.abs(na.mesh.vertices - nb.mesh.vertices).max() <= 2 * step

@@ -81,8 +81,8 @@ fifth byte with bit 7 set or a length above 2^31 - 1); the header's fixed
 part is 8 bytes, flags a u8, and its units byte holds the unit (bits 0-3,
 reported as "units") and the up axis (bits 4-5: 0 none, 1 Y, 2 Z, reported
 in "metadata" as a mETA up_axis is; a mETA up_axis is BAD_METADATA there);
-groups of kinds 6 to 11 may have no references (and then no cOLR: a count
-of 0 is BAD_COLOURS); and a shell's grid is four f32 (16 bytes), widened
+groups of kinds 6 to 11 may have no references (and then one colour: a
+cOLR of count 0 and 12 bytes; of 8 bytes, BAD_COLOURS); and a shell's grid is four f32 (16 bytes), widened
 exactly.
 
 This reader reads its input front to back (it works on pipes) and never
@@ -1870,12 +1870,12 @@ class Reader:
         if count != self.group_refcounts[group]:
             raise PlnError("BAD_COLOURS", "%d colours for %d references"
                            % (count, self.group_refcounts[group]))
-        if count == 0:
-            # pln.md §10.1: a group without references (§9.2, version 5) has no colour
-            raise PlnError("BAD_COLOURS", "a cOLR of count 0, for group %d without references" % group)
+        if count == 0 and not one_colour:
+            # pln.md §10.1: a group without references (§9.2, version 5) takes one colour
+            raise PlnError("BAD_COLOURS", "a cOLR of count 0 without its one colour, for group %d" % group)
         if one_colour:
-            # reported as the per-reference form would be (SPEC_NOTES 28)
-            rgba = [list(p[8:12]) for _ in range(count)]
+            # reported as the per-reference form would be (SPEC_NOTES 28); count 0: the one colour
+            rgba = [list(p[8:12]) for _ in range(max(count, 1))]
         else:
             rgba = [list(p[8 + 4 * i:12 + 4 * i]) for i in range(count)]
         self.colours.append({"group": group, "rgba": rgba})

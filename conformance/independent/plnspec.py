@@ -36,7 +36,7 @@ Version 5.0 was added from the 5.0 text of §4.1, §4.4, §5, §9.2, §9.10-§9.
 and Appendix A.5: every chunk after the first framed with a varint32 length (varint_head; the first,
 PHDR, keeps its u32), the header's 8-byte fixed part with the up axis in bits 4-5 of units, reported
 as the metadata "up_axis" (as the 5.0 goldens expect) and an mETA up_axis rejected, groups without
-references in kinds 6 to 11 (and in skipped kinds), a cOLR of count 0 rejected, and shell grids of
+references in kinds 6 to 11 (and in skipped kinds), a cOLR of count 0 holding one colour (without it rejected), and shell grids of
 four f32 (grid). Versions 1.0 to 4.2 are read as before (A.5).
 
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
@@ -1425,10 +1425,10 @@ class Reader:
             fail("BAD_COLOURS", f"group {group} not read yet")
         if count != self.group_refs[group]:
             fail("BAD_COLOURS", f"{count} colours for {self.group_refs[group]} references")
-        if count == 0:  # version 5: a group without references has no colour (before: m >= 1)
-            fail("BAD_COLOURS", "a count of 0")
-        if one:  # reported expanded, as the per-reference form would be (SPEC_NOTES 28)
-            colours = [list(rgba) for _ in range(count)]
+        if count == 0 and not one:  # version 5: a group without references takes one colour (before: m >= 1)
+            fail("BAD_COLOURS", "a count of 0 without its one colour")
+        if one:  # reported expanded, as the per-reference form would be (SPEC_NOTES 28); count 0: the one
+            colours = [list(rgba) for _ in range(max(count, 1))]
         else:
             colours = [list(rgba[4 * i:4 * i + 4]) for i in range(count)]
         self.colours.append({"group": group, "rgba": colours})

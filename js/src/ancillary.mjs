@@ -22,10 +22,10 @@ export function readColours(payload, groups, major) {
   if (c.left > 0) fail('BAD_COLOURS', `${c.left} bytes after the colours`);
   if (group >= groups.length) fail('BAD_COLOURS', `group ${group} not read yet`);
   if (count !== groups[group].refs.length) fail('BAD_COLOURS', `${count} colours for ${groups[group].refs.length} references`);
-  // a group without references (version 5, §9.2) has no colour
-  if (count === 0) fail('BAD_COLOURS', 'a count of 0');
+  // a group without references (version 5, §9.2) takes one colour for all its triangles
+  if (count === 0 && !uniform) fail('BAD_COLOURS', 'a count of 0 without its one colour');
   // expanded only now that count is the group's ref_count (within the reader's limit)
-  const rgba = new Uint8Array(4 * count);
+  const rgba = new Uint8Array(4 * Math.max(count, 1));
   if (uniform) for (let i = 0; i < rgba.length; i += 4) rgba.set(colours, i);
   else rgba.set(colours);
   return { group, rgba };

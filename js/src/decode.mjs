@@ -53,7 +53,8 @@ export function decodeGroup(group, table, header, earlier = []) {
   /** @type {import('./convex.mjs').Budget} */
   const budget = { left: WORK_LIMIT };
   const coding = codingError(header);
-  const base = { kind: group.kind, freeRef: m - 1 };
+  // free triangles take the last reference's colour; a group without references its cOLR's one (§10.1)
+  const base = { kind: group.kind, freeRef: Math.max(m - 1, 0) };
   switch (group.kind) {
     case 0:
       return { ...base, ...polytopeFaces(group, planes, null, budget, coding) };

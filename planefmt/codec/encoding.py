@@ -280,16 +280,18 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                 k = w.add_group(obj_index, p.kind, group_refs, bounding, cells=p.cells, tree=p.tree,
                                 vertex_planes=p.vertex_planes, facets=p.facets, shell=p.shell)
                 if o.plane_colours is not None:
-                    w.add_colours(k, o.plane_colours[local])
+                    # A group without references takes the object's one colour (spec §10.1).
+                    w.add_colours(k, o.plane_colours[local] if len(local) else o.plane_colours[:1])
     return header
 
 
 def _unreferenced(o: _Object) -> _Object:
-    """``o`` without planes where its groups are shell trees or walks over explicit corners only and no
-    colour rides on a plane: their triangles' planes name no corner, so all may be free, and version 5
-    lets such a group have no reference (spec §9.2), where 4 kept one (for its colour: a plane block
-    and a 16-byte h range in the header)."""
-    if o.plane_colours is not None or not all(
+    """``o`` without planes where its groups are shell trees or walks over explicit corners only, in one
+    colour or none: their triangles' planes name no corner, so all may be free, and version 5 lets such
+    a group have no reference (spec §9.2) and one colour for all its triangles (§10.1), where 4 kept
+    a reference for its colour (a plane block and a 16-byte h range in the header)."""
+    colours = o.plane_colours
+    if (colours is not None and (colours != colours[:1]).any()) or not all(
             g.kind in TREE_KINDS and g.shell is not None and np.all(g.shell.explicit) for g in o.groups):
         return o
 
@@ -299,7 +301,7 @@ def _unreferenced(o: _Object) -> _Object:
         return replace(shell, facets=facets)
 
     none = np.zeros(0, dtype=np.int64)
-    return replace(o, triplets=o.triplets[:0], face_plane=None,
+    return replace(o, triplets=o.triplets[:0], face_plane=None, plane_colours=None if colours is None else colours[:1],
                    groups=tuple(replace(g, refs=none, bounding=np.zeros(0, dtype=bool), shell=free(g.shell))
                                 for g in o.groups))
 

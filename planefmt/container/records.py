@@ -698,9 +698,13 @@ def check_tree(tokens: np.ndarray, count: int) -> None:
 
 # spec §10.1 Colours ---------------------------------------------------------------------------
 
-def encode_colours(c: Colours, major: int = 1) -> bytes:
-    """A cOLR payload; from version 4 on, a group in one colour stores it once (spec §10.1)."""
+def encode_colours(c: Colours, major: int = 1, count: int | None = None) -> bytes:
+    """A cOLR payload; from version 4 on, a group in one colour stores it once (spec §10.1). ``count``:
+    the group's references, where known (0: a group without references, which takes one colour)."""
     rgba = np.ascontiguousarray(c.rgba, dtype=np.uint8).reshape(-1, 4)
+    if count is not None and count == 0:
+        # A group without references (version 5): its one colour, for all its triangles.
+        return schema.ColoursHead.build(dict(group=c.group, count=0)) + rgba[0].tobytes()
     if major >= 4 and len(rgba) > 1 and (rgba == rgba[0]).all():
         return schema.ColoursHead.build(dict(group=c.group, count=len(rgba))) + rgba[0].tobytes()
     return schema.Colours.build(dict(group=c.group, count=len(rgba), rgba=rgba.tobytes()))
@@ -714,11 +718,12 @@ def decode_colours(payload: bytes, group_refs: dict[int, int], major: int = 1) -
         r = _parse(schema.Colours, payload, "cOLR")
         if len(payload) != 8 + 4 * r.count:
             raise FormatError("cOLR size does not match its count", code="BAD_COLOURS")
-    if head.group not in group_refs or group_refs[head.group] != head.count or not head.count:
-        raise FormatError(f"cOLR for group {head.group} does not match a preceding group's references",
-                          code="BAD_COLOURS")
+    if head.group not in group_refs or group_refs[head.group] != head.count or not (head.count or uniform):
+        raise FormatError(f"cOLR for group {head.group} does not match a preceding group's references (a group "
+                          "without references takes one colour)", code="BAD_COLOURS")
     rgba = np.frombuffer(bytes(payload[8:]), dtype=np.uint8).reshape(-1, 4)
-    return Colours(group=head.group, rgba=np.repeat(rgba, head.count, axis=0) if uniform else rgba.copy())
+    # A group without references takes its one colour (version 5), kept as one row.
+    return Colours(group=head.group, rgba=np.repeat(rgba, max(head.count, 1), axis=0) if uniform else rgba.copy())
 
 
 # spec §10.3 Metadata ------------------------------------------------------------------------

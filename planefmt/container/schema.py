@@ -1,4 +1,4 @@
-"""Construct declarations of the .pln container, versions 1, 2 and 3, read beside spec/pln.md: each
+"""Construct declarations of the .pln container, versions 1 to 5, read beside spec/pln.md: each
 under the section it implements ("spec §x"), the fixed-size structures of versions 1 and 2 under its
 Appendix A.1.
 

@@ -225,11 +225,14 @@ class Writer:
         return index
 
     def add_colours(self, group: int, rgba: np.ndarray) -> None:
-        """Attach one RGBA8 colour per reference of an already written group (cOLR)."""
+        """Attach one RGBA8 colour per reference of an already written group (cOLR); to a group without
+        references (version 5), one colour for all its triangles (spec §10.1)."""
         rgba = np.asarray(rgba, dtype=np.uint8).reshape(-1, 4)
-        if not 0 <= group < len(self._groups) or self._groups[group] != len(rgba) or not len(rgba):
-            raise PlnError("colours need a written group and one colour per reference", code="BAD_COLOURS")
-        self._emit(schema.COLR, records.encode_colours(Colours(group, rgba), self._major))
+        refs = self._groups[group] if 0 <= group < len(self._groups) else -1
+        if refs < 0 or len(rgba) != (refs or 1):
+            raise PlnError("colours need a written group and one colour per reference (one colour for a group "
+                           "without references)", code="BAD_COLOURS")
+        self._emit(schema.COLR, records.encode_colours(Colours(group, rgba), self._major, refs))
 
     def add_metadata(self, key: str, value: str) -> None:
         """Write a mETA chunk (spec §10.3): ``key`` = ``value``, each key once, before any object,
