@@ -436,3 +436,15 @@ def test_an_open_shell_at_a_lossy_tolerance_uses_its_budget_and_its_area_moves_o
         q = vv[ff]
         return float(np.linalg.norm(np.cross(q[:, 1] - q[:, 0], q[:, 2] - q[:, 0]), axis=1).sum()) / 2
     assert abs(area(decoded.vertices, decoded.faces) - area(v, f)) <= moved * half_perimeters + 2 * len(f) * moved ** 2
+
+
+@pytest.mark.parametrize("mesh", ["cad/box.STL", "open/test_nm.obj"])
+def test_the_encoders_walk_is_the_same_in_c_and_in_python(mesh: str, monkeypatch) -> None:
+    from planefmt.groups import shells
+
+    scene, _ = registry.read(str(CORPUS / mesh))
+    faces = np.asarray(next(n.mesh for n in scene.nodes if n.mesh is not None).faces)
+    face = np.random.default_rng(3).integers(0, 6, len(faces))  # same-face neighbours first, by these
+    walked = shells.spanning_walk(faces, face)
+    monkeypatch.setattr(shells, "_spanning", None)
+    assert all(np.array_equal(a, b) for a, b in zip(walked, shells.spanning_walk(faces, face)))

@@ -597,6 +597,111 @@ done:
     Py_RETURN_NONE;
 }
 
+typedef struct { int64_t j, r, p, k; } Step;
+
+static PyObject *
+spanning(PyObject *self, PyObject *args)
+{
+    /* twin (3T int64: the directed half-edge across each triangle edge, -1 for none), faces (T int64),
+     * walk, rotation, links (T int64 each, out): the encoder's depth-first walk (groups/shells.py,
+     * spanning_walk), a neighbour on the same face popped first. */
+    PyObject *objs[5];
+    Py_buffer views[5];
+    int held = 0;
+    if (!PyArg_ParseTuple(args, "OOOOO", &objs[0], &objs[1], &objs[2], &objs[3], &objs[4]))
+        return NULL;
+    for (; held < 5; held++)
+        if (int64_view(objs[held], &views[held], held >= 2, "spanning") < 0)
+            goto done;
+    int64_t t = views[1].len / 8;
+    if (views[0].len / 8 != 3 * t || views[2].len / 8 != t || views[3].len / 8 != t || views[4].len / 8 != t) {
+        PyErr_SetString(PyExc_ValueError, "spanning: the arrays do not match the triangles");
+        goto done;
+    }
+    const int64_t *twin = views[0].buf, *face = views[1].buf;
+    int64_t *walk_out = views[2].buf, *rot = views[3].buf, *links = views[4].buf;
+    unsigned char *seen = calloc(t ? t : 1, 1);
+    int64_t *position = malloc((t ? t : 1) * sizeof(int64_t));
+    /* Each triangle pushes at most three steps, each start one. */
+    Step *stack = malloc((4 * t + 1) * sizeof(Step));
+    if (!seen || !position || !stack) {
+        free(seen);
+        free(position);
+        free(stack);
+        PyErr_NoMemory();
+        goto done;
+    }
+    Py_BEGIN_ALLOW_THREADS
+    int64_t n = 0, top = 0;
+    for (int64_t start = 0; start < t; start++) {
+        stack[top++] = (Step){start, 0, -1, 0};
+        while (top) {
+            Step e = stack[--top];
+            if (seen[e.j])
+                continue;
+            seen[e.j] = 1;
+            position[e.j] = n;
+            walk_out[n] = e.j;
+            rot[n] = e.r;
+            links[n] = e.p < 0 ? 0 : 3 * (n - e.p - 1) + e.k + 1;
+            n++;
+            static const int64_t root_edges[3] = {2, 1, 0}, edges[2] = {2, 1};
+            const int64_t *ks = e.p < 0 ? root_edges : edges;
+            int count = e.p < 0 ? 3 : 2;
+            /* Other faces first, then the same face: the stack pops the last pushed first. */
+            for (int same = 0; same < 2; same++)
+                for (int i = 0; i < count; i++) {
+                    int64_t w = twin[3 * e.j + (e.r + ks[i]) % 3];
+                    if (w >= 0 && !seen[w / 3] && (face[w / 3] == face[e.j]) == same)
+                        stack[top++] = (Step){w / 3, w % 3, position[e.j], ks[i]};
+                }
+        }
+    }
+    Py_END_ALLOW_THREADS
+    free(seen);
+    free(position);
+    free(stack);
+done:
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&views[i]);
+    if (PyErr_Occurred())
+        return NULL;
+    Py_RETURN_NONE;
+}
+
+static PyObject *
+varints(PyObject *self, PyObject *args)
+{
+    /* values (contiguous 64-bit array, read as unsigned): their LEB128 varints, concatenated (spec §2.2). */
+    PyObject *obj;
+    Py_buffer view;
+    if (!PyArg_ParseTuple(args, "O", &obj) || uint64_view(obj, &view, 0, "varints") < 0)
+        return NULL;
+    int64_t n = view.len / 8;
+    const uint64_t *v = view.buf;
+    /* At most 10 bytes a value. */
+    PyObject *out = PyBytes_FromStringAndSize(NULL, 10 * n);
+    if (out == NULL) {
+        PyBuffer_Release(&view);
+        return NULL;
+    }
+    unsigned char *b = (unsigned char *)PyBytes_AS_STRING(out), *p = b;
+    Py_BEGIN_ALLOW_THREADS
+    for (int64_t i = 0; i < n; i++) {
+        uint64_t x = v[i];
+        while (x >= 0x80) {
+            *p++ = (unsigned char)(x & 0x7F) | 0x80;
+            x >>= 7;
+        }
+        *p++ = (unsigned char)x;
+    }
+    Py_END_ALLOW_THREADS
+    PyBuffer_Release(&view);
+    if (_PyBytes_Resize(&out, p - b) < 0)
+        return NULL;
+    return out;
+}
+
 static PyMethodDef methods[] = {
     {"resolve", resolve, METH_VARARGS,
      "resolve(value, pointer, offset[, plus, minus[, limit]]): in place, value[k] = offset[k] + "
@@ -612,6 +717,11 @@ static PyMethodDef methods[] = {
     {"walk", walk, METH_VARARGS,
      "walk(symbols, escapes, corners, triangles, links): decode a shell walk (spec §9.13) into triangles "
      "(3T int64) and links (T int64) in place; returns (reason, triangle), reason 0 where the walk is valid."},
+    {"spanning", spanning, METH_VARARGS,
+     "spanning(twin, faces, walk, rotation, links): the encoder's depth-first walk over shared edges, a "
+     "neighbour on the same face first, into walk, rotation and links (int64, in place)."},
+    {"varints", varints, METH_VARARGS,
+     "varints(values): the unsigned LEB128 varints of a 64-bit array, concatenated (spec §2.2)."},
     {"walk_codes", walk_codes, METH_VARARGS,
      "walk_codes(triangles, links, corners, codes): each attached triangle's corner code of spec §9.13."},
     {NULL, NULL, 0, NULL},

@@ -14,12 +14,26 @@ import numpy as np
 from ..errors import FormatError
 from .schema import VARINT_MAX_BYTES as MAX_BYTES
 
+try:
+    # Encoders write a body's varints several times while they rank codings: a tenth of an encode in
+    # numpy's passes (eight corpus meshes at 1e-6: 0.52 s of 4.6).
+    from ._chains import varints as _varints
+except ImportError:  # built without a C compiler
+    _varints = None
+
 
 def encode(values: np.ndarray) -> bytes:
     """The varints of ``values`` (non-negative integers below 2^64), concatenated."""
-    v = np.asarray(values).astype(np.uint64, copy=False).reshape(-1)
+    v = np.ascontiguousarray(np.asarray(values).astype(np.uint64, copy=False).reshape(-1))
     if len(v) == 0:
         return b""
+    if _varints is not None:
+        return _varints(v)
+    return _encode(v)
+
+
+def _encode(v: np.ndarray) -> bytes:
+    """:func:`encode` in numpy, where the C extension is not built: one pass per byte of the longest."""
     lengths = np.ones(len(v), dtype=np.int64)
     for k in range(1, MAX_BYTES):
         lengths += v >= np.uint64(1) << np.uint64(7 * k)

@@ -32,6 +32,13 @@ from scipy.sparse.csgraph import connected_components, depth_first_order
 from ..errors import GeometryError
 from ..model import FREE, MAX_GRID, Shell
 from ..container import varint
+
+try:
+    # The encoder walks every candidate shell: a sixth of an encode in Python (eight corpus meshes at
+    # 1e-6: 0.63 s of 4.0).
+    from ..container._chains import spanning as _spanning
+except ImportError:  # built without a C compiler
+    _spanning = None
 from ..container.shellfields import corner_codes, first_use_order
 from .sealed import corners
 
@@ -237,9 +244,20 @@ def spanning_walk(triangles: np.ndarray, face: np.ndarray) -> tuple[np.ndarray, 
     key, twin_key = a * count + b, b * count + a
     order = np.argsort(key, kind="stable")
     at = np.minimum(np.searchsorted(key[order], twin_key), len(key) - 1)
-    twin = np.where(key[order[at]] == twin_key, order[at], -1).tolist()
+    twin = np.where(key[order[at]] == twin_key, order[at], -1)
+    if _spanning is not None:
+        walk_a, rot, links = (np.empty(t, dtype=np.int64) for _ in range(3))
+        _spanning(np.ascontiguousarray(twin, dtype=np.int64), np.ascontiguousarray(face, dtype=np.int64),
+                  walk_a, rot, links)
+    else:
+        walk_a, rot, links = _walk_python(twin.tolist(), face.tolist(), t)
+    rows = np.take_along_axis(triangles[walk_a], (np.arange(3)[None, :] + rot[:, None]) % 3, axis=1)
+    return walk_a, rows, links
+
+
+def _walk_python(twin: list[int], faces: list[int], t: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`spanning_walk`'s walk, rotations and links in Python, where the C extension is not built."""
     seen = [False] * t
-    faces = face.tolist()
     walk, rotation, links = [], [], []
     position = [0] * t
     # One step per triangle: the encoder may loop where a reader may not (spec 3.3 §8.10 decodes
@@ -262,10 +280,7 @@ def spanning_walk(triangles: np.ndarray, face: np.ndarray) -> tuple[np.ndarray, 
                     ahead.append((faces[w // 3] == faces[j], w // 3, w % 3, position[j], k))
             # The stack pops last first: same-plane neighbours go on last.
             stack.extend(step[1:] for step in sorted(ahead, key=lambda step: step[0]))
-    walk_a = np.array(walk, dtype=np.int64)
-    rot = np.array(rotation, dtype=np.int64)
-    rows = np.take_along_axis(triangles[walk_a], (np.arange(3)[None, :] + rot[:, None]) % 3, axis=1)
-    return walk_a, rows, np.array(links, dtype=np.int64)
+    return np.array(walk, dtype=np.int64), np.array(rotation, dtype=np.int64), np.array(links, dtype=np.int64)
 
 
 def shell_tree(shell: Shell, walk: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> tuple[Shell, np.ndarray]:
