@@ -702,11 +702,8 @@ def encode_colours(c: Colours, major: int = 1, count: int | None = None) -> byte
     """A cOLR payload; from version 4 on, a group in one colour stores it once (spec §10.1). ``count``:
     the group's references, where known (0: a group without references, which takes one colour)."""
     rgba = np.ascontiguousarray(c.rgba, dtype=np.uint8).reshape(-1, 4)
-    if count is not None and count == 0:
-        # A group without references (version 5): its one colour, for all its triangles.
-        return schema.ColoursHead.build(dict(group=c.group, count=0)) + rgba[0].tobytes()
-    if major >= 4 and len(rgba) > 1 and (rgba == rgba[0]).all():
-        return schema.ColoursHead.build(dict(group=c.group, count=len(rgba))) + rgba[0].tobytes()
+    if count == 0 or major >= 4 and len(rgba) > 1 and (rgba == rgba[0]).all():
+        return schema.ColoursHead.build(dict(group=c.group, count=0 if count == 0 else len(rgba))) + rgba[0].tobytes()
     return schema.Colours.build(dict(group=c.group, count=len(rgba), rgba=rgba.tobytes()))
 
 
