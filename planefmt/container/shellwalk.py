@@ -241,8 +241,7 @@ def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, averaged: bool = Fa
 
 
 def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray,
-                 options: tuple[tuple[GroupKind, int], ...], decide: bool = True,
-                 major: int = 4) -> tuple[GroupKind, dict[str, bytes]]:
+                 options: tuple[tuple[GroupKind, int], ...], decide: bool = True) -> tuple[GroupKind, dict[str, bytes]]:
     """The kind (SHELL_WALK or SHELL_WALK_MULTI) and the mode, grid, tables and coordinates of a
     walk's explicit corners, in whichever of the ``(kind, mode)`` options compresses smallest
     (:func:`_smallest`)."""
@@ -262,7 +261,7 @@ def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarr
     terms = {p: _tree_predictors(links, tri, explicit, per, new, p)
              for p in {bool(m & MODE_PARALLELOGRAM) for _, m in options}}
     averaged = parallelograms(tri, explicit) if any(k == GroupKind.SHELL_WALK_MULTI for k, _ in options) else None
-    grid = grid_bytes(shell, major)
+    grid = grid_bytes(shell, 4)
     fields = []
     for kind, m in options:
         v = indices if m & MODE_TABLES else values
@@ -339,7 +338,7 @@ def codings(kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[tupl
 
 
 def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
-            decide: bool = True, major: int = 4) -> tuple[GroupKind, dict[str, bytes]]:
+            decide: bool = True) -> tuple[GroupKind, dict[str, bytes]]:
     common = surface_fields(shell)
     explicit = np.asarray(shell.explicit, dtype=bool)
     fc = np.asarray(shell.facets, dtype=np.int64)
@@ -363,7 +362,7 @@ def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
     if not explicit.any():
         # Nothing to predict: the kinds' bodies are alike, and the first needs the lower version.
         return kinds[0], out
-    kind, coordinates = _coordinates(shell, tri, links, new, codings(kinds, mode), decide, major)
+    kind, coordinates = _coordinates(shell, tri, links, new, codings(kinds, mode), decide)
     return kind, {**out, **coordinates}
 
 
@@ -405,15 +404,15 @@ def _held(shell: Shell) -> dict:
 
 
 def shell_walk_choice(shell: Shell, kinds: tuple[GroupKind, ...] = WALK_KINDS) -> tuple[GroupKind, bytes]:
-    """Whichever of ``kinds`` (shell walk kinds) codes ``shell`` smallest, and its kind data (in a
-    version 4 file: the grid's width is the same for every kind). Shells are frozen and their arrays
-    never written to, so a body made once for a shell object is its body."""
+    """Whichever of ``kinds`` (shell walk kinds) codes ``shell`` smallest, and its kind data (as a
+    version 4 file holds it). Shells are frozen and their arrays never written to, so a body made once
+    for a shell object is its body."""
     bodies = _held(shell)
     if kinds not in bodies:
         kind, fields = _fields(shell, kinds)
         bodies[kinds] = kind
-        bodies[kind, True, 4] = b"".join(fields.values())
-    return bodies[kinds], bodies[bodies[kinds], True, 4]
+        bodies[kind, True] = fields
+    return bodies[kinds], _joined(shell, bodies[bodies[kinds], True], 4)
 
 
 def shell_walk_body(shell: Shell, kind: GroupKind = GroupKind.SHELL_WALK, decide: bool = True,
@@ -423,12 +422,19 @@ def shell_walk_body(shell: Shell, kind: GroupKind = GroupKind.SHELL_WALK, decide
     False: as deflate ranks them, for a size to compare codings by; :func:`shell_walk_choice` decides
     again)."""
     bodies = _held(shell)
-    width = 5 if major >= 5 else 4
-    if (kind, True, width) in bodies:
-        return bodies[kind, True, width]
-    if (kind, decide, width) not in bodies:
-        bodies[kind, decide, width] = b"".join(_fields(shell, (kind,), decide=decide, major=major)[1].values())
-    return bodies[kind, decide, width]
+    if (kind, True) in bodies:
+        return _joined(shell, bodies[kind, True], major)
+    if (kind, decide) not in bodies:
+        bodies[kind, decide] = _fields(shell, (kind,), decide=decide)[1]
+    return _joined(shell, bodies[kind, decide], major)
+
+
+def _joined(shell: Shell, fields: dict[str, bytes], major: int) -> bytes:
+    """A walk body's ``fields`` joined, its grid (made for version 4) as a version ``major`` file
+    stores it: the coding chosen does not depend on the grid's width, so one choice serves both."""
+    if major >= 5 and "grid" in fields:
+        fields = {**fields, "grid": grid_bytes(shell, major)}
+    return b"".join(fields.values())
 
 
 def check_shell_walk(shell: Shell, bounding: np.ndarray, kind: GroupKind = GroupKind.SHELL_WALK) -> None:
