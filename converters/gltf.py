@@ -75,13 +75,41 @@ def references(path: str | os.PathLike[str]) -> tuple[str, ...]:
 def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.glb`` file into ``(scene, dropped)``."""
     return read_scene(path, "glb", "binary glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS,
-                      reversed_siblings=True, primitives=True)
+                      reversed_siblings=True, primitives=True, unnamed=_unnamed_nodes(path, binary=True))
 
 
 def read_gltf(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.gltf`` file (and the buffers and images it refers to) into ``(scene, dropped)``."""
     return read_scene(path, "gltf", "glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS, reversed_siblings=True,
-                      resolver=_uri_resolver(path), primitives=True)
+                      resolver=_uri_resolver(path), primitives=True, unnamed=_unnamed_nodes(path, binary=False))
+
+
+def _unnamed_nodes(path: str | os.PathLike[str], binary: bool) -> frozenset[str]:
+    """The names trimesh gives the nodes of ``path`` that have none: node ``i``'s index, ``"i"``,
+    where no earlier node took it (trimesh makes a taken name unique, which is left as it is).
+    Empty where the JSON cannot be read: trimesh's own read then says why."""
+    try:
+        with open(path, "rb") as handle:
+            if binary:
+                head = handle.read(20)
+                if len(head) < 20 or head[:4] != b"glTF" or head[16:20] != b"JSON":
+                    return frozenset()
+                text = handle.read(int.from_bytes(head[12:16], "little"))
+            else:
+                text = handle.read()
+        nodes = json.loads(text).get("nodes", [])
+    except (OSError, ValueError, AttributeError):
+        return frozenset()
+    taken: set[str] = set()
+    made: set[str] = set()
+    for i, node in enumerate(nodes if isinstance(nodes, list) else []):
+        name = node.get("name") if isinstance(node, dict) else None
+        if isinstance(name, str):
+            taken.add(name)
+        elif str(i) not in taken:
+            taken.add(str(i))
+            made.add(str(i))
+    return frozenset(made)
 
 
 def _uri_resolver(path: str | os.PathLike[str]) -> Any:

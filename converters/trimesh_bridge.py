@@ -48,7 +48,7 @@ _PRIMITIVE_FRAME = re.compile(r"_[0-9a-f]{6}")
 def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
                units: Units = Units.UNSPECIFIED, up_axis: str | None = None,
                reversed_siblings: bool = False, resolver: Any = None,
-               primitives: bool = False) -> tuple[Scene, list[str]]:
+               primitives: bool = False, unnamed: frozenset[str] = frozenset()) -> tuple[Scene, list[str]]:
     """Read ``path`` as ``file_type`` through trimesh into ``(scene, dropped)``.
 
     ``what`` names the format in messages ("binary glTF"); ``units`` and
@@ -56,8 +56,8 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
     failure becomes a :class:`ConversionError`; so does a file with no
     triangle. ``reversed_siblings``: trimesh's graph lists each node's
     children in reverse file order (see :func:`scene_from_trimesh`). ``resolver``:
-    how trimesh finds the files ``path`` refers to (default: by name beside it). ``primitives``: see
-    :func:`scene_from_trimesh`.
+    how trimesh finds the files ``path`` refers to (default: by name beside it). ``primitives``,
+    ``unnamed``: see :func:`scene_from_trimesh`.
     """
     tm = require_trimesh(what)
     file = os.fspath(path)
@@ -69,7 +69,7 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
         raise  # not a property of the file
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input
         raise ConversionError(f"cannot read as {what}: {describe(exc)}", file=file) from exc
-    scene, dropped = scene_from_trimesh(loaded, units, file, reversed_siblings, primitives)
+    scene, dropped = scene_from_trimesh(loaded, units, file, reversed_siblings, primitives, unnamed)
     scene = replace(scene, up_axis=up_axis)
     if not any(node.mesh is not None for node in scene.nodes):
         raise ConversionError(f"no triangle mesh found in this {what} file", file=file)
@@ -77,7 +77,8 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
 
 
 def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
-                       reversed_siblings: bool = False, primitives: bool = False) -> tuple[Scene, list[str]]:
+                       reversed_siblings: bool = False, primitives: bool = False,
+                       unnamed: frozenset[str] = frozenset()) -> tuple[Scene, list[str]]:
     """Walk a trimesh scene graph into model nodes (depth first, parents first).
 
     Every graph node except trimesh's synthetic base frame becomes a node,
@@ -88,7 +89,9 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
     reverses the file's sibling order (the round-trip tests watch this). With ``primitives`` (glTF),
     the frames trimesh makes for the primitives of a mesh of several, named after their node and a
     random suffix (``d8_6cf88e``), are named ``<node>_<k>`` in order instead: a file converts to the
-    same bytes every time.
+    same bytes every time. A node is unnamed ("") where trimesh made its name up: the frames in
+    ``unnamed`` (a glTF node without a name, which trimesh names by its index) and a file's only
+    node, which trimesh names after the file.
     """
     graph = loaded.graph
     children = graph.transforms.children
@@ -120,6 +123,10 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
             mesh = meshes[geometry_name]
         matrix = np.asarray(matrix, dtype=np.float64)
         label, stem = str(name), str(parent_name)
+        if label in unnamed or (file is not None and label == os.path.basename(file)):
+            # Not a name the file holds: a .pln keeping it would pay 13-20 bytes (3-9 % of a small
+            # convex file) for the name the file itself has, or an index.
+            label = ""
         if (primitives and geometry_name is not None and parent is not None and label.startswith(stem)
                 and _PRIMITIVE_FRAME.fullmatch(label[len(stem):])):
             numbered[parent] = numbered.get(parent, -1) + 1

@@ -211,7 +211,8 @@ class _StageReader:
     @staticmethod
     def _name(prim: Any) -> str:
         display = prim.GetDisplayName()
-        return display if display else prim.GetName()
+        # An empty display name is authored for a node without a name (the prim needs one).
+        return display if display or prim.HasAuthoredDisplayName() else prim.GetName()
 
     def _units(self) -> Units:
         if not self.stage.HasAuthoredMetadata("metersPerUnit"):

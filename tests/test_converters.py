@@ -165,6 +165,26 @@ def test_scene_formats_keep_nodes(path: Path, suffix: str, out_dir: Path) -> Non
         assert again.units == scene.units
 
 
+
+@pytest.mark.parametrize("rel", ["cad/plate_holes.STL", "convex/cube_subd.obj", "smooth_dense/npm_bunny.ply"])
+def test_a_name_made_from_the_file_name_is_not_kept(rel: str) -> None:
+    # trimesh names a file's only node after the file; that is the file's name, not the mesh's.
+    scene, _ = registry.read(CORPUS / rel)
+    assert [n.name for n in scene.nodes] == [""]
+
+
+@pytest.mark.parametrize("suffix", [".glb", ".gltf", ".usda", ".usdc"])
+def test_unnamed_and_named_nodes_come_back_as_they_were(suffix: str, tmp_path: Path) -> None:
+    mesh = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=np.float64),
+                np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]]))
+    # "1" is the name trimesh gives glTF's unnamed node 1: a node that holds it keeps it.
+    scene = Scene(nodes=(Node(name="", mesh=mesh), Node(name="1", parent=0, mesh=mesh),
+                         Node(name="", parent=0, mesh=mesh), Node(name="wheel", parent=0, mesh=mesh)))
+    target = tmp_path / f"nodes{suffix}"
+    registry.write(scene, target)
+    again, _ = registry.read(target)
+    assert sorted(n.name for n in again.nodes) == ["", "", "1", "wheel"]
+
 # --------------------------------------------------------------------------- validators
 
 def khronos_report(path: Path) -> dict:
