@@ -57,6 +57,7 @@ class _Object:
     name: str = ""  # the scene node's, for messages
     face_plane: np.ndarray | None = None  # (faces,) each face's plane in ``triplets``, -1 for none (shell scheme)
     face_colours: np.ndarray | None = None  # (faces, 4) uint8 RGBA of ``faces`` (shell scheme)
+    walk_plane: np.ndarray | None = None  # (faces,) the plane a shell's walk keeps together, where not face_plane
 
 
 def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, tolerance: float,

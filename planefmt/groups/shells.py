@@ -113,11 +113,14 @@ class ShellPlan:
     walk: tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
-def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omega: np.ndarray) -> ShellPlan:
+def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omega: np.ndarray,
+               walk_face: np.ndarray | None = None) -> ShellPlan:
     """The :class:`ShellPlan` of ``triangles`` (T, 3) over ``points`` (V, 3, model units), each on the
-    local reference ``face`` (or :data:`FREE`) of planes with exact normals ``omega``."""
+    local reference ``face`` (or :data:`FREE`) of planes with exact normals ``omega``. ``walk_face``:
+    each triangle's plane (any numbering) that the walk keeps together, where not ``face``."""
     triangles = np.asarray(triangles, dtype=np.int64)
     face = np.asarray(face, dtype=np.int64)
+    together = face if walk_face is None else np.asarray(walk_face, dtype=np.int64)
     # Planar triangles by face (runs of one reference), free ones last; within a run in the source's
     # order or in that of a depth-first walk across shared edges, whichever codes the corners in
     # fewer deflated bytes (npm_bunny.ply: the walk's 8.0 kB against 13.4; plate_holes.STL: 2.6
@@ -126,7 +129,7 @@ def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omeg
     orders = [np.argsort(run, kind="stable"), np.lexsort((walk_order(triangles, len(points)), run))]
     order = min(orders, key=lambda o: len(zlib.compress(varint.encode(corner_codes(
         first_use_order(triangles[o], len(points))[triangles[o]])), 6)))
-    triangles, face = triangles[order], face[order]
+    triangles, face, together = triangles[order], face[order], together[order]
     rank = first_use_order(triangles, len(points))
     used = np.flatnonzero(rank >= 0)
     source = np.empty(len(used), dtype=np.int64)
@@ -135,7 +138,7 @@ def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omeg
     p = points[source]
     triple, det = corner_triples(p, tri, face, omega)
     return ShellPlan(points=p, facets=np.column_stack([face, tri]), triple=triple, det=det,
-                     walk=spanning_walk(tri, face))
+                     walk=spanning_walk(tri, together))
 
 
 def walk_order(triangles: np.ndarray, count: int) -> np.ndarray:
