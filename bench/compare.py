@@ -7,7 +7,9 @@ merged by exact position) and every codec:
   14 bits, compression level 10 (its smallest);
 * ``glb`` (trimesh's binary glTF), ``ply`` (binary PLY, trimesh) and
   ``ply.gz`` (that PLY through gzip level 9): float32 positions, lossless up
-  to float32 rounding;
+  to float32 rounding; the PLY holds the mesh's face colours where it has some, as
+  ``pln convert`` writes a PLY (the .pln holds them too: issue 30 asks for it to be smaller
+  than the gzip'd PLY of the same mesh), the other peers its geometry alone;
 * ``pln@T``: ``planefmt.codec.encode_scene`` at tolerance T (fraction of the
   bbox diagonal), the whole file with its chunks and object records, as
   ``pln convert`` writes it with its default scheme (convex bodies of up to
@@ -155,11 +157,14 @@ def _draco(bits: int):
     return encode, decode
 
 
-def _trimesh_format(kind: str, compress: bool = False):
+def _trimesh_format(kind: str, compress: bool = False, colours: bool = False):
     def encode(scene, v, f):
         import trimesh
+        from planefmt_converters.assemble import flatten
 
-        data = trimesh.Trimesh(v, f, process=False).export(file_type=kind)
+        # The welded faces keep the flattened mesh's order, and so its face colours.
+        face_colours = flatten(scene).face_colours if colours else None
+        data = trimesh.Trimesh(v, f, face_colors=face_colours, process=False).export(file_type=kind)
         return gzip.compress(data, 9) if compress else data
 
     def decode(data):
@@ -192,7 +197,7 @@ def _pln(tolerance: float):
 
 def codecs(tolerances: tuple[float, ...]) -> dict:
     table = {"draco-11": _draco(11), "draco-14": _draco(14), "glb": _trimesh_format("glb"),
-             "ply": _trimesh_format("ply"), "ply.gz": _trimesh_format("ply", compress=True)}
+             "ply": _trimesh_format("ply", colours=True), "ply.gz": _trimesh_format("ply", compress=True, colours=True)}
     for t in tolerances:
         table[f"pln@{t:g}"] = _pln(t)
     return table
