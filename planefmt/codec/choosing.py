@@ -396,7 +396,7 @@ def _planeless(obj: _Object) -> _Object | None:
     keep = np.unique([g.refs[0] for g in obj.groups])
     fp = obj.face_plane
     face_plane = None if fp is None else np.where(np.isin(fp, keep), np.searchsorted(keep, fp), -1)
-    return replace(obj, triplets=obj.triplets[keep], face_plane=face_plane, 
+    return replace(obj, triplets=obj.triplets[keep], face_plane=face_plane,
                    plane_colours=None if obj.plane_colours is None else obj.plane_colours[keep],
                    groups=tuple(replace(g, refs=np.searchsorted(keep, g.refs[:1]), bounding=g.bounding[:1])
                                 for g in obj.groups))
@@ -417,7 +417,7 @@ def _walking_planes(freed: _Object, face_plane: np.ndarray | None) -> _Object | 
     faces; None where none does (the walk would be ``freed``'s)."""
     if face_plane is None:
         return None
-    planes, inverse, counts = np.unique(face_plane, return_inverse=True, return_counts=True)
+    _, inverse, counts = np.unique(face_plane, return_inverse=True, return_counts=True)
     large = (counts[inverse] > WALK_PLANE_FACES) & (face_plane >= 0)
     if not large.any():
         return None

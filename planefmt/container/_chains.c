@@ -96,14 +96,14 @@ done:
 }
 
 
-/* Where directed edge (a, b) starts probing in a table of mask + 1 slots. */
 /* A slot of an edge map: the directed edge (a, b), a < 0 for an empty slot, and what it maps to.  One
- * struct, not three arrays: a probe then touches one cache line, not three (a walk of bun_zipper.ply's
+ * struct, not three arrays, so that a probe reads one cache line, not three (a walk of bun_zipper.ply's
  * 69,451 triangles makes 6 probes a triangle into a map of 12 MB). */
 typedef struct {
     int64_t a, b, value;
 } Slot;
 
+/* Where directed edge (a, b) starts probing in a table of mask + 1 slots. */
 static int64_t
 edge_hash(int64_t a, int64_t b, int64_t mask)
 {
