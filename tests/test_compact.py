@@ -49,6 +49,13 @@ def test_varints_are_unsigned_leb128_and_round_trip():
     assert np.array_equal(varint.unzigzag(varint.zigzag(signed)), signed)
 
 
+def test_a_count_past_the_bytes_is_an_error_without_its_memory():
+    # 2^40 varints cannot fit in 3 bytes: refused before anything of that size is allocated.
+    with pytest.raises(PlnError, match="ends inside") as err:
+        varint.decode(b"\x01\x02\x03", 2**40, "test")
+    assert err.value.code == "BAD_PAYLOAD"
+
+
 @pytest.mark.parametrize("data, why", [(b"\x80", "ends inside"), (b"\x86\x00", "not minimal"),
                                        (b"\xff" * 10 + b"\x01", "longer than 10"),
                                        (b"\xff" * 9 + b"\x02", "exceeds 2")])

@@ -55,7 +55,8 @@ def decode(data: bytes | memoryview | np.ndarray, count: int, what: str) -> tupl
     b = np.frombuffer(data, dtype=np.uint8) if not isinstance(data, np.ndarray) else data
     if count == 0:
         return np.zeros(0, dtype=np.uint64), 0
-    if _unvarints is not None and b.flags.c_contiguous:
+    # Each varint takes a byte at least: a count past the bytes is an error, found without allocating it.
+    if _unvarints is not None and count <= len(b) and b.flags.c_contiguous:
         # A reader decodes a body's fields in a few dozen numpy passes each: a fifth of torus.STL's
         # decode. The loop in C reads valid varints; numpy's passes below say what is wrong with others.
         out = np.empty(count, dtype=np.uint64)
