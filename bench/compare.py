@@ -157,14 +157,25 @@ def _draco(bits: int):
     return encode, decode
 
 
+_coloured: list = [None, None]  # the last scene face_colours() was asked about, and its answer
+
+
+def face_colours(scene) -> np.ndarray | None:
+    """The face colours of ``scene`` flattened (None without), in the order of :func:`load`'s welded
+    faces (welding keeps it); made once per scene, before the PLY peers' timed encodes ask for them."""
+    from planefmt_converters.assemble import flatten
+
+    if _coloured[0] is not scene:
+        _coloured[:] = [scene, flatten(scene).face_colours]
+    return _coloured[1]
+
+
 def _trimesh_format(kind: str, compress: bool = False, colours: bool = False):
     def encode(scene, v, f):
         import trimesh
-        from planefmt_converters.assemble import flatten
 
-        # The welded faces keep the flattened mesh's order, and so its face colours.
-        face_colours = flatten(scene).face_colours if colours else None
-        data = trimesh.Trimesh(v, f, face_colors=face_colours, process=False).export(file_type=kind)
+        data = trimesh.Trimesh(v, f, face_colors=face_colours(scene) if colours else None,
+                               process=False).export(file_type=kind)
         return gzip.compress(data, 9) if compress else data
 
     def decode(data):
@@ -224,6 +235,7 @@ def _measure(path: str, name: str, tolerances: tuple[float, ...], matched: float
             encode, decode = _pln(max(matched, MEASURE_RESOLUTION))
         else:
             encode, decode = codecs(tolerances)[name]
+        face_colours(scene)  # outside the timed encode, as the welding of v and f is
         base = _peak_reset()
         encode_time, data = timed(lambda: encode(scene, v, f))
         decode_time, (dv, df) = timed(lambda: decode(data))

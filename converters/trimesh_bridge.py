@@ -111,11 +111,13 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
     while stack:
         name, parent_name, parent = stack.pop()
         matrix, geometry_name = graph.get(frame_to=name, frame_from=parent_name)
+        # trimesh names a file's only node after the file: not a name the file holds
+        after_file = file is not None and str(name) == os.path.basename(file)
         mesh = None
         if geometry_name is not None:
             if geometry_name not in meshes:
-                # trimesh names a file's only node after the file, which the message names already
-                what = None if file is not None and name == os.path.basename(file) else name
+                # (the message names the file already)
+                what = None if after_file else name
                 mesh, notes, removed = mesh_from_trimesh(loaded.geometry[geometry_name], what=what, file=file)
                 meshes[geometry_name] = mesh
                 dropped.update(notes)
@@ -123,9 +125,9 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
             mesh = meshes[geometry_name]
         matrix = np.asarray(matrix, dtype=np.float64)
         label, stem = str(name), str(parent_name)
-        if label in unnamed or (file is not None and label == os.path.basename(file)):
-            # Not a name the file holds: a .pln keeping it would pay 13-20 bytes (3-9 % of a small
-            # convex file) for the name the file itself has, or an index.
+        if after_file or label in unnamed:
+            # A .pln keeping a made-up name would pay 13-20 bytes (3-9 % of a small convex file) for
+            # the name the file itself has, or an index.
             label = ""
         if (primitives and geometry_name is not None and parent is not None and label.startswith(stem)
                 and _PRIMITIVE_FRAME.fullmatch(label[len(stem):])):
