@@ -297,6 +297,18 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
 #: 1-2% (bench widths printed per trial); half the trials of steps of 2.
 SHELL_WIDTHS = tuple(range(8, 33, 4))
 
+#: Plane widths stop once a file with planes is this many times the smallest so far: over the corpus at
+#: 1e-6, Draco-14's error and 1e-4, a width whose planes won did so as the first width written (against
+#: the planeless shells: not_convex.obj at 1e-6, 0.95; 20mm-xyz-cube.stl at 1e-4, 0.99), and after a
+#: width at 1.25 or more none came under 1.01 (20mm-xyz-cube.stl at 1e-6: 1.51, then 1.01 and 1.04);
+#: CAD parts, whose planes lost at 1.1 to 4.3, then try one width, not four or five (encodes 40 % shorter).
+SHELL_WIDTH_STOP = 1.25
+
+#: Candidates whose deflated files are within this ratio of the smallest (the best ``SHELL_RANK_TOP``)
+#: are written again with Brotli, the file's coder, which decides between them.
+SHELL_RANK_CLOSE = 1.03
+SHELL_RANK_TOP = 2
+
 #: Times the corner budget is quartered when a decoding misses a lossless volume or area.
 _SHELL_TIGHTENINGS = 6
 
@@ -319,7 +331,7 @@ def _shell_plans(obj: _Object) -> dict[int, ShellPlan]:
         local = np.where((fp >= 0) & (g.refs[by_value][at] == fp), by_value[at], FREE)
         omega, _ = from_triplets(obj.triplets[g.refs])
         plans[k] = plan_shell(obj.vertices, obj.faces[g.faces], local, omega,
-                              None if obj.walk_plane is None else obj.walk_plane[g.faces])
+                              None if obj.walk_plane is None else obj.walk_plane[g.faces], obj.walk_defer)
     return plans
 
 
@@ -450,7 +462,7 @@ def _convex_part(obj: _Object) -> _Object:
 
 def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | None,
                    bits: int | tuple[int, int, int] | None,
-                   size: Callable[[list[_Object], _Choice], int]) -> tuple[list[_Object], _Choice]:
+                   size: Callable[..., int]) -> tuple[list[_Object], _Choice]:
     """The objects of the shell scheme with their shells built, and the coding, smallest file first.
 
     Convex groups are verified as the paper's scheme verifies them (certified
@@ -498,11 +510,18 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
         walked = [_walking_planes(f, o.face_plane) for f, o in zip(freed, objects)]
         if any(w is not None for w in walked):
             variants.append(([f if w is None else w for f, w in zip(freed, walked)], candidates[:1]))
+            # And walked with each other large plane left for a root of its own, so that the fillets and
+            # holes around a plane are walked before the next plane (groups.shells.spanning_walk): at
+            # 3e-5, box.STL 7,852 B -> 6,731, ADIS16480.STL 5,168 -> 4,903, pins.glb 2,418 -> 2,272;
+            # angle_block.STL, featuretype.STL and octagonal_pocket.stl 1-2 % larger, which keep another.
+            variants.append(([f if w is None else replace(w, walk_defer=True) for f, w in zip(freed, walked)],
+                             candidates[:1]))
     # The planeless variant first: a width whose planes name no corner only adds a plane table and face
     # references to it, and is passed over unwritten.
     trials = [(objs, cod, q) for objs, cands in variants[::-1] for cod, q in cands]
     plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants}
     named_before = -1
+    tried: list[tuple[int, list[_Object], _Choice]] = []
     for k, (objs, cod, q) in enumerate(trials):
         progress.report("choosing a coding", k, len(trials))
         offsets = np.cumsum([0] + [len(o.triplets) for o in objs])
@@ -540,9 +559,12 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
                          bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,
                          error_bound=bound, lossy=any(o.simplified for o in objects) or bound > tolerance)
         n = size(list(built), choice)
+        tried.append((n, list(built), choice))
         if best is None or n < best[0]:
             best = (n, list(built), choice)
         named = sum(int((~np.asarray(g.shell.explicit)).sum()) for o in built for g in o.groups if g.shell is not None)
+        if len(variants) > 1 and objs is objects and n >= SHELL_WIDTH_STOP * best[0]:
+            break
         if len(variants) > 1 and objs is objects and named and named == named_before:
             # Finer planes named no more corners, as written (SHELL_WIDTHS ascend): from here only the
             # table grows (not_convex.obj at 2e-5: 44 corners from 24 bits on, the best file at 24).
@@ -551,6 +573,9 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     if best is None:
         raise GeometryError(f"no coding keeps the source's structure with corners within the tolerance "
                             f"{tolerance:g}: {why}", code="TOLERANCE_NOT_MET")
+    close = sorted((t for t in tried if t[0] <= SHELL_RANK_CLOSE * best[0]), key=lambda t: t[0])[:SHELL_RANK_TOP]
+    if len(close) > 1:
+        best = min(close, key=lambda t: size(t[1], t[2], brotli=True))
     return [_walk_kinds(o) for o in best[1]], best[2]
 
 

@@ -103,10 +103,10 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
         return _prepare(vertices, faces, np.eye(4), tolerance, delta, tau, diagonal=None if forced else 0.0,
                         splitters=splitters, scheme=scheme)
 
-    def size(objects: list[_Object], choice: _Choice) -> int:
+    def size(objects: list[_Object], choice: _Choice, brotli: bool = False) -> int:
         buf = io.BytesIO()
         _write(Scene((Node("", mesh=Mesh(vertices, faces)),)), buf, [0], objects, choice, tolerance,
-               scheme == "shell", False)
+               scheme == "shell", False, brotli=brotli)
         return len(buf.getvalue())
 
     (obj,), choice = _encode_objects(prepare, 1, tolerance, coding, bits, watertight, size, scheme)
@@ -162,10 +162,10 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
         return replace(_prepare(node.mesh.vertices, node.mesh.faces, worlds[meshes[k]], tolerance, delta, tau,
                                 node.mesh.face_colours, diagonal, splitters, scheme), name=node.name)
 
-    def size(objects: list[_Object], choice: _Choice) -> int:
+    def size(objects: list[_Object], choice: _Choice, brotli: bool = False) -> int:
         buf = io.BytesIO()
         # A candidate measured for its size only: the file written is verified.
-        _write(scene, buf, meshes, objects, choice, tolerance, compress, compact, major, verify=False)
+        _write(scene, buf, meshes, objects, choice, tolerance, compress, compact, major, verify=False, brotli=brotli)
         return len(buf.getvalue())
 
     objects, choice = _encode_objects(prepare, len(meshes), tolerance, coding, bits, watertight, size, scheme)
@@ -220,8 +220,9 @@ def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: floa
 
 def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int], objects: list[_Object],
            choice: _Choice, tolerance: float, compress: bool, compact: bool, major: int = 4,
-           verify: bool = True) -> Header:
-    """Write the scene's ``objects`` (those of nodes ``meshes``) in the chosen coding; its header."""
+           verify: bool = True, brotli: bool | None = None) -> Header:
+    """Write the scene's ``objects`` (those of nodes ``meshes``) in the chosen coding; its header.
+    ``verify`` off: a candidate measured for its size, deflated only unless ``brotli``."""
     if major == 3:
         objects = [replace(o, groups=tuple(_as_tree(g) for g in o.groups)) for o in objects]
     if major >= 5 and compact:
@@ -265,7 +266,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                     up_axis=scene.up_axis if version[0] >= 5 else None)
     # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
     index = True if not compact else None
-    with _writer(target, header, compress, index, verify) as w:
+    with _writer(target, header, compress, index, verify, verify if brotli is None else brotli) as w:
         if scene.up_axis is not None and version[0] < 5:
             w.add_metadata(UP_AXIS, scene.up_axis)
         for i, node in enumerate(scene.nodes):
@@ -399,7 +400,7 @@ def _version(objects: list[_Object], major: int) -> tuple[int, int]:
 
 
 def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True,
-            verify: bool = True) -> Writer:
-    # A candidate measured for its size (verify off) is deflated only: Brotli's densest quality would
-    # triple King_geom.usd's encode (1.8 s to 5.9 s) for a ranking deflate gives as well.
-    return Writer(target, header, compress=compress, index=index, verify=verify, brotli=verify)
+            verify: bool = True, brotli: bool = True) -> Writer:
+    # Candidates measured for their sizes are deflated only (``brotli`` off): Brotli's densest quality
+    # would triple King_geom.usd's encode (1.8 s to 5.9 s) for a ranking deflate mostly gives as well.
+    return Writer(target, header, compress=compress, index=index, verify=verify, brotli=brotli)

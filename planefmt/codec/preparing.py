@@ -58,6 +58,7 @@ class _Object:
     face_plane: np.ndarray | None = None  # (faces,) each face's plane in ``triplets``, -1 for none (shell scheme)
     face_colours: np.ndarray | None = None  # (faces, 4) uint8 RGBA of ``faces`` (shell scheme)
     walk_plane: np.ndarray | None = None  # (faces,) the plane a shell's walk keeps together, where not face_plane
+    walk_defer: bool = False  # a shell's walk leaves each other walk plane for later (groups.shells.spanning_walk)
 
 
 def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, tolerance: float,

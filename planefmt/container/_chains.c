@@ -608,12 +608,13 @@ static PyObject *
 spanning(PyObject *self, PyObject *args)
 {
     /* twin (3T int64: the directed half-edge across each triangle edge, -1 for none), faces (T int64),
-     * walk, rotation, links (T int64 each, out): the encoder's depth-first walk (groups/shells.py,
-     * spanning_walk), a neighbour on the same face popped first. */
+     * walk, rotation, links (T int64 each, out), defer (int): the encoder's depth-first walk
+     * (groups/shells.py, spanning_walk), a neighbour on the same face popped first; with defer, a
+     * neighbour on another face (not FREE, -1) is left for a later root, taken last left first. */
     PyObject *objs[5];
     Py_buffer views[5];
-    int held = 0;
-    if (!PyArg_ParseTuple(args, "OOOOO", &objs[0], &objs[1], &objs[2], &objs[3], &objs[4]))
+    int held = 0, defer = 0;
+    if (!PyArg_ParseTuple(args, "OOOOOi", &objs[0], &objs[1], &objs[2], &objs[3], &objs[4], &defer))
         return NULL;
     for (; held < 5; held++)
         if (int64_view(objs[held], &views[held], held >= 2, "spanning") < 0)
@@ -627,19 +628,26 @@ spanning(PyObject *self, PyObject *args)
     int64_t *walk_out = views[2].buf, *rot = views[3].buf, *links = views[4].buf;
     unsigned char *seen = calloc(t ? t : 1, 1);
     int64_t *position = malloc((t ? t : 1) * sizeof(int64_t));
-    /* Each triangle pushes at most three steps, each start one. */
+    /* Each triangle pushes or leaves at most three steps, each start one. */
     Step *stack = malloc((4 * t + 1) * sizeof(Step));
-    if (!seen || !position || !stack) {
+    Step *left = malloc((3 * t + 1) * sizeof(Step));
+    if (!seen || !position || !stack || !left) {
         free(seen);
         free(position);
         free(stack);
+        free(left);
         PyErr_NoMemory();
         goto done;
     }
     Py_BEGIN_ALLOW_THREADS
-    int64_t n = 0, top = 0;
-    for (int64_t start = 0; start < t; start++) {
-        stack[top++] = (Step){start, 0, -1, 0};
+    int64_t n = 0, top = 0, kept = 0, start = 0;
+    while (start < t) {
+        while (kept && seen[left[kept - 1].j])
+            kept--;
+        if (kept)
+            stack[top++] = (Step){left[kept - 1].j, left[kept - 1].r, -1, 0};
+        else
+            stack[top++] = (Step){start++, 0, -1, 0};
         while (top) {
             Step e = stack[--top];
             if (seen[e.j])
@@ -657,7 +665,11 @@ spanning(PyObject *self, PyObject *args)
             for (int same = 0; same < 2; same++)
                 for (int i = 0; i < count; i++) {
                     int64_t w = twin[3 * e.j + (e.r + ks[i]) % 3];
-                    if (w >= 0 && !seen[w / 3] && (face[w / 3] == face[e.j]) == same)
+                    if (w < 0 || seen[w / 3] || (face[w / 3] == face[e.j]) != same)
+                        continue;
+                    if (defer && !same && face[w / 3] != -1)
+                        left[kept++] = (Step){w / 3, w % 3, -1, 0};
+                    else
                         stack[top++] = (Step){w / 3, w % 3, position[e.j], ks[i]};
                 }
         }
@@ -666,6 +678,7 @@ spanning(PyObject *self, PyObject *args)
     free(seen);
     free(position);
     free(stack);
+    free(left);
 done:
     for (int i = 0; i < held; i++)
         PyBuffer_Release(&views[i]);
@@ -771,8 +784,9 @@ static PyMethodDef methods[] = {
      "walk(symbols, escapes, corners, triangles, links): decode a shell walk (spec §9.13) into triangles "
      "(3T int64) and links (T int64) in place; returns (reason, triangle), reason 0 where the walk is valid."},
     {"spanning", spanning, METH_VARARGS,
-     "spanning(twin, faces, walk, rotation, links): the encoder's depth-first walk over shared edges, a "
-     "neighbour on the same face first, into walk, rotation and links (int64, in place)."},
+     "spanning(twin, faces, walk, rotation, links, defer): the encoder's depth-first walk over shared edges, "
+     "a neighbour on the same face first (with defer, one on another face, not -1, from a later root), "
+     "into walk, rotation and links (int64, in place)."},
     {"varints", varints, METH_VARARGS,
      "varints(values): the unsigned LEB128 varints of a 64-bit array, concatenated (spec §2.2)."},
     {"unvarints", unvarints, METH_VARARGS,

@@ -114,10 +114,11 @@ class ShellPlan:
 
 
 def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omega: np.ndarray,
-               walk_face: np.ndarray | None = None) -> ShellPlan:
+               walk_face: np.ndarray | None = None, defer: bool = False) -> ShellPlan:
     """The :class:`ShellPlan` of ``triangles`` (T, 3) over ``points`` (V, 3, model units), each on the
     local reference ``face`` (or :data:`FREE`) of planes with exact normals ``omega``. ``walk_face``:
-    each triangle's plane (any numbering) that the walk keeps together, where not ``face``."""
+    each triangle's plane (any numbering) that the walk keeps together, where not ``face``;
+    ``defer``: the walk leaves each other plane for later (:func:`spanning_walk`)."""
     triangles = np.asarray(triangles, dtype=np.int64)
     face = np.asarray(face, dtype=np.int64)
     together = face if walk_face is None else np.asarray(walk_face, dtype=np.int64)
@@ -138,7 +139,7 @@ def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omeg
     p = points[source]
     triple, det = corner_triples(p, tri, face, omega)
     return ShellPlan(points=p, facets=np.column_stack([face, tri]), triple=triple, det=det,
-                     walk=spanning_walk(tri, together))
+                     walk=spanning_walk(tri, together, defer))
 
 
 def walk_order(triangles: np.ndarray, count: int) -> np.ndarray:
@@ -228,12 +229,17 @@ def reordered(shell: Shell, local: np.ndarray) -> Shell:
                  origin=shell.origin, step=shell.step, facets=np.column_stack([face[order], rank[tri]]))
 
 
-def spanning_walk(triangles: np.ndarray, face: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def spanning_walk(triangles: np.ndarray, face: np.ndarray,
+                  defer: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A depth-first walk of ``triangles`` (T, 3) across edges two of them share with opposite
     orientations, each piece from its first triangle: (triangles in walk order, the rotation of
     each that puts the edge it shares with its parent first, links of spec 3.3 §8.10). A neighbour on
     the same ``face`` reference is walked to first, so that a plane's triangles follow one another
-    and most triangles are coded "on the parent's plane".
+    and most triangles are coded "on the parent's plane". With ``defer``, a neighbour on another
+    face (not :data:`FREE`) is not walked to but left for a root of its own, once the walk has run
+    out (the last left first): the free triangles around a face (a CAD part's fillets and holes)
+    are then walked before the next face, and their corners coded from one another rather than
+    across that face's long triangles.
 
     Depth first because a triangle's parent is then mostly the one just before
     (link 1 or 2: about 1.5 bits a triangle after deflate on CAD/box.STL,
@@ -251,22 +257,31 @@ def spanning_walk(triangles: np.ndarray, face: np.ndarray) -> tuple[np.ndarray, 
     if _spanning is not None:
         walk_a, rot, links = (np.empty(t, dtype=np.int64) for _ in range(3))
         _spanning(np.ascontiguousarray(twin, dtype=np.int64), np.ascontiguousarray(face, dtype=np.int64),
-                  walk_a, rot, links)
+                  walk_a, rot, links, int(defer))
     else:
-        walk_a, rot, links = _walk_python(twin.tolist(), face.tolist(), t)
+        walk_a, rot, links = _walk_python(twin.tolist(), face.tolist(), t, defer)
     rows = np.take_along_axis(triangles[walk_a], (np.arange(3)[None, :] + rot[:, None]) % 3, axis=1)
     return walk_a, rows, links
 
 
-def _walk_python(twin: list[int], faces: list[int], t: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _walk_python(twin: list[int], faces: list[int], t: int,
+                 defer: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`spanning_walk`'s walk, rotations and links in Python, where the C extension is not built."""
     seen = [False] * t
     walk, rotation, links = [], [], []
     position = [0] * t
+    left: list[tuple[int, int]] = []
+    start = 0
     # One step per triangle: the encoder may loop where a reader may not (spec 3.3 §8.10 decodes
     # with numpy alone).
-    for start in range(t):
-        stack = [(start, 0, -1, 0)]
+    while start < t:
+        while left and seen[left[-1][0]]:
+            left.pop()
+        if left:
+            stack = [(*left[-1], -1, 0)]
+        else:
+            stack = [(start, 0, -1, 0)]
+            start += 1
         while stack:
             j, r, p, link = stack.pop()
             if seen[j]:
@@ -279,7 +294,11 @@ def _walk_python(twin: list[int], faces: list[int], t: int) -> tuple[np.ndarray,
             ahead = []
             for k in ((2, 1, 0) if p < 0 else (2, 1)):
                 w = twin[3 * j + (r + k) % 3]
-                if w >= 0 and not seen[w // 3]:
+                if w < 0 or seen[w // 3]:
+                    continue
+                if defer and faces[w // 3] not in (faces[j], FREE):
+                    left.append((w // 3, w % 3))
+                else:
                     ahead.append((faces[w // 3] == faces[j], w // 3, w % 3, position[j], k))
             # The stack pops last first: same-plane neighbours go on last.
             stack.extend(step[1:] for step in sorted(ahead, key=lambda step: step[0]))
