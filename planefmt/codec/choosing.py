@@ -510,9 +510,9 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
         walked = [_walking_planes(f, o.face_plane) for f, o in zip(freed, objects)]
         if any(w is not None for w in walked):
             variants.append(([f if w is None else w for f, w in zip(freed, walked)], candidates[:1]))
-            # And walked with each other large plane left for a root of its own, so that the fillets and
-            # holes around a plane are walked before the next plane (groups.shells.spanning_walk): at
-            # 3e-5, box.STL 7,852 B -> 6,731, ADIS16480.STL 5,168 -> 4,903, pins.glb 2,418 -> 2,272;
+            # And walked with each other large plane left until the walk has run out, so that the fillets
+            # and holes around a plane are walked before the next plane (groups.shells.spanning_walk): at
+            # 3e-5, box.STL 7,852 B -> 6,064, ADIS16480.STL 5,168 -> 4,952, pins.glb 2,418 -> 2,274;
             # angle_block.STL, featuretype.STL and octagonal_pocket.stl 1-2 % larger, which keep another.
             variants.append(([f if w is None else replace(w, walk_defer=True) for f, w in zip(freed, walked)],
                              candidates[:1]))

@@ -610,7 +610,9 @@ spanning(PyObject *self, PyObject *args)
     /* twin (3T int64: the directed half-edge across each triangle edge, -1 for none), faces (T int64),
      * walk, rotation, links (T int64 each, out), defer (int): the encoder's depth-first walk
      * (groups/shells.py, spanning_walk), a neighbour on the same face popped first; with defer, a
-     * neighbour on another face (not FREE, -1) is left for a later root, taken last left first. */
+     * neighbour on another face (not FREE, -1) is left until the walk has run out, then taken last
+     * left first: as a child of the triangle that left it where that triangle is on the path from the
+     * last triangle walked to its root (its subtree then follows all walked), else as a root. */
     PyObject *objs[5];
     Py_buffer views[5];
     int held = 0, defer = 0;
@@ -626,14 +628,16 @@ spanning(PyObject *self, PyObject *args)
     }
     const int64_t *twin = views[0].buf, *face = views[1].buf;
     int64_t *walk_out = views[2].buf, *rot = views[3].buf, *links = views[4].buf;
-    unsigned char *seen = calloc(t ? t : 1, 1);
-    int64_t *position = malloc((t ? t : 1) * sizeof(int64_t));
+    unsigned char *seen = calloc(t ? t : 1, 1), *on_path = calloc(t ? t : 1, 1);
+    int64_t *position = malloc((t ? t : 1) * sizeof(int64_t)), *parent = malloc((t ? t : 1) * sizeof(int64_t));
     /* Each triangle pushes or leaves at most three steps, each start one. */
     Step *stack = malloc((4 * t + 1) * sizeof(Step));
     Step *left = malloc((3 * t + 1) * sizeof(Step));
-    if (!seen || !position || !stack || !left) {
+    if (!seen || !on_path || !position || !parent || !stack || !left) {
         free(seen);
+        free(on_path);
         free(position);
+        free(parent);
         free(stack);
         free(left);
         PyErr_NoMemory();
@@ -641,13 +645,29 @@ spanning(PyObject *self, PyObject *args)
     }
     Py_BEGIN_ALLOW_THREADS
     int64_t n = 0, top = 0, kept = 0, start = 0;
-    while (start < t) {
+    for (;;) {
         while (kept && seen[left[kept - 1].j])
             kept--;
-        if (kept)
-            stack[top++] = (Step){left[kept - 1].j, left[kept - 1].r, -1, 0};
-        else
+        int64_t anchor = -1;
+        if (kept) {
+            Step d = left[--kept];
+            if (on_path[d.p]) {
+                anchor = d.p;
+                stack[top++] = d;
+            } else {
+                stack[top++] = (Step){d.j, d.r, -1, 0};
+            }
+        } else {
+            while (start < t && seen[start])
+                start++;
+            if (start == t)
+                break;
             stack[top++] = (Step){start++, 0, -1, 0};
+        }
+        /* The path from the last triangle walked up to the anchor leaves the rightmost path (all of it
+         * for a root); each triangle joins and leaves it once, so the walk stays linear. */
+        for (int64_t m = n - 1; m >= 0 && m != anchor; m = parent[m])
+            on_path[m] = 0;
         while (top) {
             Step e = stack[--top];
             if (seen[e.j])
@@ -656,6 +676,7 @@ spanning(PyObject *self, PyObject *args)
             position[e.j] = n;
             walk_out[n] = e.j;
             rot[n] = e.r;
+            parent[n] = e.p;
             links[n] = e.p < 0 ? 0 : 3 * (n - e.p - 1) + e.k + 1;
             n++;
             static const int64_t root_edges[3] = {2, 1, 0}, edges[2] = {2, 1};
@@ -667,16 +688,21 @@ spanning(PyObject *self, PyObject *args)
                     int64_t w = twin[3 * e.j + (e.r + ks[i]) % 3];
                     if (w < 0 || seen[w / 3] || (face[w / 3] == face[e.j]) != same)
                         continue;
+                    Step s = {w / 3, w % 3, position[e.j], ks[i]};
                     if (defer && !same && face[w / 3] != -1)
-                        left[kept++] = (Step){w / 3, w % 3, -1, 0};
+                        left[kept++] = s;
                     else
-                        stack[top++] = (Step){w / 3, w % 3, position[e.j], ks[i]};
+                        stack[top++] = s;
                 }
         }
+        for (int64_t m = n - 1; m >= 0 && !on_path[m]; m = parent[m])
+            on_path[m] = 1;
     }
     Py_END_ALLOW_THREADS
     free(seen);
+    free(on_path);
     free(position);
+    free(parent);
     free(stack);
     free(left);
 done:
@@ -785,7 +811,8 @@ static PyMethodDef methods[] = {
      "(3T int64) and links (T int64) in place; returns (reason, triangle), reason 0 where the walk is valid."},
     {"spanning", spanning, METH_VARARGS,
      "spanning(twin, faces, walk, rotation, links, defer): the encoder's depth-first walk over shared edges, "
-     "a neighbour on the same face first (with defer, one on another face, not -1, from a later root), "
+     "a neighbour on the same face first (with defer, one on another face, not -1, left until the walk has "
+     "run out), "
      "into walk, rotation and links (int64, in place)."},
     {"varints", varints, METH_VARARGS,
      "varints(values): the unsigned LEB128 varints of a 64-bit array, concatenated (spec §2.2)."},

@@ -236,10 +236,12 @@ def spanning_walk(triangles: np.ndarray, face: np.ndarray,
     each that puts the edge it shares with its parent first, links of spec 3.3 §8.10). A neighbour on
     the same ``face`` reference is walked to first, so that a plane's triangles follow one another
     and most triangles are coded "on the parent's plane". With ``defer``, a neighbour on another
-    face (not :data:`FREE`) is not walked to but left for a root of its own, once the walk has run
-    out (the last left first): the free triangles around a face (a CAD part's fillets and holes)
-    are then walked before the next face, and their corners coded from one another rather than
-    across that face's long triangles.
+    face (not :data:`FREE`) is not walked to but left until the walk has run out, then taken (the
+    last left first) as a child of the triangle that left it where that triangle is on the path
+    from the last triangle walked to its root, whose subtrees then all precede it, or else as a
+    root (which costs three corner codes): the free triangles around a face (a CAD part's fillets
+    and holes) are walked before the next face, and their corners coded from one another rather
+    than across that face's long triangles.
 
     Depth first because a triangle's parent is then mostly the one just before
     (link 1 or 2: about 1.5 bits a triangle after deflate on CAD/box.STL,
@@ -268,20 +270,32 @@ def _walk_python(twin: list[int], faces: list[int], t: int,
                  defer: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`spanning_walk`'s walk, rotations and links in Python, where the C extension is not built."""
     seen = [False] * t
-    walk, rotation, links = [], [], []
+    walk, rotation, links, parent = [], [], [], []
+    on_path: list[bool] = []
     position = [0] * t
-    left: list[tuple[int, int]] = []
+    left: list[tuple[int, int, int, int]] = []
     start = 0
     # One step per triangle: the encoder may loop where a reader may not (spec 3.3 §8.10 decodes
     # with numpy alone).
-    while start < t:
+    while True:
         while left and seen[left[-1][0]]:
             left.pop()
+        anchor = -1
         if left:
-            stack = [(*left[-1], -1, 0)]
+            j, r, p, k = left.pop()
+            anchor = p if on_path[p] else -1
+            stack = [(j, r, p, k) if anchor >= 0 else (j, r, -1, 0)]
         else:
+            while start < t and seen[start]:
+                start += 1
+            if start == t:
+                break
             stack = [(start, 0, -1, 0)]
             start += 1
+        m = len(walk) - 1
+        while m >= 0 and m != anchor:
+            on_path[m] = False
+            m = parent[m]
         while stack:
             j, r, p, link = stack.pop()
             if seen[j]:
@@ -290,6 +304,8 @@ def _walk_python(twin: list[int], faces: list[int], t: int,
             position[j] = len(walk)
             walk.append(j)
             rotation.append(r)
+            parent.append(p)
+            on_path.append(False)
             links.append(0 if p < 0 else 3 * (len(walk) - 1 - p - 1) + link + 1)
             ahead = []
             for k in ((2, 1, 0) if p < 0 else (2, 1)):
@@ -297,11 +313,15 @@ def _walk_python(twin: list[int], faces: list[int], t: int,
                 if w < 0 or seen[w // 3]:
                     continue
                 if defer and faces[w // 3] not in (faces[j], FREE):
-                    left.append((w // 3, w % 3))
+                    left.append((w // 3, w % 3, position[j], k))
                 else:
                     ahead.append((faces[w // 3] == faces[j], w // 3, w % 3, position[j], k))
             # The stack pops last first: same-plane neighbours go on last.
             stack.extend(step[1:] for step in sorted(ahead, key=lambda step: step[0]))
+        m = len(walk) - 1
+        while m >= 0 and not on_path[m]:
+            on_path[m] = True
+            m = parent[m]
     return np.array(walk, dtype=np.int64), np.array(rotation, dtype=np.int64), np.array(links, dtype=np.int64)
 
 
