@@ -20,7 +20,20 @@ each alternative compressed by Brotli at quality 11 as the writer's are (bytes):
   symbols and for the coordinates (values above 62 escaped with an Elias-gamma length), against
   Brotli on the same field;
 * ``brotli``: the whole body at Brotli's default window and block against the best of its modes
-  (generic, text, font), windows 2^10, 2^16, 2^22 and blocks 2^16, 2^24.
+  (generic, text, font), windows 2^10, 2^16, 2^22 and blocks 2^16, 2^24;
+* ``more`` (grid values, Brotli as above): S, the step from the gate corner, against a corner's chain
+  (the step source g of S, its own g2, g3): ``linear`` 2g - g2 and ``reflection`` g + d3, d3 the step
+  g2 - g3 reflected about the step g - g2 (exact for a regular polygon: a tessellated circle walked
+  round); ``adaptive``, per corner the one of S, P and reflection that was best on its step source
+  (a reader knows it: no choice is coded), and ``oracle``, the best of the three at each corner with
+  its choice not counted (what no coding of a choice can beat); ``recency``, each axis value coded as
+  0 where S is 0, else as its rank among the axis's distinct values used so far (most recent first),
+  else S escaped; ``interleaved``, S's x, y, z corner by corner rather than axis by axis;
+* ``grid`` (S, grid values): the decoded corners are any grid points within the budget (the
+  budget s√3/2 a step s keeps holds for each), so an encoder may choose among about 2.7 per corner:
+  ``nearest`` (the writer's), ``chord``, the point whose step from its decoded step source is
+  nearest the source's (so that translated copies code alike), ``seen``, a point whose values the
+  axis has used already where there is one, and ``seen+chord``.
 
 Usage: ``python bench/cad_coordinates.py [paths relative to the corpus]`` (default: the CAD part of
 ``shell_bits.D14_ERROR``).
@@ -37,6 +50,7 @@ import sys
 import brotli
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 sys.path.insert(0, os.path.dirname(__file__))
 from compare import CORPUS, load  # noqa: E402
@@ -153,14 +167,95 @@ def measure(rel: str) -> dict:
              for mode in (brotli.MODE_GENERIC, brotli.MODE_TEXT, brotli.MODE_FONT)
              for window in (10, 16, 22) for block in (0, 16, 24)}
     row["brotli"] = {"default": sizes[(brotli.MODE_GENERIC, 22, 0)], "best of modes": min(sizes.values())}
+    row["more"] = more_predictors(values, step, pair)
+    source = np.concatenate([n.mesh.vertices for n in scene.nodes if n.mesh is not None])
+    points = np.asarray(shell.origin) + values * float(shell.step)
+    row["grid"] = grid_choices(source[cKDTree(source).query(points)[1]], values, step, np.asarray(shell.origin),
+                               float(shell.step))
     return row
+
+
+def _reflection(values: np.ndarray, g: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each corner's chain predictions (linear, reflection) from its step sources ``g`` (-1: none)."""
+    g2 = np.where(g >= 0, g[np.maximum(g, 0)], -1)
+    g3 = np.where(g2 >= 0, g[np.maximum(g2, 0)], -1)
+    a, b, c = (values[np.maximum(x, 0)] for x in (g, g2, g3))
+    linear = np.where((g2 >= 0)[:, None], 2 * a - b, a)
+    d1, d2 = (b - c).astype(float), (a - b).astype(float)
+    dd = (d2 * d2).sum(axis=1)
+    t = np.where(dd > 0, 2 * (d1 * d2).sum(axis=1) / np.where(dd > 0, dd, 1), 0.0)
+    reflected = np.floor(a + t[:, None] * d2 - d1 + 0.5).astype(np.int64)
+    return linear, np.where(((g3 >= 0) & (dd > 0))[:, None], reflected, linear)
+
+
+def more_predictors(values: np.ndarray, step: np.ndarray, pair: np.ndarray) -> dict[str, int]:
+    """Brotli bytes of the coordinates under the chain predictors, choices and codings of ``more``."""
+    g = step[:, 0]
+    s = values - _predict(values, step)
+    p = values - _predict(values, pair)
+    linear, reflected = _reflection(values, g)
+    r = values - reflected
+    out = {"S": _brotli(_coded(s)), "linear": _brotli(_coded(values - linear)), "reflection": _brotli(_coded(r))}
+    options = np.stack([s, p, r])
+    best = np.abs(options).sum(axis=2).argmin(axis=0)
+    adaptive = np.where(g >= 0, best[np.maximum(g, 0)], 0)
+    out["adaptive"] = _brotli(_coded(options[adaptive, np.arange(len(values))]))
+    out["oracle"] = _brotli(_coded(options[best, np.arange(len(values))]))
+    streams = []
+    for axis in range(3):
+        recent: list[int] = []
+        coded = []
+        for x, step_residual in zip(values[:, axis].tolist(), s[:, axis].tolist()):
+            if step_residual == 0:
+                coded.append(0)
+            elif x in recent:
+                coded.append(1 + 2 * recent.index(x))
+            else:
+                coded.append(2 + 2 * (2 * step_residual if step_residual >= 0 else -2 * step_residual - 1))
+            if x in recent:
+                recent.remove(x)
+            recent.insert(0, x)
+        streams.append(varint.encode(np.array(coded, dtype=np.uint64)))
+    out["recency"] = _brotli(b"".join(streams))
+    out["interleaved"] = _brotli(varint.encode(varint.zigzag(s.reshape(-1))))
+    return out
+
+
+def grid_choices(source: np.ndarray, values: np.ndarray, step: np.ndarray, origin: np.ndarray,
+                 cell: float) -> dict[str, int]:
+    """Brotli bytes of S's residuals with the grid points chosen as ``grid`` says (``source``: each
+    corner's source vertex; ``values``: the writer's grid points, origin + values * cell)."""
+    target = (source - origin) / cell
+    budget = math.sqrt(3) / 2
+    offsets = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)])
+    g = step[:, 0]
+    out = {}
+    for mode in ("nearest", "chord", "seen", "seen+chord"):
+        q = np.zeros_like(values)
+        seen: list[set[int]] = [set(), set(), set()]
+        for k in range(len(values)):
+            cands = np.rint(target[k]).astype(np.int64) + offsets
+            cands = cands[np.linalg.norm(cands - target[k], axis=1) <= budget]
+            cost = np.linalg.norm(cands - target[k], axis=1) * 1e-3
+            if "seen" in mode:
+                cost = cost + sum(np.array([v not in seen[a] for v in cands[:, a]]) for a in range(3))
+            if "chord" in mode and g[k] >= 0:
+                chord = q[g[k]] + np.rint(target[k] - target[g[k]]).astype(np.int64)
+                cost = cost + 0.1 * np.abs(cands - chord).sum(axis=1)
+            q[k] = cands[np.argmin(cost)]
+            for a in range(3):
+                seen[a].add(int(q[k, a]))
+        out[mode] = _brotli(_coded(q - _predict(q, step)))
+        if mode == "nearest":
+            out["nearest is the writer's"] = bool(np.array_equal(q, values))
+    return out
 
 
 def main(argv: list[str]) -> int:
     for rel in argv or [m for m in D14_ERROR if m.startswith("cad/")]:
         r = measure(rel)
         print(f"{r['mesh']}: file {r['file']} B, {r['corners']} explicit corners, walk body {r['body']} B", flush=True)
-        for part in ("coordinates", "tables", "entropy", "brotli"):
+        for part in ("coordinates", "tables", "entropy", "brotli", "more", "grid"):
             print(f"  {part}: " + ", ".join(f"{k} {v}" for k, v in r[part].items()), flush=True)
     return 0
 
