@@ -30,7 +30,8 @@ each alternative compressed by Brotli at quality 11 as the writer's are (bytes):
   0 where S is 0, else as its rank among the axis's distinct values used so far (most recent first),
   else S escaped; ``interleaved``, S's x, y, z corner by corner rather than axis by axis;
 * ``grid`` (S, grid values): the decoded corners are any grid points within the budget (the
-  budget s√3/2 a step s keeps holds for each), so an encoder may choose among about 2.7 per corner:
+  budget s√3/2 a step s keeps holds for each), so an encoder may choose among 4/3·π·(√3/2)³ ≈ 2.72
+  per corner on average:
   ``nearest`` (the writer's), ``chord``, the point whose step from its decoded step source is
   nearest the source's (so that translated copies code alike), ``seen``, a point whose values the
   axis has used already where there is one, and ``seen+chord``.
