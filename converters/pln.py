@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 
 from planefmt.errors import GeometryError, PlnWarning, SkippedGroupsWarning
-from planefmt.model import Mesh, Scene
+from planefmt.model import GroupKind, Mesh, Scene
 
 from .assemble import build_mesh, instancing_note, with_area, world_transforms
 
@@ -57,6 +57,17 @@ def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6
         notes.append(f"the tolerance {header.tolerance:g} (the forced coding measured {header.error_bound:.3g} of "
                      "the diagonal; the file is marked lossy)")
     return notes + [str(w) for w in _pln_warnings(caught)]
+
+
+def beyond_version_1(path: str | os.PathLike[str]) -> tuple[tuple[int, int], list[str]]:
+    """The version of the .pln file at ``path`` and, in order of kind, the names of its group kinds
+    that version 1.0 does not have (5 and up: sealed, shell, ...): why a file written with
+    ``compact=False`` is not 1.0."""
+    import planefmt
+
+    with planefmt.open(path) as r:
+        kinds = sorted({GroupKind(g.kind) for g in r.part_groups() if g.kind >= GroupKind.SEALED})
+        return r.header.version, [k.name.lower().replace("_", " ") for k in kinds]
 
 
 #: The header's bounding box is float32 (spec §5): a coordinate beyond this cannot be recorded.

@@ -381,6 +381,24 @@ def test_readme_cube_figures_are_what_pln_convert_writes(tmp_path: Path) -> None
     assert "version\n2.0" not in readme and "version 2.0 (`pln convert`" not in readme
 
 
+def test_no_compact_says_when_the_file_is_not_version_1(tmp_path: Path, capsys: pytest.CaptureFixture) -> None:
+    import planefmt
+
+    # A cube is convex groups, which version 1.0 has: 1.0 and no word about it.
+    assert main(["convert", "--no-compact", str(CUBE), str(tmp_path / "cube.pln")]) == 0
+    assert "not 1.0" not in capsys.readouterr().err
+    with planefmt.open(tmp_path / "cube.pln") as r:
+        assert r.header.version == (1, 0)
+    # A non-convex part is a shell walk by default, which 1.0 has not: the file says 5.0, and so does pln.
+    out = tmp_path / "part.pln"
+    assert main(["convert", "--no-compact", str(CORPUS / "open" / "not_convex.obj"), str(out)]) == 0
+    err = capsys.readouterr().err
+    with planefmt.open(out) as r:
+        version = r.header.version
+    assert version != (1, 0)
+    assert f"written as version {version[0]}.{version[1]}, not 1.0 (--no-compact)" in err and "shell walk" in err
+
+
 def test_compact_help_names_the_default(capsys: pytest.CaptureFixture) -> None:
     assert main(["convert", "--help"]) == 0
     text = " ".join(capsys.readouterr().out.split())

@@ -63,7 +63,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--compact", action=argparse.BooleanOptionalAction, default=True,
                    help="write version 5.0 (spec/pln.md; the default): bit-packed or predicted plane codes, "
                         "whichever is smaller, varint group bodies and chunk heads, transforms entry by entry. "
-                        "--no-compact writes version 1.0, for readers of 1.x only")
+                        "--no-compact writes version 1.0, for readers of 1.x only, where the groups allow: shell "
+                        "and sealed groups need version 3 or later (--major), and a warning says which was written")
     g.add_argument("--major", type=int, choices=[3, 4, 5], default=5,
                    help="5 (the default): version 5.0; 4: the lowest of versions 4.0 to 4.2 that holds the file, "
                         "for readers of 4.x (32-bit chunk lengths, a mETA up axis, float64 shell grids); 3: the "
@@ -171,6 +172,14 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
         warnings.append(f"{src_name}: dropped {'; '.join(dropped)} (not carried into {Path(dst_name).name})")
     if notes:
         warnings.append(f"{dst_name}: not kept by {fmt.name}: {', '.join(notes)}")
+    if fmt.name == "pln" and not pln_opts.get("compact", True):
+        from planefmt_converters.pln import beyond_version_1
+
+        version, kinds = beyond_version_1(dst)
+        if kinds:
+            warnings.append(f"{dst_name}: written as version {version[0]}.{version[1]}, not 1.0 (--no-compact): "
+                            f"version 1.0 has no {', '.join(kinds)} groups; it holds convex groups, cells, trees "
+                            "and patches, which --scheme paper makes where it can")
     return warnings, [f"{src_name}: {line}" for line in lost]
 
 
