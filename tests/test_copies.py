@@ -70,6 +70,37 @@ def test_copies_read_alike_streamed_through_a_pipe_and_by_random_access(monkeypa
         assert np.array_equal(a.shell.grid, b.shell.grid) and np.array_equal(a.shell.grid, c.shell.grid)
 
 
+def test_a_file_read_again_keeps_no_payloads_and_a_pipe_keeps_them(tmp_path):
+    data = encoded(PINS, 3.2e-5)
+    path = tmp_path / "pins.pln"
+    path.write_bytes(data)
+    with planefmt.open(path, retain_planes=False) as r:
+        from_file = list(r.part_groups())
+        # A source is read again where a copy names it: memory stays that of the largest chunk.
+        assert not r._payloads and len(r._offsets) == len(from_file)
+    with planefmt.open(TrickleReader(data)) as r:
+        piped = list(r.part_groups())
+        assert len(r._payloads) == len(piped) and not r._offsets
+    assert [g.source for g in from_file] == [g.source for g in piped] and sum(g.source is not None for g in piped) == 5
+    for a, b in zip(from_file, piped):
+        assert a.kind == b.kind and np.array_equal(a.shell.grid, b.shell.grid)
+        assert np.array_equal(a.shell.facets, b.shell.facets)
+
+
+def test_a_source_read_again_that_is_no_longer_a_group_is_an_error(tmp_path):
+    data = encoded(PINS, 3.2e-5)
+    path = tmp_path / "pins.pln"
+    path.write_bytes(data)
+    with planefmt.open(path) as r:
+        groups = r.part_groups()
+        assert next(groups).source is None and next(groups).source is None  # group 1: the copies' source
+        # As if the file had changed since: the source's offset now holds the first object's chunk.
+        r._offsets[1] = next(off for off, t, _ in r._listed if t == b"OBJT")
+        with pytest.raises(planefmt.FormatError, match="changed while read") as info:
+            list(groups)
+    assert info.value.offset == r._offsets[1] and info.value.file == str(path)
+
+
 def test_a_writer_asked_for_no_copies_writes_every_group(tmp_path):
     header = planefmt.Header(version=(4, 2), coding=planefmt.Coding.FLOAT64)
     cube = np.array([[0.0, 0.0, 1.0], [np.pi, 0.0, 0.0], [np.pi / 2, 0.0, 1.0], [np.pi / 2, np.pi, 0.0],

@@ -50,9 +50,12 @@ class Reader:
         self._table = np.empty((0, 3), dtype=np.float64)
         self._plane_count = 0
         self._group_refs: dict[int, int] = {}
-        # Version 4.2's copies (spec §9.15) name earlier groups: their stored payloads, and the sources
-        # decoded so far.
+        # Version 4.2's copies (spec §9.15) name earlier groups: where the file can be read again (a
+        # regular file or an in-memory buffer) a source is re-read at its offset, so memory stays that of
+        # the largest chunk; a pipe's reader keeps every group's stored payload. And the sources decoded
+        # so far.
         self._payloads: dict[int, bytes] = {}
+        self._offsets: dict[int, int] = {}
         self._sources: dict[int, PartGroup] = {}
         self._group_count = 0
         self._done = False
@@ -187,7 +190,10 @@ class Reader:
             self._group_refs[group.index] = len(group.refs)
             self._group_count += 1
             if int(GroupKind.COPY) in records.kinds_of(*self.header.version):
-                self._payloads[group.index] = bytes(raw.payload)
+                if self._rereadable:
+                    self._offsets[group.index] = raw.offset
+                else:
+                    self._payloads[group.index] = bytes(raw.payload)
             if group.kind == GroupKind.COPY:
                 group = self._copied(group)
             if self.retain_planes:
@@ -226,9 +232,12 @@ class Reader:
         s = copy.source
         source = self._sources.get(s)
         if source is None:
-            if s in self._payloads:
+            payload = self._payloads.get(s)
+            if payload is None and s in self._offsets:
+                payload = self._reread(self._offsets[s]).payload
+            if payload is not None:
                 source, _ = records.decode_group(
-                    self._payloads[s], expected_index=s, objects=len(self.objects), planes=self._plane_count,
+                    payload, expected_index=s, objects=len(self.objects), planes=self._plane_count,
                     minor=self.header.version[1], limits=self.limits, major=self.header.version[0])
             else:
                 source = self.group(s)
@@ -241,6 +250,26 @@ class Reader:
         if not isinstance(source.kind, GroupKind):
             self.findings.append(("SKIPPED_GROUP_KIND", f"group {copy.index} copies group {s}, of a kind skipped"))
         return dataclasses.replace(source, index=copy.index, object=copy.object, source=s)
+
+    @property
+    def _rereadable(self) -> bool:
+        return self._base is not None and self._stream._size is not None
+
+    def _reread(self, offset: int) -> RawChunk:
+        """The GRUP chunk at ``offset`` (from the file's start), its CRC checked again; the stream is left
+        where it was."""
+        here = self._fp.tell()
+        try:
+            stream = ChunkStream(self._fp, file=self.name, limits=self.limits, compact=self._compact)
+            stream.seek(self._base + offset)
+            stream.offset = offset
+            raw = stream.next_chunk()
+        finally:
+            self._fp.seek(here)
+        if raw.type != schema.GRUP:
+            raise FormatError(f"byte {offset} held a GRUP chunk, now {raw.name}: the file changed while read",
+                              code="BAD_GROUP_STRUCTURE", offset=offset)
+        return raw
 
     def _check_index(self, entries: np.ndarray) -> None:
         """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §10.2)."""
@@ -334,7 +363,7 @@ class Reader:
         # A shallow copy shares the file but starts from an empty plane table and object list.
         sub = copy.copy(self)
         sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
-        sub._payloads, sub._sources = {}, {}
+        sub._payloads, sub._offsets, sub._sources = {}, {}, {}
         sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
         stream = ChunkStream(self._fp, file=self.name, limits=self.limits, compact=self._compact)
         for i in np.flatnonzero(np.isin(types[: pos + 1], [schema.OBJT, schema.PLNS])).tolist() + [int(pos)]:
@@ -359,7 +388,9 @@ def open(source: str | os.PathLike | BinaryIO, *, retain_planes: bool = True,  #
 
     ``source`` may be a path, ``"-"`` for standard input, or a binary file
     object (which is left open on close). ``retain_planes=False`` keeps memory
-    bounded by the largest chunk but leaves ``PartGroup.planes`` unresolved.
+    bounded by the largest chunk but leaves ``PartGroup.planes`` unresolved (except
+    on a stream that cannot be read again, such as a pipe, whose groups' stored
+    payloads a version 4.2 or 5.0 reader keeps for copies to name, spec §9.15).
     """
     if isinstance(source, str) and source == "-":
         return Reader(sys.stdin.buffer, retain_planes=retain_planes, limits=limits, name=name or "<stdin>")
