@@ -21,7 +21,9 @@ each alternative compressed by Brotli at quality 11 as the writer's are (bytes):
   Brotli on the same field;
 * ``brotli``: the whole body at Brotli's default window and block against the best of its modes
   (generic, text, font), windows 2^10, 2^16, 2^22 and blocks 2^16, 2^24;
-* ``more`` (grid values, Brotli as above): S, the step from the gate corner, against a corner's chain
+* ``more`` (grid values, Brotli as above): ``written``, the walk's tables and coordinates as the writer
+  codes them (in table indices or grid values, whichever it chose), then S, the step from the gate
+  corner in grid values, against a corner's chain
   (the step source g of S, its own g2, g3): ``linear`` 2g - g2 and ``reflection`` g + d3, d3 the step
   g2 - g3 reflected about the step g - g2 (exact for a regular polygon: a tessellated circle walked
   round); ``adaptive``, per corner the one of S, P and reflection that was best on its step source
@@ -168,7 +170,7 @@ def measure(rel: str) -> dict:
              for mode in (brotli.MODE_GENERIC, brotli.MODE_TEXT, brotli.MODE_FONT)
              for window in (10, 16, 22) for block in (0, 16, 24)}
     row["brotli"] = {"default": sizes[(brotli.MODE_GENERIC, 22, 0)], "best of modes": min(sizes.values())}
-    row["more"] = more_predictors(values, step, pair)
+    row["more"] = {"written": _brotli(fields["tables"] + fields["coordinates"]), **more_predictors(values, step, pair)}
     source = np.concatenate([n.mesh.vertices for n in scene.nodes if n.mesh is not None])
     points = np.asarray(shell.origin) + values * float(shell.step)
     row["grid"] = grid_choices(source[cKDTree(source).query(points)[1]], values, step, np.asarray(shell.origin),
