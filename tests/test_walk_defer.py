@@ -5,6 +5,7 @@ decodes within its bound, and the walk is the same in C and in Python."""
 
 from __future__ import annotations
 
+import dataclasses
 import io
 
 import numpy as np
@@ -106,3 +107,23 @@ def test_close_candidates_are_decided_by_brotli(monkeypatch: pytest.MonkeyPatch)
     by_deflate = _encoded("cad/featuretype.STL", 1e-4)
     # 2,256 bytes against 2,283 when measured: deflate ranked two walks within 3 % the other way round.
     assert len(decided) < len(by_deflate)
+
+
+@pytest.mark.parametrize("defer", [False, True])
+def test_a_plan_walked_again_is_the_plan_made_for_that_walk(defer: bool) -> None:
+    from planefmt.codec.preparing import _prepare
+
+    scene, _ = registry.read(CORPUS / "cad/box.STL")
+    mesh = next(n.mesh for n in scene.nodes if n.mesh is not None)
+    obj = _prepare(mesh.vertices, mesh.faces, np.eye(4), 3.9e-5, None, None)
+    freed = choosing._planeless(obj)
+    walked = choosing._walking_planes(freed, obj.face_plane)
+    assert walked is not None
+    walked = dataclasses.replace(walked, walk_defer=defer)
+    made = choosing._shell_plans(walked)
+    for k, plan in choosing._shell_plans(freed).items():
+        again = shells.rewalked(plan, walked.walk_plane[walked.groups[k].faces], defer)
+        assert np.array_equal(again.order, made[k].order) and np.array_equal(again.facets, made[k].facets)
+        assert all(np.array_equal(a, b) for a, b in zip(again.walk, made[k].walk))
+        # Another walk than the freed plan's own.
+        assert not all(np.array_equal(a, b) for a, b in zip(again.walk, plan.walk))

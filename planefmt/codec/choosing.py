@@ -25,7 +25,7 @@ from ..geometry.hausdorff import DEFAULT_MAX_PIECES
 from ..geometry.planes import from_triplets, transform_points
 from ..geometry.trianglegeom import TriangleIndex
 from ..geometry.topology import euler_characteristic, signed_volume
-from ..groups.shells import FREE, ShellPlan, decode_shell, encode_shell, plan_shell, shell_tree
+from ..groups.shells import FREE, ShellPlan, decode_shell, encode_shell, plan_shell, rewalked, shell_tree
 from ..model import TREE_KINDS, Coding, GroupKind, Mesh, Quantization
 from .decoding import EXACT, SHELL_KINDS, _concatenate, plane_error
 from .preparing import (LOSSLESS_TOLERANCE, STRUCTURE_TOLERANCE, _Object, _area, _diagonal, _fit_error, _one_shell,
@@ -519,7 +519,13 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     # The planeless variant first: a width whose planes name no corner only adds a plane table and face
     # references to it, and is passed over unwritten.
     trials = [(objs, cod, q) for objs, cands in variants[::-1] for cod, q in cands]
-    plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants}
+    plans = {id(objs): [_shell_plans(o) for o in objs] for objs, _ in variants[:2]}
+    # The walked variants are the freed objects with another walk: their plans are the freed ones walked
+    # again (sorting the triangles and numbering the corners is most of a plan's cost).
+    for objs, _ in variants[2:]:
+        plans[id(objs)] = [pf if o.walk_plane is None else
+                           {k: rewalked(plan, o.walk_plane[o.groups[k].faces], o.walk_defer) for k, plan in pf.items()}
+                           for o, pf in zip(objs, plans[id(freed)])]
     named_before = -1
     tried: list[tuple[int, list[_Object], _Choice]] = []
     for k, (objs, cod, q) in enumerate(trials):

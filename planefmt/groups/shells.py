@@ -104,13 +104,23 @@ class ShellPlan:
     """What of a shell does not depend on its planes' coding: triangles sorted by face, corners
     numbered by first use (``points`` (V, 3) in that order),
     each corner's triple of planes with ``|det|`` of their exact normals, and the
-    :func:`spanning_walk` of its triangles (the encoder tries a dozen codings, one walk)."""
+    :func:`spanning_walk` of its triangles (the encoder tries a dozen codings, one walk); ``order``,
+    the source's triangle each of ``facets`` is."""
 
     points: np.ndarray
     facets: np.ndarray
     triple: np.ndarray
     det: np.ndarray
     walk: tuple[np.ndarray, np.ndarray, np.ndarray]
+    order: np.ndarray
+
+
+def rewalked(plan: ShellPlan, walk_face: np.ndarray, defer: bool = False) -> ShellPlan:
+    """``plan`` with the walk :func:`plan_shell` makes for ``walk_face`` (each source triangle's
+    plane that the walk keeps together) and ``defer``, where the triangles' faces, hence their order
+    and corners, are ``plan``'s: the rest of the plan is not made again."""
+    together = np.asarray(walk_face, dtype=np.int64)[plan.order]
+    return replace(plan, walk=spanning_walk(plan.facets[:, 1:], together, defer))
 
 
 def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omega: np.ndarray,
@@ -139,7 +149,7 @@ def plan_shell(points: np.ndarray, triangles: np.ndarray, face: np.ndarray, omeg
     p = points[source]
     triple, det = corner_triples(p, tri, face, omega)
     return ShellPlan(points=p, facets=np.column_stack([face, tri]), triple=triple, det=det,
-                     walk=spanning_walk(tri, together, defer))
+                     walk=spanning_walk(tri, together, defer), order=order)
 
 
 def walk_order(triangles: np.ndarray, count: int) -> np.ndarray:
