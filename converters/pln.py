@@ -66,6 +66,8 @@ def beyond_version_1(path: str | os.PathLike[str]) -> tuple[tuple[int, int], lis
     import planefmt
 
     with planefmt.open(path) as r:
+        if r.header.version == (1, 0):
+            return r.header.version, []
         kinds = sorted({GroupKind(g.kind) for g in r.part_groups() if g.kind >= GroupKind.SEALED})
         return r.header.version, [k.name.lower().replace("_", " ") for k in kinds]
 

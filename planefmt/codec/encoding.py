@@ -103,8 +103,9 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
         return _prepare(vertices, faces, np.eye(4), tolerance, delta, tau, diagonal=None if forced else 0.0,
                         splitters=splitters, scheme=scheme)
 
-    def size(objects: list[_Object], choice: _Choice, brotli: bool = False) -> int:
+    def size(objects: list[_Object], choice: _Choice, brotli: bool = True) -> int:
         buf = io.BytesIO()
+        # Trials verified and written as the file is, Brotli included (encode_scene's are deflated only).
         _write(Scene((Node("", mesh=Mesh(vertices, faces)),)), buf, [0], objects, choice, tolerance,
                scheme == "shell", False, brotli=brotli)
         return len(buf.getvalue())
@@ -220,9 +221,9 @@ def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: floa
 
 def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int], objects: list[_Object],
            choice: _Choice, tolerance: float, compress: bool, compact: bool, major: int = 4,
-           verify: bool = True, brotli: bool | None = None) -> Header:
+           verify: bool = True, brotli: bool = True) -> Header:
     """Write the scene's ``objects`` (those of nodes ``meshes``) in the chosen coding; its header.
-    ``verify`` off: a candidate measured for its size, deflated only unless ``brotli``."""
+    ``verify`` off: a candidate measured for its size; ``brotli`` off: deflated only."""
     if major == 3:
         objects = [replace(o, groups=tuple(_as_tree(g) for g in o.groups)) for o in objects]
     if major >= 5 and compact:
@@ -266,7 +267,7 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                     up_axis=scene.up_axis if version[0] >= 5 else None)
     # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
     index = True if not compact else None
-    with _writer(target, header, compress, index, verify, verify if brotli is None else brotli) as w:
+    with _writer(target, header, compress, index, verify, brotli) as w:
         if scene.up_axis is not None and version[0] < 5:
             w.add_metadata(UP_AXIS, scene.up_axis)
         for i, node in enumerate(scene.nodes):
