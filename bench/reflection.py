@@ -1,24 +1,13 @@
-"""What a shell walk predicting its corners by circle-continuing reflection would save on the corpus at
-Draco-14's error: a measurement for a coding not in the format (issue 31's closing note, stop 45).
+"""What shell walks with reflections (kind 12, spec §9.16) save on the corpus at Draco-14's error.
 
 For each corpus mesh, at the draco-14 error ``docs/benchmarks.md`` records for it (two digits), the
-default encoder writes the file; each of its walk groups (kinds 9 and 10) whose corners are all
-explicit has its coordinates predicted again, in grid values, as the candidate coding would: corner
-k from a, b, c, the step sources of k, a and b (spec §9.11's p, the corner k's coordinates are a
-step from),
-
-    d1 = b - c, d2 = a - b, D = d2·d2,
-    prediction = a + floor((2N + D) / (2D)),  N = 2 (d1·d2) d2 - D d1   (per axis; half rounds up),
-
-a step d2 rotated on from the step d1 by the angle between them: exact on a regular polygon (a
-tessellated circle walked round), in integers, used where the chain exists, D > 0 and every component
-of d1 and d2 is within 2^18 (so that every product fits a signed 64-bit integer), else the step
-a + 0. Printed per mesh: the written walk's tables and coordinates (``shell_bits.shell_fields``, Brotli
-at quality 11, as the writer compresses), the same corners' residuals under the reflection (zigzag
-varints, every x, then y, then z, Brotli 11), the share of corners with a chain, the file, the file a
-writer choosing the smaller of the two per group would make (an estimate: fields compressed alone, as
-here, sum to a little more than a body compressed whole), and both over draco-14's bytes; then the
-category medians of both ratios, and over the whole corpus, as ``docs/benchmarks.md`` takes them.
+default encoder writes the file twice: as it does (kinds 9, 10 and 12 to choose from) and with kind 12
+left out of the encoder's shell layouts (``choosing.SHELL_LAYOUTS``: the file a 5.0 writer made).
+Printed per mesh: the walk groups' tables and coordinates in each of kinds 9, 10 and 12, each in its
+smallest mode (Brotli at quality 11 of the fields, as ``shell_walk_fields`` builds them, summed over the
+groups of the file written), the share of explicit corners whose chain turns, both files, and both
+over draco-14's bytes; then the category medians of both ratios, and over the whole corpus, as
+``docs/benchmarks.md`` takes them.
 
 Usage: ``python bench/reflection.py [--benchmarks docs/benchmarks.md]``
 """
@@ -36,35 +25,16 @@ import brotli
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from compare import CATEGORIES, CORPUS, corpus_files, load  # noqa: E402
-from shell_bits import shell_fields  # noqa: E402
+from compare import CATEGORIES, corpus_files, load  # noqa: E402
 
 import planefmt  # noqa: E402
 from planefmt import codec  # noqa: E402
-from planefmt.container import shellwalk, varint  # noqa: E402
-from planefmt.container.shellfields import _tree_predictors, code_stream  # noqa: E402
+from planefmt.codec import choosing  # noqa: E402
+from planefmt.container import shellwalk  # noqa: E402
+from planefmt.container.shellfields import MAX_TURN, _chains_of, _tree_predictors, code_stream  # noqa: E402
+from planefmt.model import GroupKind  # noqa: E402
 
-#: The largest component of a step the reflection takes (beyond it, the step predicts).
-REFLECTION_LIMIT = 2 ** 18
-
-
-def reflection(values: np.ndarray, source: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Each corner's prediction (V, 3) from the grid ``values`` (V, 3) and each corner's step
-    ``source`` (-1: none), and whether it had a chain."""
-    g2 = np.where(source >= 0, source[np.maximum(source, 0)], -1)
-    g3 = np.where(g2 >= 0, source[np.maximum(g2, 0)], -1)
-    a, b, c = (values[np.maximum(x, 0)] for x in (source, g2, g3))
-    d1, d2 = b - c, a - b
-    d = (d2 * d2).sum(axis=1)
-    chain = (g3 >= 0) & (d > 0) & (np.abs(d1).max(axis=1) <= REFLECTION_LIMIT) \
-        & (np.abs(d2).max(axis=1) <= REFLECTION_LIMIT)
-    den = np.where(chain, d, 1)[:, None]
-    num = 2 * (d1 * d2).sum(axis=1)[:, None] * d2 - den * d1
-    return np.where(chain[:, None], a + np.floor_divide(2 * num + den, 2 * den), a), chain
-
-
-def _brotli(data: bytes) -> int:
-    return len(brotli.compress(bytes(data), quality=11))
+KINDS = (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI, GroupKind.SHELL_WALK_REFLECT)
 
 
 def draco14(path: str) -> dict[str, tuple[int, float]]:
@@ -78,35 +48,51 @@ def draco14(path: str) -> dict[str, tuple[int, float]]:
     return out
 
 
+def _encoded(scene, tolerance: float, reflections: bool) -> bytes:
+    saved = choosing.SHELL_LAYOUTS
+    if not reflections:
+        choosing.SHELL_LAYOUTS = tuple(k for k in saved if k != GroupKind.SHELL_WALK_REFLECT)
+    try:
+        buf = io.BytesIO()
+        codec.encode_scene(scene, buf, tolerance=tolerance)
+        return buf.getvalue()
+    finally:
+        choosing.SHELL_LAYOUTS = saved
+
+
+def _turning(shell) -> tuple[int, int]:
+    """How many of ``shell``'s explicit corners have a chain that turns (spec §9.16), of how many."""
+    explicit = np.asarray(shell.explicit, dtype=bool)
+    tri = np.asarray(shell.facets, dtype=np.int64)[:, 1:]
+    links = np.asarray(shell.links, dtype=np.int64)
+    _, new, _ = code_stream(tri, links == 0)
+    step = _tree_predictors(links, tri, explicit, np.where(links == 0, 3, 1), new)[:, 0]
+    a, b, c = _chains_of(step)
+    g = np.zeros((len(explicit), 3), dtype=np.int64)
+    g[explicit] = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
+    d1, d2 = g[b] - g[c], g[a] - g[b]
+    turns = explicit & (c >= 0) & (np.abs(np.c_[d1, d2]).max(axis=1) <= MAX_TURN) & (np.abs(d2).sum(axis=1) > 0)
+    return int(turns.sum()), int(explicit.sum())
+
+
 def measure(path: str, tolerance: float) -> dict:
     scene, _, _ = load(path)
-    buf = io.BytesIO()
-    codec.encode_scene(scene, buf, tolerance=tolerance)
-    written = candidate = corners = chained = 0
-    with planefmt.open(io.BytesIO(buf.getvalue())) as r:
+    written = _encoded(scene, tolerance, True)
+    without = _encoded(scene, tolerance, False)
+    sizes = dict.fromkeys(KINDS, 0)
+    turned = corners = 0
+    with planefmt.open(io.BytesIO(written)) as r:
         for group in r.part_groups():
-            if group.kind not in shellwalk.WALK_KINDS or group.source is not None:
+            if group.kind not in shellwalk.WALK_KINDS or group.source is not None or not group.shell.explicit.any():
                 continue
-            shell = group.shell
-            explicit = np.asarray(shell.explicit, dtype=bool)
-            if not explicit.all():
-                continue
-            fields = shell_fields(group)
-            tri = np.asarray(shell.facets, dtype=np.int64)[:, 1:]
-            links = np.asarray(shell.links, dtype=np.int64)
-            values = np.asarray(shell.grid, dtype=np.int64).reshape(-1, 3)
-            _, new, _ = code_stream(tri, links == 0)
-            step = _tree_predictors(links, tri, explicit, np.where(links == 0, 3, 1), new, False)
-            prediction, chain = reflection(values, step[:, 0])
-            before = _brotli(fields["tables"] + fields["coordinates"])
-            after = _brotli(varint.encode(varint.zigzag((values - prediction).T)))
-            written += before
-            candidate += min(before, after)
-            corners += len(values)
-            chained += int(chain.sum())
-    size = len(buf.getvalue())
-    return dict(file=size, written=written, candidate=candidate, estimate=size - written + candidate,
-                chained=chained / corners if corners else 0.0)
+            for kind in KINDS:
+                sizes[kind] += min(len(brotli.compress(f["tables"] + f["coordinates"], quality=11))
+                                   for f in (shellwalk.shell_walk_fields(group.shell, m, kind)
+                                             for m in shellwalk.MODES))
+            t, e = _turning(group.shell)
+            turned += t
+            corners += e
+    return dict(file=len(written), without=len(without), sizes=sizes, turning=turned / corners if corners else 0.0)
 
 
 def main(argv: list[str]) -> int:
@@ -114,27 +100,28 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--benchmarks", default=os.path.join(os.path.dirname(__file__), "..", "docs", "benchmarks.md"))
     args = ap.parse_args(argv)
     peers = draco14(args.benchmarks)
-    labels = {folder: label for folder, label in CATEGORIES.items()}
     before: dict[str, list[float]] = {}
     after: dict[str, list[float]] = {}
-    print("| mesh | walk corners written B | smaller with reflection B | chains | file B | estimate B | draco-14 B | ratio | estimate ratio |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| mesh | kind 9 B | kind 10 B | kind 12 B | turning | without kind 12 B | written B | draco-14 B | "
+          "ratio without | ratio |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for folder, path in corpus_files(list(CATEGORIES)):
-        name = f"{labels[folder]}/{os.path.basename(path)}"
+        name = f"{CATEGORIES[folder]}/{os.path.basename(path)}"
         if name not in peers:
             continue
         draco, error = peers[name]
         row = measure(path, error)
-        r0, r1 = row["file"] / draco, row["estimate"] / draco
+        r0, r1 = row["without"] / draco, row["file"] / draco
         for table, r in ((before, r0), (after, r1)):
-            table.setdefault(labels[folder], []).append(r)
+            table.setdefault(CATEGORIES[folder], []).append(r)
             table.setdefault("all", []).append(r)
-        print(f"| {name} | {row['written']:,} | {row['candidate']:,} | {row['chained']:.2f} | {row['file']:,} | "
-              f"{row['estimate']:,} | {draco:,} | {r0:.3f} | {r1:.3f} |", flush=True)
+        s = row["sizes"]
+        print(f"| {name} | {s[KINDS[0]]:,} | {s[KINDS[1]]:,} | {s[KINDS[2]]:,} | {row['turning']:.2f} | "
+              f"{row['without']:,} | {row['file']:,} | {draco:,} | {r0:.3f} | {r1:.3f} |", flush=True)
     print()
-    print("| category | meshes | median ratio | median estimate ratio |")
+    print("| category | meshes | median ratio without kind 12 | median ratio |")
     print("|---|---|---|---|")
-    for category in list(dict.fromkeys(labels.values())) + ["all"]:
+    for category in list(dict.fromkeys(CATEGORIES.values())) + ["all"]:
         if category in before:
             print(f"| {category} | {len(before[category])} | {statistics.median(before[category]):.3f} | "
                   f"{statistics.median(after[category]):.3f} |")

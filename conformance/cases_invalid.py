@@ -1834,13 +1834,14 @@ def _():
 V50 = (5, 0)
 
 
-def v5_layout(*extra: tuple[bytes, bytes], up_axis: str | None = None, groups: list[bytes] | None = None) -> Layout:
-    """The cube of spec/pln-1.md §12 in a version 5.0 file (float32, as a convex group, or ``groups``),
-    chunks ``extra`` after PHDR, before iNDX."""
+def v5_layout(*extra: tuple[bytes, bytes], up_axis: str | None = None, groups: list[bytes] | None = None,
+              version: tuple[int, int] = V50) -> Layout:
+    """The cube of spec/pln-1.md §12 in a version 5.0 file (or ``version``; float32, as a convex group, or
+    ``groups``), chunks ``extra`` after PHDR, before iNDX."""
     groups = [grup_v5(np.arange(6), 0)] if groups is None else groups
-    layout = [(schema.PHDR, header(version=V50, up_axis=up_axis, group_count=len(groups))), *extra,
+    layout = [(schema.PHDR, header(version=version, up_axis=up_axis, group_count=len(groups))), *extra,
               (schema.OBJT, records.encode_object(ObjectRecord(0, "cube", None, None), 5)),
-              (schema.PLNS, records.encode_planes(0, CUBE, dataclasses.replace(SPEC_HEADER, version=V50), False))]
+              (schema.PLNS, records.encode_planes(0, CUBE, dataclasses.replace(SPEC_HEADER, version=version), False))]
     return layout + [(schema.GRUP, g) for g in groups]
 
 
@@ -1929,3 +1930,54 @@ def _():
 def _():
     colours = schema.ColoursHead.build(dict(group=0, count=0))
     return v5_file(v5_layout(groups=[grup_v5(np.zeros(0), GroupKind.SHELL, SHELL_PYRAMID)]) + [(schema.COLR, colours)])
+
+
+# -- version 5.1: shell walks with reflections (spec/pln.md §9.16) ----------------------------------
+
+REFLECT = int(GroupKind.SHELL_WALK_REFLECT)
+
+
+def reflect_file(shell, fields: dict[str, bytes], version: tuple[int, int] = (5, 1)) -> bytes:
+    """``shell`` as a shell walk with reflections (kind 12) of kind data ``fields`` (its grid in f32) on
+    the cube's six planes, whose faces it names, in a version 5.1 file (or ``version``), uncompressed."""
+    body = CUBE_REFS + b"".join({**fields, "grid": shellfields.grid_bytes(shell, 5)}.values())
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=REFLECT, compression=0, raw_size=len(body), body=body))
+    return v5_file(v5_layout(groups=[group], version=version))
+
+
+def _reflect_residuals(fields: dict[str, bytes]) -> np.ndarray:
+    z = np.array(_all_varints(np.frombuffer(fields["coordinates"], dtype=np.uint8)), dtype=np.uint64).reshape(3, -1)
+    return varint.unzigzag(z)
+
+
+@case("xv51_reflect_in_5_0", "UNKNOWN_GROUP_KIND", "a well-formed shell walk with reflections (kind 12) of the "
+      "all-explicit box in a version 5.0 file, whose version has no kind 12")
+def _():
+    return reflect_file(TREE_BOX, walk_fields(TREE_BOX, 0, GroupKind.SHELL_WALK_REFLECT), version=(5, 0))
+
+
+@case("xv51_reflect_mode_bits", "BAD_GROUP_STRUCTURE", "version 5.1 shell walk with reflections of the "
+      "all-explicit box whose coordinate mode is 4: a bit above bit 1")
+def _():
+    return reflect_file(TREE_BOX, walk_fields(TREE_BOX, 0, GroupKind.SHELL_WALK_REFLECT, mode=b"\x04"))
+
+
+@case("xv51_reflect_beyond", "BAD_GROUP_STRUCTURE", "version 5.1 shell walk with reflections of the "
+      "all-explicit box whose corners' x are 2^52 but the last corner's, 2^52 + 1: the last corner's chain turns "
+      "(its steps differ in y and z), its residual is 1 over the prediction 2^52, the resolved value beyond it")
+def _():
+    grid = np.asarray(TREE_BOX.grid, dtype=np.int64).copy()
+    grid[:, 0] = 1 << 52
+    grid[-1, 0] += 1
+    shell = dataclasses.replace(TREE_BOX, grid=grid)
+    return reflect_file(shell, walk_fields(shell, 0, GroupKind.SHELL_WALK_REFLECT))
+
+
+@case("xv51_reflect_table_index", "BAD_GROUP_STRUCTURE", "version 5.1 shell walk with reflections of the "
+      "all-explicit box in mode 2 (x table of 2 values) whose last corner, predicted by its turning chain of "
+      "indices, has an x residual 2 larger: every earlier index is in its table, the last resolves past it")
+def _():
+    f = walk_fields(TREE_BOX, 2, GroupKind.SHELL_WALK_REFLECT)
+    r = _reflect_residuals(f)
+    r[0, -1] += 2
+    return reflect_file(TREE_BOX, {**f, "coordinates": varint.encode(varint.zigzag(r).reshape(-1))})

@@ -487,21 +487,22 @@ V40_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 0))
 V41_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 1))
 V42_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 2))
 V50_CUBE = dataclasses.replace(SPEC_HEADER, version=(5, 0))
+V51_CUBE = dataclasses.replace(SPEC_HEADER, version=(5, 1))
 
 
-def _explicit_walk(mesh, edge_two_first: bool = False) -> Shell:
-    """``mesh`` (a trimesh) at 4 steps a unit, every corner explicit, every triangle free, as a
-    shell tree along planefmt's depth-first walk, or along one that walks each triangle's neighbour
+def _explicit_walk(mesh, edge_two_first: bool = False, steps: float = 4.0) -> Shell:
+    """``mesh`` (a trimesh) at ``steps`` grid steps a unit, every corner explicit, every triangle free, as
+    a shell tree along planefmt's depth-first walk, or along one that walks each triangle's neighbour
     across its edge 2 before the one across its edge 1 (a writer's choice a reader must follow)."""
     from planefmt.container.shellfields import first_use_order
     from planefmt.groups.shells import shell_tree
 
     rank = first_use_order(mesh.faces, len(mesh.vertices))
     grid = np.empty((len(mesh.vertices), 3), dtype=np.int64)
-    grid[rank] = np.rint(mesh.vertices * 4).astype(np.int64)
+    grid[rank] = np.rint(mesh.vertices * steps).astype(np.int64)
     tri = rank[mesh.faces]
     flat = Shell(explicit=np.ones(len(grid), dtype=bool), vertex_planes=np.zeros((0, 3), dtype=np.int64), grid=grid,
-                 origin=np.zeros(3), step=0.25, facets=np.column_stack([np.full(len(tri), -1), tri]))
+                 origin=np.zeros(3), step=1.0 / steps, facets=np.column_stack([np.full(len(tri), -1), tri]))
     return shell_tree(flat, _edge_two_first(tri) if edge_two_first else None)[0]
 
 
@@ -545,13 +546,34 @@ WALK_SPHERE = _explicit_walk(_trimesh("icosphere", subdivisions=1))
 #: children in the order (2, 1), corner steps in escapes.
 WALK_TORUS = _explicit_walk(_trimesh("torus", major_radius=1.0, minor_radius=0.4, major_sections=6, minor_sections=4),
                             edge_two_first=True)
+#: trimesh's torus of 16 by 8 sections (128 corners, 256 triangles) at 64 steps a unit: walked round its
+#: circles, so that most corners' chains of steps turn (spec §9.16), by angles the grid only approximates.
+WALK_RING = _explicit_walk(_trimesh("torus", major_radius=1.0, minor_radius=0.35, major_sections=16,
+                                    minor_sections=8), steps=64.0)
+def _exact_walk() -> Shell:
+    """Two triangles (0, 1, 2), (2, 1, 3) whose corner 3's chain (2, 1, 0) turns by steps d1 = (-39564,
+    142330, 0), d2 = (228053, 255342, 0): its x quotient, exactly 145878, is 2^-33 below an integer that
+    binary64 arithmetic rounds 2N + D up to (145879), so only exact integers decode corner 3."""
+    from planefmt.groups.shells import shell_tree
+
+    grid = np.array([[0, 0, 0], [-39564, 142330, 0], [188489, 397672, 0], [334368, 374377, 7]], dtype=np.int64)
+    flat = Shell(explicit=np.ones(4, dtype=bool), vertex_planes=np.zeros((0, 3), dtype=np.int64), grid=grid,
+                 origin=np.zeros(3), step=2.0 ** -16, facets=np.array([[-1, 0, 1, 2], [-1, 2, 1, 3]]))
+    return shell_tree(flat)[0]
 
 
-def walk_mode(shell: Shell, mode: int) -> Callable[[list], list]:
-    """An edit replacing every kind 9 or kind 10 GRUP body's kind data by ``shell``'s with its explicit
-    corners in coordinate ``mode`` (spec §9.13, §9.14), whichever a writer would pick: a reader must
-    decode each."""
-    from planefmt.container import shellwalk, varint
+WALK_EXACT = _exact_walk()
+#: The same torus at 2^19 steps a unit: steps around the tube are within 2^18 and turn, steps along the
+#: ring are not and fall back to kind 9's prediction.
+WALK_RING_FINE = _explicit_walk(_trimesh("torus", major_radius=1.0, minor_radius=0.35, major_sections=16,
+                                         minor_sections=8), steps=float(1 << 19))
+
+
+def walk_mode(shell: Shell, mode: int, major: int = 4) -> Callable[[list], list]:
+    """An edit replacing every shell walk GRUP body's kind data by ``shell``'s with its explicit
+    corners in coordinate ``mode`` (spec §9.13, §9.14, §9.16), whichever a writer would pick: a reader
+    must decode each; its grid as a version ``major`` file stores it."""
+    from planefmt.container import shellfields, shellwalk, varint
 
     def edit(layout: list) -> list:
         out = []
@@ -562,8 +584,8 @@ def walk_mode(shell: Shell, mode: int) -> Callable[[list], list]:
                 (count,), pos = varint.decode(raw, 1, "count")
                 _, used = varint.decode(raw[pos:], int(count), "refs")
                 pos += used + (int(count) + 7) // 8
-                body = raw[:pos].tobytes() + b"".join(
-                    shellwalk.shell_walk_fields(shell, mode, GroupKind(head.kind)).values())
+                fields = shellwalk.shell_walk_fields(shell, mode, GroupKind(head.kind))
+                body = raw[:pos].tobytes() + b"".join({**fields, "grid": shellfields.grid_bytes(shell, major)}.values())
                 payload = schema.GroupHead3.build(dict(head, raw_size=len(body), body=body))
             out.append((kind, payload))
         return out
@@ -895,6 +917,32 @@ CASES = [
                Obj("torus twin", 0, translation(-3.0, 0.0, 0.0)),
                Group(3, GroupKind.SHELL_WALK_MULTI, (4,), shell=WALK_TORUS)),
               decoded_bbox=True),
+    ValidCase("shell_walk_reflect_knot_v5_1", "version 5.1: a torus of 16 by 8 sections (128 corners) at 64 steps "
+              "a unit as a shell walk with reflections (kind 12) without references, in mode 0: most explicit "
+              "corners (124 of 128) predicted by turning the step before them (spec §9.16; 180 negative numerators "
+              "among them, rounded toward -infinity), the four without a chain of three step sources by kind 9's "
+              "prediction", V51_CUBE,
+              (Obj("ring"), Group(0, GroupKind.SHELL_WALK_REFLECT, (), shell=WALK_RING),
+               Colour(0, np.array([[40, 160, 90, 255]], dtype=np.uint8))),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_RING, 0, 5)),
+    ValidCase("shell_walk_reflect_tables_v5_1", "version 5.1: the icosphere of shell_walk_sphere_v4_1 as a shell "
+              "walk with reflections on one reference, in mode 3: the chains turn over indices into each axis's "
+              "table of values, the corners without a chain predicted by kind 9's parallelograms", V51_CUBE,
+              (Obj("sphere"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_WALK_REFLECT, (0,), shell=WALK_SPHERE)),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_SPHERE, 3, 5)),
+    ValidCase("shell_walk_reflect_far_v5_1", "version 5.1: the torus of shell_walk_reflect_knot_v5_1 at 2^19 steps "
+              "a unit, in mode 1: chains whose steps have a component beyond 2^18 do not turn and are predicted by "
+              "kind 9's parallelograms (7 of 124 chains), the others turn (2N + D up to 1.2 * 2^55)", V51_CUBE,
+              (Obj("ring"), Group(0, GroupKind.SHELL_WALK_REFLECT, (), shell=WALK_RING_FINE),
+               Colour(0, np.array([[90, 40, 160, 255]], dtype=np.uint8))),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_RING_FINE, 1, 5)),
+    ValidCase("shell_walk_reflect_exact_v5_1", "version 5.1: two triangles as a shell walk with reflections without "
+              "references, in mode 0: corner 3 is predicted by its chain's turn (334367, 374378, 0), whose x quotient "
+              "145878 binary64 arithmetic floors to 145879 (2N + D rounded): a reader must compute in exact integers "
+              "(spec §9.16); its residuals (1, -1, 7)", V51_CUBE,
+              (Obj("pair"), Group(0, GroupKind.SHELL_WALK_REFLECT, (), shell=WALK_EXACT),
+               Colour(0, np.array([[200, 200, 40, 255]], dtype=np.uint8))),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_EXACT, 0, 5)),
     ValidCase("shells_v5_0", "version 5.0, written to a pipe (no counts): shells with explicit corners on f32 grids "
               "(spec §9.10: 16 bytes) of kinds 6 (the mixed cube), 7 (the mixed cube as a tree), 8 (the box) and 6 "
               "again without references (the open pyramid, m = 0)", V50_CUBE,

@@ -8,7 +8,7 @@ the Python 3.11 standard library, and for the Brotli payloads of version
 4.0 (compression method 2) the PyPI package `brotli` (1.2 bounds the output
 of each call; with 1.1 the stored bytes are given one at a time), imported only when such a payload is met: files of versions 1.0 to 3.4, and
 4.0 files without Brotli payloads, need nothing else.  It reads versions
-1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2 and 5.0 (pln.md §13: files of major versions 1 to 5,
+1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 and 5.1 (pln.md §13: files of major versions 1 to 5,
 each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
 was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
@@ -85,6 +85,16 @@ groups of kinds 6 to 11 may have no references (and then one colour: a
 cOLR of count 0 and 12 bytes; of 8 bytes, BAD_COLOURS); and a shell's grid is four f32 (16 bytes), widened
 exactly.
 
+Version 5.1 (pln.md §9.16, kind 12, shell walks with reflections) was added
+from the 5.1 text of §9.16 and of §9.2, §9.3, §11, §13 and Appendix A.4,
+before the 5.1 golden files existed: kind 9 with an explicit corner whose
+chain of step sources (§9.11's predictor k <- a <- b <- c, whatever bit 0 of
+the mode) turns predicted by a's value plus the step b - c reflected in the
+line of the step a - b, in exact integers rounded toward -infinity after
+adding half (reflected_step); reported as kind 9 is.  Kind 12 is a kind of
+5.1 and later minors of major 5 (UNKNOWN_GROUP_KIND in a 5.0 file), and
+like the other shells may have no references.
+
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
 a code it never raises; a file whose last chunk is not PEND is TRUNCATED or
@@ -123,8 +133,9 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0, 2.0, 3.4, 4.2 and 5.0; pln.md §13: a reader of 5.0 reads major versions 1 to 5)
-READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 0}
+# (1.0, 2.0, 3.4, 4.2 and 5.1, as pln.md §9.3 says, not §5's 0 for major 5:
+# SPEC_NOTES 62; pln.md §13: a reader of 5.1 reads major versions 1 to 5)
+READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 1}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 # pln.md §4.1, version 5: every chunk after PHDR has its length as a minimal
@@ -156,18 +167,21 @@ KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
 # kind 7, the shell tree (§8.10), in files of version 3.3 and later; pln.md
 # §9.3: kind 8 in 3.4 and later, kind 9, the shell walk (pln.md §9.13), in 4.1
 # and later, kind 10, the shell walk with multi-parallelograms (pln.md
-# §9.14), and kind 11, the copy (pln.md §9.15), in 4.2 and later; in older
+# §9.14), and kind 11, the copy (pln.md §9.15), in 4.2 and later, kind 12,
+# the shell walk with reflections (pln.md §9.16), in 5.1 and later; in older
 # files each is a kind the file's version does not have
 SEALED_KIND, SHELL_KIND, SHELL_TREE_KIND, PARALLELOGRAM_KIND, WALK_KIND = 5, 6, 7, 8, 9
 MULTI_WALK_KIND = 10
 COPY_KIND = 11  # pln.md §9.15, the copy, in 4.2 and later
+REFLECT_WALK_KIND = 12
 KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3), PARALLELOGRAM_KIND: (3, 4),
-              WALK_KIND: (4, 1), MULTI_WALK_KIND: (4, 2), COPY_KIND: (4, 2)}
+              WALK_KIND: (4, 1), MULTI_WALK_KIND: (4, 2), COPY_KIND: (4, 2), REFLECT_WALK_KIND: (5, 1)}
 MULTI_PARALLELOGRAMS = 4  # pln.md §9.14: a corner has at most four parallelograms
+TURN_LIMIT = 2**18  # pln.md §9.16: a chain turns only where every component of its steps is within it
 SHELL_COORD_LIMIT = 2**52  # pln-3 §8.9: each grid step and coordinate of magnitude at most 2^52
 SHELL_GRID_BYTES = 32  # pln-3 §8.9: origin x, y, z and step s, f64 each
 F32_GRID_MAJOR = 5  # pln.md §9.10-§9.14: version 5's grids are f32 each, 16 bytes (Appendix A.5)
-NO_REFS_MAJOR = 5  # pln.md §9.2: in version 5, m may be 0 in kinds 6 to 11
+NO_REFS_MAJOR = 5  # pln.md §9.2: in version 5, m may be 0 in kinds 6 to 12
 LAST_KIND_NEEDING_REFS = 5  # pln.md §9.2: m = 0 in kinds 0 to 5 is BAD_GROUP_STRUCTURE
 
 F32_PI = struct.unpack("<f", struct.pack("<I", 0x40490FDB))[0]  # §7.1
@@ -491,6 +505,32 @@ def multi_parallelograms(tris, is_explicit):
             if a < k and b < k and far < k and a in is_explicit and b in is_explicit and far in is_explicit:
                 grams.setdefault(k, []).append((a, b, far))
     return grams
+
+
+def reflected_step(values, sources, k):
+    """pln.md §9.16: the prediction of explicit corner k where its chain
+    turns, else None.  The chain is a = p(k), b = p(a), c = p(b), p the
+    step source (``sources``, None for none), all three existing; with
+    d1 = g(b) - g(c), d2 = g(a) - g(b) and D = d2.d2, it turns where D > 0
+    and every component of d1 and d2 is within 2^18.  The prediction is
+    g(a) + floor((2N + D) / 2D) on each axis, N = 2(d1.d2) d2 - D d1:
+    d1 reflected in the line of d2, halves rounded toward +infinity.
+    ``values`` holds g of the corners resolved so far (every corner of the
+    chain is below k, so resolved and checked); Python's integers are exact
+    and its // rounds toward -infinity (no quotient is ever a half:
+    SPEC_NOTES 63)."""
+    a = sources[k]
+    b = None if a is None else sources[a]
+    c = None if b is None else sources[b]
+    if c is None:
+        return None
+    d1 = [values[b][i] - values[c][i] for i in range(3)]
+    d2 = [values[a][i] - values[b][i] for i in range(3)]
+    dd = sum(x * x for x in d2)
+    if dd == 0 or any(abs(x) > TURN_LIMIT for x in d1 + d2):
+        return None
+    dot = sum(x * y for x, y in zip(d1, d2))
+    return [values[a][i] + (2 * (2 * dot * d2[i] - dd * d1[i]) + dd) // (2 * dd) for i in range(3)]
 
 
 class OpenEdges:
@@ -1153,8 +1193,9 @@ class Reader:
             g["shell"] = self.read_shell(c, m, set(bounding))
         elif kind in (SHELL_TREE_KIND, PARALLELOGRAM_KIND):
             g["shell"] = self.read_shell_tree(c, m, set(bounding), kind == PARALLELOGRAM_KIND)
-        elif kind in (WALK_KIND, MULTI_WALK_KIND):
-            g["shell"] = self.read_shell_walk(c, m, set(bounding), kind == MULTI_WALK_KIND)
+        elif kind in (WALK_KIND, MULTI_WALK_KIND, REFLECT_WALK_KIND):
+            g["shell"] = self.read_shell_walk(c, m, set(bounding), kind == MULTI_WALK_KIND,
+                                              kind == REFLECT_WALK_KIND)
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.group_kinds.append(kind)
@@ -1208,7 +1249,7 @@ class Reader:
         """pln.md §9.2 step 2: m above the limit (LIMIT_EXCEEDED); m = 0
         (BAD_GROUP_STRUCTURE) in every group before version 5 (Appendix
         A.5), and in version 5 in kinds 0 to 5 only: a shell or a copy
-        (kinds 6 to 11) may have none, and a kind of a newer minor version,
+        (kinds 6 to 12) may have none, and a kind of a newer minor version,
         skipped here, decides for itself."""
         if m > LIMIT_REFS:
             raise PlnError("LIMIT_EXCEEDED", "ref_count %d above %d" % (m, LIMIT_REFS))
@@ -1569,7 +1610,7 @@ class Reader:
                                          parallelogram)
 
     def read_shell_tree_rest(self, c, m, bounding, v, flags, face_codes, tris, parents, creator,
-                             parallelogram=False, walk=False, multi=False):
+                             parallelogram=False, walk=False, multi=False, reflect=False):
         """What pln.md §9.11 and §9.13 have in common once the triangles,
         each one's parent (or None) and the triangle that named each corner
         anew are known: the faces (checked here, since they decide the
@@ -1579,7 +1620,10 @@ class Reader:
         the grid, into which the predicted and resolved values index).
         A shell walk with multi-parallelograms (``multi``, pln.md §9.14)
         predicts an explicit corner that has parallelograms by their
-        average, and any other as a shell walk does."""
+        average, and any other as a shell walk does; a shell walk with
+        reflections (``reflect``, pln.md §9.16) one whose chain of step
+        sources turns by reflected_step, and any other as a shell walk
+        does."""
         explicit = [k for k in range(v) if (flags[k >> 3] >> (k & 7)) & 1]
         is_explicit = set(explicit)
         faces = []
@@ -1656,10 +1700,12 @@ class Reader:
             xyz = {}  # with tables, each corner's indices into them; otherwise its coordinates
             previous = None
             grams = multi_parallelograms(tris, is_explicit) if multi else {}
+            sources = {}  # pln.md §9.16: each explicit corner's step source, its §9.11 predictor
             for r, k in enumerate(explicit):  # corner order: every predictor comes first
                 j = creator[k]
                 first = tris[j][0]
                 pred = first if parents[j] is not None and first in is_explicit else previous
+                sources[k] = pred
                 base = [xyz[pred][a] if pred is not None else 0 for a in range(3)]
                 if k in grams:
                     # pln.md §9.14: floor((S + floor(n/2)) / n), S the sum of
@@ -1674,6 +1720,10 @@ class Reader:
                     second, opposite = tris[j][1], tris[p][(edge + 2) % 3]
                     if first in is_explicit and second in is_explicit and opposite in is_explicit:
                         base = [xyz[first][a] + xyz[second][a] - xyz[opposite][a] for a in range(3)]
+                if reflect:
+                    # pln.md §9.16: where the chain turns, instead of the
+                    # prediction above (§9.13's, by bit 0 of the mode)
+                    base = reflected_step(xyz, sources, k) or base
                 xyz[k] = []
                 for a in range(3):
                     value = residuals[a][r] + base[a]
@@ -1712,7 +1762,7 @@ class Reader:
     WALK_CHILDREN_ROOT = ((), (0,), (1,), (2,), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1),
                           (0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
 
-    def read_shell_walk(self, c, m, bounding, multi=False):
+    def read_shell_walk(self, c, m, bounding, multi=False, reflect=False):
         """pln.md §9.13, kind 9: corner_count V, triangle_count T,
         escape_count X (read, then checked against the bytes left after the
         three); T symbols, X escapes, T face codes and the corner flags
@@ -1728,7 +1778,9 @@ class Reader:
         tables for the explicit corners.  Returned as a kind 7 group's
         "shell", its triangles in walk order.  pln.md §9.14, kind 10
         (``multi``): the same, but an explicit corner with parallelograms
-        (see multi_parallelograms) is predicted by their rounded average."""
+        (see multi_parallelograms) is predicted by their rounded average.
+        pln.md §9.16, kind 12 (``reflect``): the same, but an explicit
+        corner whose chain turns is predicted by reflected_step."""
         v = c.varint("corner_count")
         t = c.varint("triangle_count")
         x = c.varint("escape_count")
@@ -1824,7 +1876,7 @@ class Reader:
         if n != v:
             raise PlnError("BAD_GROUP_STRUCTURE", "%d corners named anew, corner_count %d" % (n, v))
         return self.read_shell_tree_rest(c, m, bounding, v, flags, face_codes, tris, parents, creator,
-                                         walk=True, multi=multi)
+                                         walk=True, multi=multi, reflect=reflect)
 
     def check_tree(self, tokens, m):
         """§8.4: exactly one complete tree in preorder (tokens numbered as in §8.4)."""

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2 and 5.0), written from
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 and 5.1), written from
 spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
 
     python conformance/independent/plnspec.py FILE
@@ -39,6 +39,14 @@ as the metadata "up_axis" (as the 5.0 goldens expect) and an mETA up_axis reject
 references in kinds 6 to 11 (and in skipped kinds), a cOLR of count 0 holding one colour (without it rejected), and shell grids of
 four f32 (grid). Versions 1.0 to 4.2 are read as before (A.5).
 
+Version 5.1 (§9.16, kind 12, shell walks with reflections) was added from the 5.1 text of §9.16 and of
+§9.2, §9.3, §11, §13 and Appendix A.4, before any 5.1 golden file existed: kind 9's walk and everything
+after it, with one rule changed, the prediction of an explicit corner whose chain of step sources
+(§9.11's predictors, k <- a <- b <- c) turns: the step b - c reflected in the line of the step a - b,
+added to a, in exact integers (reflection); §9.13's prediction where there is no chain or it does not
+turn. Kind 12 is a kind of 5.1 and later minors of major 5 (UNKNOWN_GROUP_KIND in 5.0, skipped in
+major 3 and 4 files of a newer minor) and may have no references.
+
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
 comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
 """
@@ -66,7 +74,7 @@ OBJECT_LIMIT = 1 << 24
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 # §10.3: the values of the keywords the spec defines
 META_VALUES = {"up_axis": ("Y", "Z")}
-NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 2, 5: 0}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.2, 5.0"
+NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 2, 5: 1}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.2, 5.1" (SPEC_NOTES 62)
 UP_AXES = {1: "Y", 2: "Z"}  # §5, version 5: bits 4-5 of units (0 not said, 3 BAD_HEADER_VALUE)
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
@@ -752,7 +760,7 @@ class Reader:
     # §9
     def kinds(self) -> set[int]:
         if self.major >= 5:
-            return set(range(12))  # §9.3: kinds 0-11 in 5.0
+            return set(range(12 + (self.minor >= 1)))  # §9.3: kinds 0-11 in 5.0, 0-12 in 5.1 (and later)
         if self.major >= 4:
             # §9.3: kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later: SPEC_NOTES 29)
             return set(range(9 + min(self.minor, 1) + 2 * (self.minor >= 2)))
@@ -806,8 +814,8 @@ class Reader:
             group["shell"] = self.shell(b, refs, roles)
         elif kind in (7, 8):
             group["shell"] = self.shell_tree(b, refs, roles, parallelogram=kind == 8)
-        elif kind in (9, 10):
-            group["shell"] = self.shell_walk(b, refs, roles, multi=kind == 10)
+        elif kind in (9, 10, 12):
+            group["shell"] = self.shell_walk(b, refs, roles, multi=kind == 10, reflect=kind == 12)
         elif kind == 11:
             group["source"], skipped = self.copy(b, index, refs, roles)
             if skipped:
@@ -847,8 +855,9 @@ class Reader:
         m = b.varint("ref_count")
         if m > REF_LIMIT:
             fail("LIMIT_EXCEEDED", f"ref_count {m}")
-        # version 5: m = 0 in kinds 0-5 only; a skipped kind of a newer minor version "decides for
-        # itself", which a reader that skips it cannot know, so it is accepted (SPEC_NOTES 56).
+        # version 5: m = 0 in kinds 0-5 only (shells and copies, kinds 6-12, may have none); a
+        # skipped kind of a newer minor version "decides for itself", which a reader that skips it
+        # cannot know, so it is accepted (SPEC_NOTES 56).
         # Versions 2 to 4 (A.5): in every kind, skipped ones included.
         if m == 0 and (self.major < 5 or (not skipped and kind <= 5)):
             fail("BAD_GROUP_STRUCTURE", f"ref_count 0 in a group of kind {kind}")
@@ -1128,11 +1137,13 @@ class Reader:
 
     def shell_tree_rest(self, b: Cursor, m: int, roles: list[int], v: int, flags: list[int],
                         face_codes: list[int], parents: list, tris: list[list[int]], named_by: list[int],
-                        parallelogram: bool = False, walk: bool = False, multi: bool = False) -> dict:
+                        parallelogram: bool = False, walk: bool = False, multi: bool = False,
+                        reflect: bool = False) -> dict:
         """What §9.11 and §9.13 share after the triangles are known: the faces checked, the picks,
-        (kinds 9, 10: the mode byte), the grid, (kinds 9, 10: the value tables), the coordinates;
-        then the rest checked. ``parents`` holds (p, e) for an attached triangle, None for a root.
-        Kind 10 (``multi``, §9.14) changes only the prediction of explicit corners."""
+        (kinds 9, 10, 12: the mode byte), the grid, (kinds 9, 10, 12: the value tables), the
+        coordinates; then the rest checked. ``parents`` holds (p, e) for an attached triangle, None
+        for a root. Kinds 10 (``multi``, §9.14) and 12 (``reflect``, §9.16) change only the
+        prediction of explicit corners."""
         faces = []  # local reference of each triangle, -1 for a free one
         for j, fc in enumerate(face_codes):
             if fc == 0:
@@ -1212,11 +1223,13 @@ class Reader:
             # The rule of the "Explicit corners" paragraph, not the overview's bullet (SPEC_NOTES 23).
             # Kind 9 with tables: the values predicted and resolved are indices into each axis's
             # table, resolved the same way, each within [0, C) (§9.13). Kind 10: the average of the
-            # corner's parallelograms where it has one, this prediction otherwise (§9.14).
+            # corner's parallelograms where it has one, this prediction otherwise (§9.14). Kind 12:
+            # this predictor is the step source (§9.16), whatever bit 0 of the mode.
             res = [[unzigzag(r) for r in residuals[a * e_count:(a + 1) * e_count]] for a in range(3)]
             # kind 10 (§9.14): each explicit corner's parallelograms (a, b, c), at most four
             parallelograms = self.multi_parallelograms(tris, flags) if multi else None
             xyz = {}
+            sources = {}  # kind 12 (§9.16): each explicit corner's step source, §9.11's predictor
             for x, c in enumerate(explicit):
                 r = [res[a][x] for a in range(3)]
                 if any(abs(s) > lim for s in r):
@@ -1227,6 +1240,7 @@ class Reader:
                     pred = tris[j][0]
                 elif x > 0:
                     pred = explicit[x - 1]
+                sources[c] = pred
                 base = xyz[pred] if pred is not None else [0, 0, 0]
                 if parallelogram and parents[j] is not None:
                     p, e = parents[j]
@@ -1243,6 +1257,13 @@ class Reader:
                     par = parallelograms[c]
                     base = [(sum(xyz[pa][ax] + xyz[pb][ax] - xyz[pc][ax] for pa, pb, pc in par) + len(par) // 2)
                             // len(par) for ax in range(3)]
+                # kind 12 (§9.16): the reflection where the chain of step sources turns, §9.13's
+                # prediction above (by bit 0) otherwise; the chain's corners are below c, resolved
+                # and checked already
+                chain = self.chain(sources, c) if reflect else None
+                turned = self.reflection(*(xyz[y] for y in chain)) if chain else None
+                if turned is not None:
+                    base = turned
                 point = [a + s for a, s in zip(base, r)]
                 if any(abs(a) > lim for a in point):
                     fail("BAD_GROUP_STRUCTURE", f"explicit corner {c}: "
@@ -1291,6 +1312,29 @@ class Reader:
         return out
 
     @staticmethod
+    def chain(sources: dict[int, int | None], k: int) -> tuple[int, int, int] | None:
+        """§9.16: (a, b, c) = (p(k), p(a), p(b)) where all three exist, p the step source."""
+        a = sources[k]
+        b = None if a is None else sources[a]
+        c = None if b is None else sources[b]
+        return None if c is None else (a, b, c)
+
+    @staticmethod
+    def reflection(ga: list[int], gb: list[int], gc: list[int]) -> list[int] | None:
+        """§9.16: g(a) + floor((2N + D) / 2D) on each axis, N = 2(d1.d2) d2 - D d1, d1 = g(b) - g(c),
+        d2 = g(a) - g(b), D = d2.d2; None where the chain does not turn (D = 0, or a component of d1
+        or d2 beyond 2^18). Python's integers are exact and its // rounds toward -infinity, as the
+        text asks (no quotient is ever a half: SPEC_NOTES 63); the prediction itself is not bounded,
+        only what it resolves to."""
+        d1 = [y - x for x, y in zip(gc, gb)]
+        d2 = [y - x for x, y in zip(gb, ga)]
+        dd = sum(x * x for x in d2)
+        if dd == 0 or any(abs(x) > 1 << 18 for x in d1 + d2):
+            return None
+        dot = sum(x * y for x, y in zip(d1, d2))
+        return [g + (2 * (2 * dot * y - dd * x) + dd) // (2 * dd) for g, x, y in zip(ga, d1, d2)]
+
+    @staticmethod
     def value_table(b: Cursor, e_count: int, axis: str) -> list[int]:
         """§9.13, one axis's table: a count C, 1 <= C <= E, checked when read (§12.1 item 4,
         SPEC_NOTES 31); the first value, zigzag; C - 1 gaps g, each next value the previous + g + 1."""
@@ -1311,13 +1355,15 @@ class Reader:
     ROOT_CHILDREN = [(), (0,), (1,), (2,), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1),
                      (0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
 
-    def shell_walk(self, b: Cursor, refs: list[int], roles: list[int], multi: bool = False) -> dict:
+    def shell_walk(self, b: Cursor, refs: list[int], roles: list[int], multi: bool = False,
+                   reflect: bool = False) -> dict:
         """Kind 9, a shell tree coded as a depth-first walk: one symbol per triangle (its
         children's edges and, attached, the kind of its third corner), escapes for what the
         symbols cannot say, then what §9.11 stores after its corner codes, with a mode byte and
         optional per-axis value tables before the coordinates. Reported as kinds 7 and 8 are.
         Kind 10 (§9.14, ``multi``) is the same body with explicit corners predicted by the
-        average of their parallelograms (multi_parallelograms)."""
+        average of their parallelograms (multi_parallelograms); kind 12 (§9.16, ``reflect``) with
+        those whose chain of step sources turns predicted by the reflection of its earlier step."""
         # 1. the three counts, read, then checked against the bytes left after all three
         v = b.varint("corner_count")
         t = b.varint("triangle_count")
@@ -1408,7 +1454,7 @@ class Reader:
             fail("BAD_GROUP_STRUCTURE", f"{n} corners named, V = {v}")
         # 4. the faces checked, then the picks and the rest, as §9.11 (with the links the walk gives)
         return self.shell_tree_rest(b, len(refs), roles, v, flags, face_codes, parents, tris, named_by,
-                                    walk=True, multi=multi)
+                                    walk=True, multi=multi, reflect=reflect)
 
     # §10.1
     def colr(self, p: bytes):

@@ -1,4 +1,4 @@
-/** Geometry of part groups (spec §9.4-§9.15): each group to an indexed triangle mesh. */
+/** Geometry of part groups (spec §9.4-§9.16): each group to an indexed triangle mesh. */
 import { fail } from './errors.mjs';
 import { intersectHalfSpaces, WORK_LIMIT, EXACT } from './convex.mjs';
 import { cellsSurface, treeSurface, halfSpace } from './union.mjs';

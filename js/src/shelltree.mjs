@@ -7,9 +7,10 @@
  * triangle order does the same work in linear time, which is what a loop in JavaScript is good
  * at (the corners each triangle takes from its parent are known when the loop reaches it).
  *
- * shellTreeRest, everything after the corner codes, is shared with shell walks (kind 9, §9.13, and
- * kind 10, §9.14, shellwalk.mjs), whose links and corners come from a walk instead; kind 10's
- * multi-parallelogram prediction (parallelograms, averaged) is here, with the other predictions.
+ * shellTreeRest, everything after the corner codes, is shared with shell walks (kind 9, §9.13, kind
+ * 10, §9.14, and kind 12, §9.16, shellwalk.mjs), whose links and corners come from a walk instead;
+ * kind 10's multi-parallelogram prediction (parallelograms, averaged) and kind 12's reflection (the
+ * turn of a chain of steps) are here, with the other predictions.
  */
 import { fail } from './errors.mjs';
 import { unzigzag, readBits } from './varint.mjs';
@@ -115,12 +116,13 @@ export function readShellTree(b, roles, parallelogram = false, f32Grid = false) 
  * @param {Int32Array} s.parent per triangle, -1 for a root
  * @param {Int32Array} s.opposite per triangle, the parent's corner off the shared edge, -1 for a root
  * @param {Float64Array} s.faceCodes per triangle, as read
- * @param {{parallelogram: boolean, walk?: boolean, multi?: boolean, f32Grid?: boolean}} how kind 8 (parallelogram), kind 9
- *   (walk: a mode byte decides both), kind 10 (walk and multi: §9.14's averaged parallelograms first);
- *   f32Grid: the grid in f32 (version 5, §9.10)
+ * @param {{parallelogram: boolean, walk?: boolean, multi?: boolean, reflect?: boolean, f32Grid?: boolean}} how kind 8
+ *   (parallelogram), kind 9 (walk: a mode byte decides both), kind 10 (walk and multi: §9.14's
+ *   averaged parallelograms first), kind 12 (walk and reflect: §9.16's turn first, where a chain
+ *   turns); f32Grid: the grid in f32 (version 5, §9.10)
  * @returns {import('./shells.mjs').Shell}
  */
-export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, walk = false, multi = false, f32Grid = false }) {
+export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, walk = false, multi = false, reflect = false, f32Grid = false }) {
   const m = roles.length;
   // faces: 0 the parent's (the previous triangle's for a root), 1 free, r + 2 reference r
   const face = new Int32Array(T);
@@ -234,6 +236,10 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
   // exact in binary64.
   // kind 10 (§9.14): up to four parallelograms (a, b, c) per explicit corner, averaged where there are any
   const multiGrams = multi && E > 0 ? parallelograms(V, T, explicit, tri) : null;
+  // kind 12 (§9.16): each explicit corner's step source p (the §9.11 predictor, whatever the mode),
+  // and the turn of a chain a = p(k), b = p(a), c = p(b) where it turns
+  const steps = reflect && E > 0 ? new Int32Array(V) : null;
+  const q = new Float64Array(3);
   const values = new Float64Array(3 * V);
   const coords = tables ? new Float64Array(3 * V) : values;
   let previous = -1;
@@ -241,7 +247,15 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
     if (!explicit[k]) continue;
     const t = namer[k];
     const pred = t >= 0 && explicit[tri[3 * t]] ? tri[3 * t] : previous;
-    const gram = parallelogram && t >= 0 && explicit[tri[3 * t]] && explicit[tri[3 * t + 1]] && explicit[opposite[t]];
+    let turns = false;
+    if (steps) {
+      steps[k] = pred;
+      // a step source is explicit and below k, so its own step source is set
+      const b = pred >= 0 ? steps[pred] : -1;
+      const c = b >= 0 ? steps[b] : -1;
+      turns = c >= 0 && turn(values, pred, b, c, q);
+    }
+    const gram = !turns && parallelogram && t >= 0 && explicit[tri[3 * t]] && explicit[tri[3 * t + 1]] && explicit[opposite[t]];
     const grams = multiGrams ? multiGrams.count[k] : 0;
     for (let a = 0; a < 3; a++) {
       const zz = residuals[a * E + e];
@@ -259,7 +273,8 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
         }
         continue;
       }
-      const base = gram
+      // a turn's base, g(a) + q with |q| ≤ 2^19 + 1, is exact, as is its sum with r where that is within 2^53
+      const base = turns ? values[3 * pred + a] + q[a] : gram
         ? values[3 * tri[3 * t] + a] + values[3 * tri[3 * t + 1] + a] - values[3 * opposite[t] + a]
         : pred >= 0 ? values[3 * pred + a] : 0;
       let v = base + r;
@@ -285,6 +300,50 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
 }
 
 const TWO_53 = 2 ** 53;
+
+/** §9.16: a chain turns only where every component of its two steps is within this. */
+const STEP_LIMIT = 2 ** 18;
+
+/**
+ * §9.16: whether the chain c → b → a of step sources turns, and where it does the turn on each axis
+ * i, ⌊(2N_i + D) / (2D)⌋ rounding toward −∞, into q (the prediction is g(a) + q): d1 = g(b) − g(c),
+ * d2 = g(a) − g(b), D = d2·d2, N = 2(d1·d2) d2 − D d1. It turns where D > 0 and every component of
+ * d1 and d2 is within 2^18. The steps (of values within 2^52), d1·d2 and D (below 2^38) are exact in
+ * binary64; N_i reaches 2^58, so N and the quotient in BigInt, whose division truncates toward zero
+ * (corrected for a negative numerator; the divisor is positive). |q_i| ≤ |d1| + 1 < 2^19 + 1 (N/D is
+ * d1 reflected, of d1's length), exact as a number.
+ * @param {Float64Array} values 3 per corner @param {number} a @param {number} b @param {number} c
+ * @param {Float64Array} q 3, written where the chain turns
+ */
+export function turn(values, a, b, c, q) {
+  const d1x = values[3 * b] - values[3 * c];
+  const d1y = values[3 * b + 1] - values[3 * c + 1];
+  const d1z = values[3 * b + 2] - values[3 * c + 2];
+  const d2x = values[3 * a] - values[3 * b];
+  const d2y = values[3 * a + 1] - values[3 * b + 1];
+  const d2z = values[3 * a + 2] - values[3 * b + 2];
+  const L = STEP_LIMIT;
+  if (!(Math.abs(d1x) <= L && Math.abs(d1y) <= L && Math.abs(d1z) <= L && Math.abs(d2x) <= L && Math.abs(d2y) <= L && Math.abs(d2z) <= L)) return false;
+  const D = d2x * d2x + d2y * d2y + d2z * d2z;
+  if (D === 0) return false;
+  const dot = BigInt(d1x * d2x + d1y * d2y + d1z * d2z);
+  const bigD = BigInt(D);
+  q[0] = turnAxis(dot, bigD, d1x, d2x);
+  q[1] = turnAxis(dot, bigD, d1y, d2y);
+  q[2] = turnAxis(dot, bigD, d1z, d2z);
+  return true;
+}
+
+/**
+ * ⌊(2N_i + D) / (2D)⌋ of one axis, N_i = 2(d1·d2) d2_i − D d1_i.
+ * @param {bigint} dot d1·d2 @param {bigint} D @param {number} d1 @param {number} d2 the axis's components
+ */
+function turnAxis(dot, D, d1, d2) {
+  const num = 2n * (2n * dot * BigInt(d2) - D * BigInt(d1)) + D;
+  const den = 2n * D;
+  const quotient = num / den;
+  return Number(num < 0n && quotient * den !== num ? quotient - 1n : quotient);
+}
 
 /**
  * §9.14: the parallelograms of each explicit corner k, at most four: for each triangle in triangle

@@ -226,6 +226,8 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
     ``verify`` off: a candidate measured for its size; ``brotli`` off: deflated only."""
     if major == 3:
         objects = [replace(o, groups=tuple(_as_tree(g) for g in o.groups)) for o in objects]
+    elif major == 4:
+        objects = [replace(o, groups=tuple(_unreflected(g) for g in o.groups)) for o in objects]
     if major >= 5 and compact:
         objects = [_unreferenced(o) for o in objects]
     sealed = any(g.kind == GroupKind.SEALED for o in objects for g in o.groups)
@@ -391,6 +393,14 @@ def _as_tree(g: GroupSpec) -> GroupSpec:
         return g
     bodies = shellfields.shell_tree_bodies(g.shell)
     return replace(g, kind=min(bodies, key=lambda k: len(zlib.compress(bodies[k], 9))))
+
+
+def _unreflected(g: GroupSpec) -> GroupSpec:
+    """``g``, a shell walk with reflections (version 5.1) written for readers of 4.x: kind 9 or 10,
+    whichever codes it smaller (the corners are the same, so is the bound)."""
+    if g.kind != GroupKind.SHELL_WALK_REFLECT:
+        return g
+    return replace(g, kind=shellwalk.shell_walk_choice(g.shell, shellwalk.WALK_KINDS[:2])[0])
 
 
 def _version(objects: list[_Object], major: int) -> tuple[int, int]:

@@ -96,6 +96,100 @@ done:
 }
 
 
+/* floor(num / den) for den > 0: C's division truncates toward zero. */
+static int64_t
+floor_div(int64_t num, int64_t den)
+{
+    int64_t q = num / den;
+    return (num % den != 0 && num < 0) ? q - 1 : q;
+}
+
+static PyObject *
+reflect(PyObject *self, PyObject *args)
+{
+    /* A kind 12 walk's explicit corners (spec/pln.md §9.16), in place and in corner order: value is
+     * (V, 3) row-major, each corner's residuals on entry.  Where corner k's step sources chain
+     * a = pointer[k], b = pointer[a], c = pointer[b] and the chain turns (D = d2.d2 > 0, every
+     * component of d1 = v[b] - v[c] and d2 = v[a] - v[b] within turn), the prediction is
+     * v[a] + floor((2N + D) / 2D), N = 2 (d1.d2) d2 - D d1; elsewhere resolve()'s rule (pointer,
+     * plus, minus; -1 where unused; pointer -1: the residuals are the values).  With turn = 2^18 every
+     * product is below 2^60, and every resolved magnitude is checked against limit as it is made. */
+    PyObject *objs[4];
+    static const char *names[4] = {"value", "pointer", "plus", "minus"};
+    Py_buffer views[4];
+    long long limit, turn;
+    int held = 0;
+    if (!PyArg_ParseTuple(args, "OOOOLL", &objs[0], &objs[1], &objs[2], &objs[3], &limit, &turn))
+        return NULL;
+    for (; held < 4; held++)
+        if (int64_view(objs[held], &views[held], held == 0, names[held]) < 0)
+            goto done;
+    Py_ssize_t n = views[1].len / 8, bad = -1;
+    if (views[0].len / 8 != 3 * n || views[2].len / 8 != n || views[3].len / 8 != n) {
+        PyErr_SetString(PyExc_ValueError, "the corner arrays differ in length");
+        goto done;
+    }
+    if (turn < 0 || turn > (1LL << 18)) {
+        PyErr_SetString(PyExc_ValueError, "turn must be within 2^18");
+        goto done;
+    }
+    int64_t *value = views[0].buf;
+    const int64_t *pointer = views[1].buf, *plus = views[2].buf, *minus = views[3].buf;
+    int beyond = 0;
+    Py_BEGIN_ALLOW_THREADS
+    for (Py_ssize_t k = 0; k < n && bad < 0; k++) {
+        int64_t a = pointer[k];
+        if (a < 0)
+            continue;
+        int64_t p = plus[k], m = minus[k];
+        if (a >= k || p >= k || m >= k) {
+            bad = k;
+            break;
+        }
+        int64_t b = pointer[a], c = b >= 0 ? pointer[b] : -1, x[3];
+        int turns = b >= 0 && c >= 0 && b < a && c < b;
+        int64_t d1[3], d2[3], dd = 0, dot = 0;
+        for (int i = 0; turns && i < 3; i++) {
+            d1[i] = value[3 * b + i] - value[3 * c + i];
+            d2[i] = value[3 * a + i] - value[3 * b + i];
+            turns = d1[i] >= -turn && d1[i] <= turn && d2[i] >= -turn && d2[i] <= turn;
+        }
+        if (turns) {
+            for (int i = 0; i < 3; i++) {
+                dd += d2[i] * d2[i];
+                dot += d1[i] * d2[i];
+            }
+            turns = dd > 0;
+        }
+        for (int i = 0; i < 3; i++) {
+            if (turns)
+                x[i] = value[3 * k + i] + value[3 * a + i]
+                       + floor_div(2 * (2 * dot * d2[i] - dd * d1[i]) + dd, 2 * dd);
+            else
+                x[i] = value[3 * k + i] + value[3 * a + i] + (p >= 0 ? value[3 * p + i] : 0)
+                       - (m >= 0 ? value[3 * m + i] : 0);
+            if (x[i] > limit || x[i] < -limit) {
+                bad = k;
+                beyond = 1;
+            }
+        }
+        if (bad < 0)
+            for (int i = 0; i < 3; i++)
+                value[3 * k + i] = x[i];
+    }
+    Py_END_ALLOW_THREADS
+    if (bad >= 0 && beyond)
+        PyErr_Format(PyExc_OverflowError, "corner %zd resolves beyond %lld", bad, limit);
+    else if (bad >= 0)
+        PyErr_Format(PyExc_ValueError, "corner %zd is predicted from a corner not before it", bad);
+done:
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&views[i]);
+    if (PyErr_Occurred())
+        return NULL;
+    Py_RETURN_NONE;
+}
+
 /* A slot of an edge map: the directed edge (a, b), a < 0 for an empty slot, and what it maps to.  One
  * struct, not three arrays, so that a probe reads one cache line, not three (a walk of bun_zipper.ply's
  * 69,451 triangles makes 6 probes a triangle into a map of 12 MB). */
@@ -803,6 +897,10 @@ static PyMethodDef methods[] = {
      "average(value, pointer, plus, minus, offset, start, a, b, c, limit): one axis of a kind 10 walk's "
      "corners (spec §9.14) in place: the floor average of parallelograms a + b - c where a corner has "
      "some, resolve()'s rule elsewhere (OverflowError past limit, ValueError for a term not before)."},
+    {"reflect", reflect, METH_VARARGS,
+     "reflect(value, pointer, plus, minus, limit, turn): a kind 12 walk's corners (spec §9.16) in place, "
+     "value (V, 3) row-major: a turning chain of step sources predicts by reflection, resolve()'s rule "
+     "elsewhere (OverflowError past limit, ValueError for a term not before)."},
     {"parallelograms", parallelograms, METH_VARARGS,
      "parallelograms(triangles, explicit, start, terms): a kind 10 walk's parallelograms (spec §9.14) into "
      "start (V + 1) and terms (rows a, b, c; at least 12V entries); returns the number of rows."},

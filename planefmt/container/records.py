@@ -21,17 +21,18 @@ from ..errors import FormatError, LimitError, PlnError, VersionError
 from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, TREE_KINDS, UP_AXES, UP_AXIS, Coding, Colours,
                     GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
 from .shellfields import _decode_shell, _decode_shell_tree
-from .shellwalk import decode_shell_walk, shell_kind_data
+from .shellwalk import WALK_KINDS, decode_shell_walk, shell_kind_data
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 0}
+VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 1}
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3), 5: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
 KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3),
                 int(GroupKind.SHELL_TREE_PARALLELOGRAM): (3, 4), int(GroupKind.SHELL_WALK): (4, 1),
-                int(GroupKind.SHELL_WALK_MULTI): (4, 2), int(GroupKind.COPY): (4, 2)}
+                int(GroupKind.SHELL_WALK_MULTI): (4, 2), int(GroupKind.COPY): (4, 2),
+                int(GroupKind.SHELL_WALK_REFLECT): (5, 1)}
 #: Kinds whose groups may have no reference in version 5 (spec §9.2): shells of free triangles over
 #: explicit corners, and copies of them.
 UNREFERENCED_KINDS = frozenset({int(GroupKind.SHELL), *map(int, TREE_KINDS), int(GroupKind.COPY)})
@@ -542,8 +543,8 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
         extra = rest.tobytes()
     elif head.kind == GroupKind.SHELL:
         shell = _decode_shell(rest, bounding, major)
-    elif head.kind in (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI):
-        shell = decode_shell_walk(rest, bounding, head.kind == GroupKind.SHELL_WALK_MULTI, major)
+    elif head.kind in WALK_KINDS:
+        shell = decode_shell_walk(rest, bounding, head.kind, major)
     elif head.kind in TREE_KINDS:
         shell = _decode_shell_tree(rest, bounding, head.kind == GroupKind.SHELL_TREE_PARALLELOGRAM, major)
     elif head.kind == GroupKind.CELLS:

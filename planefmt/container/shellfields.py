@@ -12,12 +12,16 @@ from ..model import FREE, MAX_GRID, GroupKind, Shell
 from . import schema, varint
 
 try:
-    from ._chains import average as _average, parallelograms as _parallelograms, resolve as _resolve_forward
+    from ._chains import (average as _average, parallelograms as _parallelograms, reflect as _reflect,
+                          resolve as _resolve_forward)
 except ImportError:  # built without a C compiler: pointer jumping in numpy does the same, more slowly
-    _average = _parallelograms = _resolve_forward = None
+    _average = _parallelograms = _reflect = _resolve_forward = None
 
 #: A kind 10 corner's parallelograms (spec §9.14): at most this many, the first in triangle order.
 MAX_PARALLELOGRAMS = 4
+#: A kind 12 chain turns only where every component of its two steps is within this (spec §9.16):
+#: every product of the prediction then fits a signed 64-bit integer.
+MAX_TURN = 1 << 18
 
 
 def corner_codes(triangles: np.ndarray) -> np.ndarray:
@@ -396,6 +400,65 @@ def _resolve_averaged(value: np.ndarray, pointer: np.ndarray, plus: np.ndarray, 
     return np.array(got, dtype=np.int64)
 
 
+def _chains_of(step: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each corner's step sources a = step[k], b = step[a], c = step[b] (spec §9.16), -1 where absent."""
+    b = np.where(step >= 0, step[np.maximum(step, 0)], -1)
+    return step, b, np.where(b >= 0, step[np.maximum(b, 0)], -1)
+
+
+def predict_reflected(values: np.ndarray, step: np.ndarray, fallback: np.ndarray) -> np.ndarray:
+    """The predictions ``(V, 3)`` of spec §9.16 from every corner's known ``values``: the last step of a
+    corner's turning chain of ``step`` sources (§9.11's predictors) turned on by the angle between its
+    last two steps, in exact integers; ``fallback`` (§9.13's prediction) where the chain does not turn."""
+    a, b, c = _chains_of(step)
+    ga, gb, gc = (values[np.maximum(x, 0)] for x in (a, b, c))
+    d1, d2 = gb - gc, ga - gb
+    d = (d2 * d2).sum(axis=1)
+    turns = (c >= 0) & (d > 0) & (np.abs(d1).max(axis=1) <= MAX_TURN) & (np.abs(d2).max(axis=1) <= MAX_TURN)
+    # Steps that do not turn are zeroed first: their products could pass 2^63.
+    d1, d2 = d1 * turns[:, None], d2 * turns[:, None]
+    den = np.where(turns, d, 1)[:, None]
+    num = 2 * (d1 * d2).sum(axis=1)[:, None] * d2 - den * d1
+    return np.where(turns[:, None], ga + np.floor_divide(2 * num + den, 2 * den), fallback)
+
+
+def _resolve_reflected(residual: np.ndarray, terms: np.ndarray, explicit: np.ndarray) -> np.ndarray:
+    """A kind 12 walk's corners ``(V, 3)`` resolved in corner order (spec §9.16) from their
+    ``residual`` ``(V, 3)`` and :func:`_tree_predictors`' ``terms`` (step source, plus, minus), each
+    resolved value checked against :data:`MAX_GRID` as it is made; named corners stay 0. In C
+    (``_chains.reflect``); without it, the same loop in Python."""
+    out = np.ascontiguousarray(residual, dtype=np.int64).copy()
+    pointer, plus, minus = (np.ascontiguousarray(np.where(explicit, t, -1), dtype=np.int64) for t in terms.T)
+    if _reflect is not None:
+        try:
+            _reflect(out, pointer, plus, minus, MAX_GRID, MAX_TURN)
+        except ValueError as exc:
+            raise FormatError(f"shell walk: {exc}", code="BAD_GROUP_STRUCTURE") from None
+        except OverflowError:
+            raise FormatError("shell walk: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE") from None
+        return out
+    got = [[int(x) for x in row] for row in out]
+    ps, qs, ms = pointer.tolist(), plus.tolist(), minus.tolist()
+    for k, a in enumerate(ps):
+        if a < 0:
+            continue
+        b = ps[a]
+        c = ps[b] if b >= 0 else -1
+        d1 = [got[b][i] - got[c][i] for i in range(3)] if c >= 0 else None
+        d2 = [got[a][i] - got[b][i] for i in range(3)] if c >= 0 else None
+        d = sum(x * x for x in d2) if d2 else 0
+        if d and max(map(abs, d1 + d2)) <= MAX_TURN:
+            dot = sum(x * y for x, y in zip(d1, d2))
+            x = [got[k][i] + got[a][i] + (2 * (2 * dot * d2[i] - d * d1[i]) + d) // (2 * d) for i in range(3)]
+        else:
+            x = [got[k][i] + got[a][i] + (got[qs[k]][i] if qs[k] >= 0 else 0) - (got[ms[k]][i] if ms[k] >= 0 else 0)
+                 for i in range(3)]
+        if max(map(abs, x)) > MAX_GRID:
+            raise FormatError("shell walk: a grid coordinate is beyond 2^52", code="BAD_GROUP_STRUCTURE")
+        got[k] = x
+    return np.array(got, dtype=np.int64).reshape(-1, 3)
+
+
 def _predict(grid: np.ndarray, terms: np.ndarray) -> np.ndarray:
     """The predictions ``(V, 3)`` of :func:`_tree_predictors`' ``terms`` from every corner's ``grid``."""
     def at(j: np.ndarray) -> np.ndarray:
@@ -572,10 +635,11 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: boo
 
 def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, links: np.ndarray,
               faces: np.ndarray, explicit: np.ndarray, new: np.ndarray, parallelogram: bool | None,
-              averaged: bool = False, major: int = 4) -> Shell:
+              averaged: bool = False, major: int = 4, reflected: bool = False) -> Shell:
     """A shell tree's body from its faces' checks on (spec §9.11 and §9.12; §9.13 with
     ``parallelogram`` None, whose mode byte and tables come before the coordinates; §9.14 with
-    ``averaged`` too, whose corners parallelograms average where they can): ``tri`` and
+    ``averaged`` too, whose corners parallelograms average where they can; §9.16 with ``reflected``,
+    whose corners a turning chain of steps predicts): ``tri`` and
     ``links`` as decoded, ``faces`` the face codes and ``explicit`` the flags as read, ``new`` which of
     the corner code stream's entries (3 per root, 1 per attached triangle) name a corner anew."""
     def bad(reason: str) -> FormatError:
@@ -636,7 +700,9 @@ def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, 
         ex = np.flatnonzero(explicit)
         residual = np.zeros((3, v), dtype=np.int64)
         residual[:, ex] = steps.T
-        if averaged:
+        if reflected:
+            grid = _resolve_reflected(residual.T, terms, explicit)[ex]
+        elif averaged:
             start, quads = parallelograms(tri, explicit)
             grid = np.column_stack([_resolve_averaged(residual[axis], *terms.T, start, quads)
                                     for axis in range(3)])[ex]

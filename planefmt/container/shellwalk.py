@@ -22,7 +22,7 @@ from ..errors import FormatError, LimitError
 from ..model import GroupKind, Shell
 from . import schema, varint
 from .shellfields import (_predict, _shell_body, grid_bytes, _shell_tree_body, _tree_parents, _tree_predictors, code_stream,
-                          parallelograms, predict_averaged, same_tree, surface_fields, tree_rest)
+                          parallelograms, predict_averaged, predict_reflected, same_tree, surface_fields, tree_rest)
 
 try:
     from ._chains import walk as _walk_c, walk_codes as _walk_codes_c
@@ -219,9 +219,10 @@ def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray,
     return tri, links
 
 
-def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, averaged: bool = False, major: int = 4) -> Shell:
-    """The corners and triangles of a SHELL_WALK body (spec §9.13), or with ``averaged`` of a
-    SHELL_WALK_MULTI body (§9.14), checked."""
+def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, kind: GroupKind = GroupKind.SHELL_WALK,
+                      major: int = 4) -> Shell:
+    """The corners and triangles of a ``kind`` body (a shell walk kind: SHELL_WALK, spec §9.13;
+    SHELL_WALK_MULTI, §9.14; SHELL_WALK_REFLECT, §9.16), checked."""
     (v, t, x), pos = varint.decode(raw, 3, "shell walk counts")
     v, t, x = int(v), int(t), int(x)
     left = len(raw) - pos
@@ -237,12 +238,13 @@ def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, averaged: bool = Fa
     explicit, pos = varint.bit_field(raw, pos, v, "shell walk: the body", "corner flags")
     tri, links = _walk(symbols, escapes, v)
     _, new, _ = code_stream(tri, links == 0)
-    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None, averaged, major)
+    return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None,
+                     kind == GroupKind.SHELL_WALK_MULTI, major, kind == GroupKind.SHELL_WALK_REFLECT)
 
 
 def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray,
                  options: tuple[tuple[GroupKind, int], ...], decide: bool = True) -> tuple[GroupKind, dict[str, bytes]]:
-    """The kind (SHELL_WALK or SHELL_WALK_MULTI) and the mode, grid, tables and coordinates of a
+    """The kind (a walk kind, :data:`WALK_KINDS`) and the mode, grid, tables and coordinates of a
     walk's explicit corners, in whichever of the ``(kind, mode)`` options compresses smallest
     (:func:`_smallest`)."""
     explicit = np.asarray(shell.explicit, dtype=bool)
@@ -268,6 +270,8 @@ def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarr
         prediction = _predict(v, terms[bool(m & MODE_PARALLELOGRAM)])
         if kind == GroupKind.SHELL_WALK_MULTI:
             prediction = predict_averaged(v, *averaged, prediction)
+        elif kind == GroupKind.SHELL_WALK_REFLECT:
+            prediction = predict_reflected(v, terms[bool(m & MODE_PARALLELOGRAM)][:, 0], prediction)
         fields.append({"mode": bytes([m]), "grid": grid, "tables": tables if m & MODE_TABLES else b"",
                        "coordinates": varint.encode(varint.zigzag((v - prediction)[explicit].T))})
     best = _smallest(fields, decide)
@@ -322,17 +326,18 @@ def _brotli_size(part: bytes) -> int:
     return size
 
 
-#: The shell walk kinds: kind 9 (spec §9.13) and kind 10 (§9.14), which differ only in predictions.
-#: The encoder writes kind 10 without mode bit 0 only: the bit decides kind 10's corners without
-#: parallelograms alone, a few per mesh, and over the corpus at 1e-6, 1e-4 and Draco-14's error no kind
-#: 10 group was smallest with it; its near copies of the bit-0-clear bodies only crowded the ranking's
-#: best two (on quadknot.obj they pushed out the smallest coding, 7 % smaller).
-WALK_KINDS = (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI)
+#: The shell walk kinds: kind 9 (spec §9.13), kind 10 (§9.14) and kind 12 (§9.16), which differ only in
+#: predictions. The encoder writes kinds 10 and 12 without mode bit 0 only: the bit decides their
+#: corners without parallelograms or turning chains alone, a few per mesh, and over the corpus at 1e-6,
+#: 1e-4 and Draco-14's error no kind 10 group was smallest with it; its near copies of the bit-0-clear
+#: bodies only crowded the ranking's best two (on quadknot.obj they pushed out the smallest coding, 7 %
+#: smaller).
+WALK_KINDS = (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI, GroupKind.SHELL_WALK_REFLECT)
 
 
 def codings(kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[tuple[GroupKind, int], ...]:
     """The (kind, mode) pairs the encoder tries for a walk of one of ``kinds``: ``mode`` alone if given,
-    else every mode of kind 9 and kind 10's without bit 0 (see :data:`WALK_KINDS`)."""
+    else every mode of kind 9 and those of kinds 10 and 12 without bit 0 (see :data:`WALK_KINDS`)."""
     return tuple((k, m) for k in kinds for m in (MODES if mode is None else (mode,))
                  if mode is not None or k == GroupKind.SHELL_WALK or not m & MODE_PARALLELOGRAM)
 
@@ -368,15 +373,16 @@ def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
 
 def shell_walk_fields(shell: Shell, mode: int | None = None, kind: GroupKind = GroupKind.SHELL_WALK) -> dict[str, bytes]:
     """The fields of ``shell`` (a shell tree whose links are a depth-first walk, as
-    ``groups.shells.spanning_walk`` makes them) as a ``kind`` body (SHELL_WALK, spec §9.13, or
-    SHELL_WALK_MULTI, §9.14), by name in body order; its explicit corners in ``mode``, or in whichever
+    ``groups.shells.spanning_walk`` makes them) as a ``kind`` body (a walk kind, :data:`WALK_KINDS`), by
+    name in body order; its explicit corners in ``mode``, or in whichever
     of the modes the encoder tries compresses smallest."""
     return _fields(shell, (kind,), mode)[1]
 
 
 def shell_kind_data(kind: GroupKind, shell: Shell, decide: bool = True, major: int = 4) -> bytes:
     """The kind data of a SHELL (spec §9.10), SHELL_TREE (§9.11), SHELL_TREE_PARALLELOGRAM (§9.12),
-    SHELL_WALK (§9.13) or SHELL_WALK_MULTI (§9.14) group in a version ``major`` file (``decide``:
+    SHELL_WALK (§9.13), SHELL_WALK_MULTI (§9.14) or SHELL_WALK_REFLECT (§9.16) group in a version ``major``
+    file (``decide``:
     :func:`shell_walk_body`'s)."""
     if kind == GroupKind.SHELL:
         return _shell_body(shell, major)
@@ -417,8 +423,8 @@ def shell_walk_choice(shell: Shell, kinds: tuple[GroupKind, ...] = WALK_KINDS) -
 
 def shell_walk_body(shell: Shell, kind: GroupKind = GroupKind.SHELL_WALK, decide: bool = True,
                     major: int = 4) -> bytes:
-    """The kind data of ``shell`` as a ``kind`` group (SHELL_WALK, spec §9.13, or SHELL_WALK_MULTI,
-    §9.14) in a version ``major`` file, its coordinates in the mode that compresses smallest (``decide``
+    """The kind data of ``shell`` as a ``kind`` group (a walk kind: SHELL_WALK, spec §9.13; SHELL_WALK_MULTI,
+    §9.14; SHELL_WALK_REFLECT, §9.16) in a version ``major`` file, its coordinates in the mode that compresses smallest (``decide``
     False: as deflate ranks them, for a size to compare codings by; :func:`shell_walk_choice` decides
     again)."""
     bodies = _held(shell)
@@ -443,7 +449,7 @@ def check_shell_walk(shell: Shell, bounding: np.ndarray, kind: GroupKind = Group
     if shell.links is None or len(shell.links) != len(shell.facets):
         raise FormatError("shell walk: one link per triangle", code="BAD_GROUP_STRUCTURE")
     back = decode_shell_walk(np.frombuffer(shell_walk_body(shell, kind), dtype=np.uint8), np.asarray(bounding, bool),
-                             kind == GroupKind.SHELL_WALK_MULTI)
+                             kind)
     if not same_tree(back, shell):
         raise FormatError("shell walk: its body does not decode to it (links not a depth-first walk, corners "
                           "not numbered by first use, or named corners not three of their face planes in "
