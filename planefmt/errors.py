@@ -38,7 +38,7 @@ _CATALOGUE = [
     Code("TRAILING_DATA", "error", "bytes follow the PEND chunk"),
     Code("BAD_PAYLOAD", "error", "a chunk payload does not match its declared structure"),
     # header (spec §5)
-    Code("UNSUPPORTED_VERSION", "error", "the major version is not 1, 2, 3 or 4"),
+    Code("UNSUPPORTED_VERSION", "error", "the major version is not 1, 2, 3, 4 or 5"),
     Code("NEWER_MINOR_VERSION", "info", "the file has a newer minor version; unknown parts were ignored"),
     Code("UNSUPPORTED_CODING", "error", "the triplet coding is unknown or its bit widths are invalid"),
     Code("BAD_HEADER_VALUE", "error", "a header field is out of its allowed range"),
