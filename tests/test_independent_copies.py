@@ -10,51 +10,16 @@ body) apart, and the versions of §9.3."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import struct
 import subprocess
 import sys
-import zlib
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "conformance"
-
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, SUITE / "independent" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-plnspec = _load("plnspec")
-
-
-# --- bytes (§2, §4) -------------------------------------------------------------------------------
-
-def uv(v: int) -> bytes:
-    """§2.2: unsigned LEB128, minimal."""
-    assert v >= 0
-    out = bytearray()
-    while v >= 0x80:
-        out.append(0x80 | (v & 0x7F))
-        v >>= 7
-    out.append(v)
-    return bytes(out)
-
-
-def zz(d: int) -> int:
-    return 2 * d if d >= 0 else -2 * d - 1
-
-
-def chunk(ctype: bytes, payload: bytes) -> bytes:
-    """§4.1: type, length, payload, CRC-32 of type and payload."""
-    return ctype + struct.pack("<I", len(payload)) + payload + struct.pack("<I", zlib.crc32(ctype + payload))
+from spec_files import ROOT, SIGNATURE, SUITE, group_body, grup, phdr, plns, u32_chunk, uv, zigzag
+from spec_files import read_spec as read
 
 
 # --- the content ----------------------------------------------------------------------------------
@@ -87,7 +52,7 @@ def walk_data() -> bytes:
     data += bytes([0x0F])  # flags: all four explicit; no picks (no named corner)
     data += bytes([0]) + struct.pack("<4d", 0.0, 0.0, 0.0, 1.0)  # mode 0, grid
     for axis in range(3):
-        data += b"".join(uv(zz(r[axis])) for r in TET_RESIDUALS)
+        data += b"".join(uv(zigzag(r[axis])) for r in TET_RESIDUALS)
     return data
 
 
@@ -106,15 +71,6 @@ def matrix(tx):
     return None if tx is None else [1.0, 0.0, 0.0, tx, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0]
 
 
-def body(refs, bounding, data) -> bytes:
-    """§9.2: ref_count, the differences, the role bits, the kind data."""
-    out = uv(len(refs)) + b"".join(uv(r - p) for p, r in zip([0] + refs, refs))
-    roles = bytearray((len(refs) + 7) // 8)
-    for i in bounding:
-        roles[i >> 3] |= 1 << (i & 7)
-    return out + bytes(roles) + data
-
-
 def copy_data(source: int) -> bytes:
     return uv(source)
 
@@ -123,38 +79,25 @@ def pln(groups, objects=(None,), minor=2, colours=(), index=False, counts=False)
     """A version 4.minor file: PHDR, one float64 PLNS, objects (each a root, None or the x of a
     translation), groups (object, kind, refs, bounding, data[, method]), cOLR (group, count, rgba:
     one colour for every reference), optionally an iNDX and its PEND offset."""
-    phdr = bytes([4, minor]) + struct.pack("<HB3BB", 2 if counts else 0, 1, 0, 0, 0, 1)
-    phdr += struct.pack("<ff", math.nan, math.nan)
-    if counts:
-        phdr += uv(len(PLANES)) + uv(len(objects)) + uv(len(groups))
-    out = b"\x89PLN\r\n\x1a\n" + chunk(b"PHDR", phdr)
-    entries = []
-    raw = b"".join(struct.pack("<3d", *p) for p in PLANES)
-    entries.append((len(out), b"PLNS", 0))
-    out += chunk(b"PLNS", uv(0) + uv(len(PLANES)) + b"\x00" + uv(len(raw)) + raw)
+    counted = (len(PLANES), len(objects), len(groups)) if counts else None
+    out = SIGNATURE + u32_chunk(b"PHDR", phdr(4, minor, coding=1, counts=counted))
+    entries = [(len(out), b"PLNS", 0)]
+    out += u32_chunk(b"PLNS", plns(PLANES, 1))
     for k, tx in enumerate(objects):
         entries.append((len(out), b"OBJT", k))
-        out += chunk(b"OBJT", uv(k) + uv(0) + bytes([tx is not None]) + uv(1) + bytes([0x61 + k])
-                     + (transform(tx) if tx is not None else b""))
+        out += u32_chunk(b"OBJT", uv(k) + uv(0) + bytes([tx is not None]) + uv(1) + bytes([0x61 + k])
+                         + (transform(tx) if tx is not None else b""))
     for k, (obj, kind, refs, bounding, data, *method) in enumerate(groups):
-        raw_body = body(refs, bounding, data)
-        stored = zlib.compress(raw_body, 9) if method == [1] else raw_body
         entries.append((len(out), b"GRUP", k))
-        out += chunk(b"GRUP", uv(k) + uv(obj) + bytes([kind, method[0] if method else 0]) + uv(len(raw_body)) + stored)
+        out += u32_chunk(b"GRUP", grup(k, obj, kind, group_body(refs, bounding, data), *method))
     for group, count, rgba in colours:
-        out += chunk(b"cOLR", struct.pack("<II", group, count) + bytes(rgba))
+        out += u32_chunk(b"cOLR", struct.pack("<II", group, count) + bytes(rgba))
     if index:
         at = len(out)
-        out += chunk(b"iNDX", struct.pack("<I", len(entries)) + b"".join(struct.pack("<Q4sI", *e) for e in entries))
-        return out + chunk(b"PEND", struct.pack("<Q", at))
-    return out + chunk(b"PEND", b"")
-
-
-def read(data: bytes) -> dict:
-    try:
-        return plnspec.Reader(data).read()
-    except plnspec.PlnError as exc:
-        return {"error": exc.code, "why": str(exc)}
+        table = struct.pack("<I", len(entries)) + b"".join(struct.pack("<Q4sI", *e) for e in entries)
+        out += u32_chunk(b"iNDX", table)
+        return out + u32_chunk(b"PEND", struct.pack("<Q", at))
+    return out + u32_chunk(b"PEND", b"")
 
 
 def error(data: bytes) -> str | None:
@@ -334,5 +277,5 @@ def test_counts_and_index_count_copies():
     payload = good[at + 8:at + 8 + struct.unpack_from("<I", good, at + 4)[0]]
     count = struct.unpack_from("<I", payload)[0]
     short = struct.pack("<I", count - 1) + payload[4:4 + 16 * (count - 1)]
-    bad = good[:at] + chunk(b"iNDX", short) + chunk(b"PEND", struct.pack("<Q", at))
+    bad = good[:at] + u32_chunk(b"iNDX", short) + u32_chunk(b"PEND", struct.pack("<Q", at))
     assert error(bad) == "BAD_INDEX"

@@ -13,75 +13,28 @@ a pipe, where the reader cannot look back for the source."""
 
 from __future__ import annotations
 
-import importlib.util
-import io
-import json
 import math
 import struct
-import subprocess
-import sys
-import zlib
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-PLNREAD = ROOT / "conformance" / "independent" / "plnread.py"
-
-
-def _load_plnread():
-    spec = importlib.util.spec_from_file_location("plnread_copies", PLNREAD)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-plnread = _load_plnread()
+from spec_files import SIGNATURE, group_body, grup, phdr, plns, read_pipe, u32_chunk, uv, zigzag
+from spec_files import read_read as read
 
 COPY = 11
 
 
 # --- bytes (§2, §4) -----------------------------------------------------------------------------
 
-def uv(v: int) -> bytes:
-    """§2.2: unsigned LEB128, minimal."""
-    assert v >= 0
-    out = bytearray()
-    while v >= 0x80:
-        out.append((v & 0x7F) | 0x80)
-        v >>= 7
-    out.append(v)
-    return bytes(out)
-
-
-def zz(d: int) -> int:
-    """§2.2 zigzag."""
-    return 2 * d if d >= 0 else -2 * d - 1
-
-
-def chunk(tag: bytes, payload: bytes) -> bytes:
-    """§4.1: type, length, payload, CRC-32 of type and payload."""
-    return tag + struct.pack("<I", len(payload)) + payload + struct.pack("<I", zlib.crc32(tag + payload))
-
-
-SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])
-
-
 def header(major=4, minor=2, counts=None) -> bytes:
     """§5: version, flags (COUNTS_KNOWN if counts), coding 1 (float64), widths 0, units 1 (metre),
     no h range (coding 1), no bbox, tolerance and error bound NaN, then the counts."""
-    flags = 2 if counts else 0
-    p = bytes([major, minor]) + struct.pack("<HB3BB", flags, 1, 0, 0, 0, 1)
-    p += struct.pack("<ff", math.nan, math.nan)
-    if counts:
-        p += b"".join(uv(n) for n in counts)
-    return chunk(b"PHDR", p)
+    return u32_chunk(b"PHDR", phdr(major, minor, coding=1, counts=counts))
 
 
-def planes_chunk(planes, first=0) -> bytes:
+def planes_chunk(planes) -> bytes:
     """§7.1 with coding 1 (§7.2): float64 triplets, stored (method 0)."""
-    raw = b"".join(struct.pack("<3d", *p) for p in planes)
-    return chunk(b"PLNS", uv(first) + uv(len(planes)) + b"\x00" + uv(len(raw)) + raw)
+    return u32_chunk(b"PLNS", plns(planes, 1))
 
 
 def translation(tx, ty, tz) -> bytes:
@@ -103,28 +56,17 @@ def object_chunk(index, name, move=None, parent=None) -> bytes:
     p += uv(len(name)) + name.encode()
     if move:
         p += translation(*move)
-    return chunk(b"OBJT", p)
+    return u32_chunk(b"OBJT", p)
 
 
-def group_body(refs, bounding, data) -> bytes:
-    """§9.2: ref_count, the references as differences, the role bits, the kind data."""
-    body = uv(len(refs)) + b"".join(uv(r - p) for r, p in zip(refs, [0] + list(refs[:-1])))
-    roles = bytearray((len(refs) + 7) // 8)
-    for i in bounding:
-        roles[i // 8] |= 1 << (i % 8)
-    return body + bytes(roles) + data
-
-
-def group_chunk(index, obj, kind, refs, bounding, data, method=0, source_body=None) -> bytes:
-    """§9.1: index, object, kind, compression, raw size, the body (method 0 stored, 1 zlib)."""
-    body = group_body(refs, bounding, data) if source_body is None else source_body
-    stored = body if method == 0 else zlib.compress(body, 9)
-    return chunk(b"GRUP", uv(index) + uv(obj) + bytes([kind, method]) + uv(len(body)) + stored)
+def group_chunk(index, obj, kind, refs, bounding, data, method=0) -> bytes:
+    """§9.1 and §9.2: the head and the body (method 0 stored, 1 zlib)."""
+    return u32_chunk(b"GRUP", grup(index, obj, kind, group_body(refs, bounding, data), method))
 
 
 def colour_chunk(group, rgba) -> bytes:
     """§10.1: group, count, one colour per reference."""
-    return chunk(b"cOLR", struct.pack("<II", group, len(rgba)) + b"".join(bytes(c) for c in rgba))
+    return u32_chunk(b"cOLR", struct.pack("<II", group, len(rgba)) + b"".join(bytes(c) for c in rgba))
 
 
 def with_index(prefix: bytes) -> bytes:
@@ -146,7 +88,7 @@ def with_index(prefix: bytes) -> bytes:
         pos += 12 + length
     index = struct.pack("<I", len(entries)) + b"".join(struct.pack("<Q4sI", *e) for e in entries)
     at = len(prefix)
-    return prefix + chunk(b"iNDX", index) + chunk(b"PEND", struct.pack("<Q", at))
+    return prefix + u32_chunk(b"iNDX", index) + u32_chunk(b"PEND", struct.pack("<Q", at))
 
 
 def plns_count(payload: bytes) -> int:
@@ -164,28 +106,7 @@ def plns_count(payload: bytes) -> int:
 
 
 def end() -> bytes:
-    return chunk(b"PEND", b"")
-
-
-# --- reading ------------------------------------------------------------------------------------
-
-def read(data: bytes):
-    """plnread in process, on a stream that says its size (as a regular file does)."""
-    reader = plnread.Reader(io.BytesIO(data), len(data))
-    try:
-        reader.read()
-    except plnread.PlnError as exc:
-        return {"error": exc.code, "why": exc.message}
-    return json.loads(json.dumps(reader.result()))
-
-
-def read_pipe(data: bytes):
-    """plnread as the runner calls it, its input a pipe (no size, no seeking back)."""
-    proc = subprocess.run([sys.executable, str(PLNREAD), "/dev/stdin"], input=data, capture_output=True,
-                          timeout=120)
-    out = json.loads(proc.stdout)
-    assert (proc.returncode == 0) == ("error" not in out), proc.stderr
-    return out
+    return u32_chunk(b"PEND", b"")
 
 
 def error(data: bytes):
@@ -222,7 +143,7 @@ TETRA_WALK = (uv(4) + uv(4) + uv(3)  # V, T, X
               + bytes([0x0F])  # flags: corners 0-3 explicit
               + bytes([0])  # mode
               + struct.pack("<4d", 0.0, 0.0, 0.0, 1.0)  # grid
-              + b"".join(uv(zz(r[axis])) for axis in range(3) for r in TETRA_RESIDUALS))
+              + b"".join(uv(zigzag(r[axis])) for axis in range(3) for r in TETRA_RESIDUALS))
 TETRA_SHELL = {"explicit": [0, 1, 2, 3], "vertex_planes": [], "grid": [list(p) for p in TETRA_XYZ],
                "origin": [0.0, 0.0, 0.0], "step": 1.0,
                "facets": [[2, 0, 1, 2], [0, 1, 0, 3], [3, 2, 1, 3], [1, 0, 2, 3]]}
@@ -255,10 +176,6 @@ WALK = (0, 9, TETRA_REFS, [], TETRA_WALK)
 
 def copy_of(source, obj, refs, bounding=(), data=None, method=0):
     return (obj, COPY, refs, list(bounding), uv(source) if data is None else data, method)
-
-
-def common(g):
-    return {k: g[k] for k in ("index", "object", "kind", "refs", "bounding")}
 
 
 # --- valid copies -------------------------------------------------------------------------------
@@ -457,7 +374,7 @@ def test_every_prefix_of_a_copy_file_is_refused_and_no_byte_crashes_it(source):
             for value in (0x00, 0x01, 0x80, 0xFF):
                 payload = bytearray(data[start + 8:start + 8 + length])
                 payload[k] = value
-                damaged = data[:start] + chunk(tag, bytes(payload)) + data[start + 12 + length:]
+                damaged = data[:start] + u32_chunk(tag, bytes(payload)) + data[start + 12 + length:]
                 got = read(damaged)
                 assert "error" not in got or got["error"] in codes, got
 

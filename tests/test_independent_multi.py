@@ -1,233 +1,37 @@
 """Kind 10 (spec/pln.md §9.14, shell walks with multi-parallelograms) in the independent reader
 conformance/independent/plnspec.py, on hand-built version 4.2 files.
 
-The files come from an encoder written here from §9.13 and §9.14 alone (not from planefmt, nor from
-the reader, nor from tests/test_independent_walk.py's encoder): the walk keeps its open edges as a
-plain list in order of entry, as §9.13 words it, and the far corners of §9.14 are found by scanning
-the triangles in order for the reverse edge, with no map, so both check the reader's faster
-structures against the text. The prediction's rounding is computed with fractions. Each mesh
-(trimesh's icosphere and torus, an open height-field patch, a triangle soup and two golden shells
-with named corners) is encoded in the four modes, read back, and compared with the shell the
-encoder meant; then hostile bodies (a value pushed past 2^52 along a chain of predictions whose
-residuals are all within 2^52; an index outside its table) are checked for BAD_GROUP_STRUCTURE."""
+The files come from an encoder written from §9.13 and §9.14 alone (not from planefmt, nor from the
+reader): the walk, tests/spec_files.py's, keeps its open edges as a plain list in order of entry, as
+§9.13 words it, and the far corners of §9.14 are found here by scanning the triangles in order for
+the reverse edge, with no map, so both check the reader's faster structures against the text. The
+prediction's rounding is computed with fractions. Each mesh (trimesh's icosphere and torus, an open
+height-field patch, a triangle soup and two golden shells with named corners) is encoded in the four
+modes, read back, and compared with the shell the encoder meant; then hostile bodies (a value pushed
+past 2^52 along a chain of predictions whose residuals are all within 2^52; an index outside its
+table) are checked for BAD_GROUP_STRUCTURE."""
 
 from __future__ import annotations
 
-import importlib.util
-import itertools
-import json
 import math
 import random
-import struct
-import zlib
 from fractions import Fraction
-from pathlib import Path
+from functools import partial
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "conformance"
+from spec_files import CodedWalk, golden_shell, icosphere, pln_file, plnspec, torus
+from spec_files import read_spec as read
+
 LIM = 1 << 52
 
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, SUITE / "independent" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+pln = partial(pln_file, major=4, minor=2)
 
 
-plnspec = _load("plnspec")
+class Walk(CodedWalk):
+    """A walk coded as kind 10 (§9.14), or with kind=9 as kind 9."""
 
-
-# --- bytes --------------------------------------------------------------------------------------
-
-def uv(v: int) -> bytes:
-    """§2.2: unsigned LEB128."""
-    assert v >= 0
-    out = bytearray()
-    while v >= 0x80:
-        out.append(0x80 | (v & 0x7F))
-        v >>= 7
-    out.append(v)
-    return bytes(out)
-
-
-def zigzag(d: int) -> int:
-    return 2 * d if d >= 0 else -2 * d - 1
-
-
-def chunk(ctype: bytes, payload: bytes) -> bytes:
-    return ctype + struct.pack("<I", len(payload)) + payload + struct.pack("<I", zlib.crc32(ctype + payload))
-
-
-def pln(planes, groups, minor=2):
-    """A version 4.`minor` file, one object, groups (kind, refs, bounding, data) uncompressed; the
-    planes float32 where each value is one (the goldens', whose f32 pi is above binary64's), else
-    float64."""
-    f32 = all(struct.unpack("<f", struct.pack("<f", x))[0] == x for p in planes for x in p)
-    phdr = bytes([4, minor]) + struct.pack("<HB3BB", 0, 0 if f32 else 1, 0, 0, 0, 1)
-    phdr += struct.pack("<ff", math.nan, math.nan)
-    out = b"\x89PLN\r\n\x1a\n" + chunk(b"PHDR", phdr)
-    raw = b"".join(struct.pack("<3f" if f32 else "<3d", *p) for p in planes)
-    out += chunk(b"PLNS", uv(0) + uv(len(planes)) + b"\x00" + uv(len(raw)) + raw)
-    out += chunk(b"OBJT", uv(0) + uv(0) + b"\x00" + uv(1) + b"o")
-    for index, (kind, refs, bounding, data) in enumerate(groups):
-        body = uv(len(refs)) + b"".join(uv(r - p) for p, r in zip([0] + refs, refs))
-        roles = bytearray((len(refs) + 7) // 8)
-        for i in bounding:
-            roles[i >> 3] |= 1 << (i & 7)
-        body += bytes(roles) + data
-        out += chunk(b"GRUP", uv(index) + uv(0) + bytes([kind, 0]) + uv(len(body)) + body)
-    return out + chunk(b"PEND", b"")
-
-
-def read(data: bytes):
-    try:
-        return plnspec.Reader(data).read()
-    except plnspec.PlnError as exc:
-        return {"error": exc.code, "why": str(exc)}
-
-
-# --- the walk (§9.13) ---------------------------------------------------------------------------
-
-def ordered_lists(free):
-    """The ordered lists of distinct free edges: by length, then lexicographically by places."""
-    return [tuple(free[i] for i in p) for n in range(len(free) + 1) for p in itertools.permutations(range(len(free)), n)]
-
-
-ROOT_LISTS = ordered_lists((0, 1, 2))
-ATTACHED_LISTS = ordered_lists((1, 2))
-
-
-class Walk:
-    """A shell walked as §9.13 says: triangles in walk order over corners numbered in order of
-    first use, the kind data up to and including the picks (`head`), and what a body needs after
-    it. tris: source corner triples, consistently oriented where they share an edge; faces: local
-    reference or -1; xyz: {source corner: [x, y, z]} of the explicit corners; planes: {source
-    corner: [a, b, c]} of the named ones."""
-
-    def __init__(self, tris, faces, xyz, planes, rng, escape_rate=0.0):
-        self.src = tris
-        neighbours = {}
-        for t, tri in enumerate(tris):
-            for e in range(3):
-                neighbours.setdefault((tri[e], tri[(e + 1) % 3]), []).append(t)
-        taken = [False] * len(tris)
-        number, corner_of = {}, []
-        self.tris, self.parents, self.named_by = [], [], []
-        symbols, escapes = [], []
-        open_list = []  # directed edges in order of entry
-        slots = []  # (parent, edge, source triangle claimed for it), top last
-        order = []  # the source triangle of each walked one
-        next_root = 0
-
-        def name(c):
-            number[c] = len(corner_of)
-            corner_of.append(c)
-            self.named_by.append(len(self.tris))
-
-        while len(self.tris) < len(tris):
-            j = len(self.tris)
-            if slots:
-                p, e, t = slots.pop()
-                q = self.tris[p]
-                i0, i1, x = q[(e + 1) % 3], q[e], q[(e + 2) % 3]
-                s = tris[t]
-                r = next(r for r in range(3) if (number.get(s[r]), number.get(s[(r + 1) % 3])) == (i0, i1))
-                src = [s[r], s[(r + 1) % 3], s[(r + 2) % 3]]
-                if src[2] not in number:
-                    code = 0
-                    name(src[2])
-                else:
-                    w = number[src[2]]
-                    ending = [a for a, b in reversed(open_list) if b == i1]
-                    starting = [b for a, b in reversed(open_list) if a == i0]
-                    left = ending[1] if ending and ending[0] == x and len(ending) > 1 else \
-                        (ending[0] if ending and ending[0] != x else None)
-                    right = starting[1] if starting and starting[0] == x and len(starting) > 1 else \
-                        (starting[0] if starting and starting[0] != x else None)
-                    if left == w and rng.random() >= escape_rate:
-                        code = 1
-                    elif right == w and rng.random() >= escape_rate:
-                        code = 2
-                    else:
-                        code = 3 + zigzag(w - i1)
-                self.parents.append((p, e))
-                free = (1, 2)
-            else:
-                while taken[next_root]:
-                    next_root += 1
-                t = next_root
-                src = list(tris[t])
-                codes = []
-                for c in src:
-                    if c in number:
-                        codes.append(len(corner_of) - number[c])
-                    else:
-                        codes.append(0)
-                        name(c)
-                self.parents.append(None)
-                free = (0, 1, 2)
-            taken[t] = True
-            order.append(t)
-            tri = [number[c] for c in src]
-            self.tris.append(tri)
-            kids = []
-            for e in rng.sample(free, len(free)):
-                for u in neighbours.get((src[(e + 1) % 3], src[e]), []):
-                    if not taken[u]:
-                        taken[u] = True
-                        kids.append((e, u))
-                        break
-            edges = tuple(e for e, _ in kids)
-            if self.parents[j] is None:
-                symbols.append(ROOT_LISTS.index(edges))
-                escapes += codes
-            else:
-                symbols.append(4 * ATTACHED_LISTS.index(edges) + min(code, 3))
-                if code >= 3:
-                    escapes.append(code - 3)
-            for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
-                rev = [k for k, edge in enumerate(open_list) if edge == (b, a)]
-                if rev:
-                    del open_list[rev[-1]]
-                else:
-                    open_list.append((a, b))
-            for e, u in reversed(kids):
-                slots.append((j, e, u))
-        v = len(corner_of)
-        self.v = v
-        self.flags = [1 if corner_of[c] in xyz else 0 for c in range(v)]
-        self.explicit = [c for c in range(v) if self.flags[c]]
-        self.coords = {c: list(xyz[corner_of[c]]) for c in self.explicit}
-        walk_faces = [faces[t] for t in order]
-        face_codes = []
-        for j, f in enumerate(walk_faces):
-            inherit = walk_faces[self.parents[j][0]] if self.parents[j] else (walk_faces[j - 1] if j else -1)
-            face_codes.append(0 if f == inherit else 1 if f < 0 else f + 2)
-        around = [set() for _ in range(v)]
-        for tri, f in zip(self.tris, walk_faces):
-            if f >= 0:
-                for c in tri:
-                    around[c].add(f)
-        picks, self.vertex_planes = [], []
-        for c in range(v):
-            if not self.flags[c]:
-                abc = list(planes[corner_of[c]])
-                self.vertex_planes.append(abc)
-                if len(around[c]) > 3:
-                    picks += [sorted(around[c]).index(p) for p in abc]
-        flag_bytes = bytearray((v + 7) // 8)
-        for c in self.explicit:
-            flag_bytes[c >> 3] |= 1 << (c & 7)
-        self.head = (uv(v) + uv(len(self.tris)) + uv(len(escapes)) + b"".join(map(uv, symbols))
-                     + b"".join(map(uv, escapes)) + b"".join(map(uv, face_codes)) + bytes(flag_bytes)
-                     + b"".join(map(uv, picks)))
-        self.facets = [[f, *tri] for f, tri in zip(walk_faces, self.tris)]
-        self.stats = {"codes": [s % 4 for s, p in zip(symbols, self.parents) if p], "escapes": len(escapes)}
-
-    # --- §9.14 --------------------------------------------------------------------------------
+    kind = 10
 
     def far(self, a, b):
         """The far corner of (a, b): the third corner of the first triangle with (b, a)."""
@@ -249,89 +53,15 @@ class Walk:
         return out[:4]
 
     def predict(self, k, g, mode, kind):
-        """The prediction of explicit corner k from g (resolved values of the corners below k)."""
-        if kind == 10:
-            par = self.parallelograms(k)
-            if par:
-                n = len(par)
-                return [math.floor(Fraction(sum(g[a][x] + g[b][x] - g[c][x] for a, b, c in par) + n // 2, n))
-                        for x in range(3)]
-        j = self.named_by[k]
-        tri = self.tris[j]
-        if mode & 1 and self.parents[j] is not None:  # §9.12
-            p, e = self.parents[j]
-            o = self.tris[p][(e + 2) % 3]
-            if self.flags[tri[0]] and self.flags[tri[1]] and self.flags[o]:
-                return [g[tri[0]][x] + g[tri[1]][x] - g[o][x] for x in range(3)]
-        if self.parents[j] is not None and self.flags[tri[0]]:  # §9.11
-            return list(g[tri[0]])
-        before = [c for c in self.explicit if c < k]
-        return list(g[before[-1]]) if before else [0, 0, 0]
-
-    def tables(self):
-        return [sorted({self.coords[c][x] for c in self.explicit}) for x in range(3)]
-
-    def values(self, mode):
-        """g: the coordinates, or with tables the indices into each axis's table."""
-        if mode & 2:
-            t = self.tables()
-            return {c: [t[x].index(self.coords[c][x]) for x in range(3)] for c in self.explicit}
-        return {c: list(self.coords[c]) for c in self.explicit}
-
-    def residuals(self, mode, kind, g=None):
-        """The residuals of values g (by default the coordinates' values)."""
-        g = self.values(mode) if g is None else g
-        return {k: [g[k][x] - p for x, p in enumerate(self.predict(k, g, mode, kind))] for k in self.explicit}
-
-    def resolve(self, residuals, mode, kind):
-        """The values a reader resolves from residuals, unchecked."""
-        g = {}
-        for k in self.explicit:
-            g[k] = [p + r for p, r in zip(self.predict(k, g, mode, kind), residuals[k])]
-        return g
-
-    def body(self, mode, kind=10, residuals=None, tables=None, grid=(0.5, -1.0, 2.0, 0.125)):
-        data = self.head
-        if not self.explicit:
-            return data
-        if residuals is None:
-            residuals = self.residuals(mode, kind)
-        data += bytes([mode]) + struct.pack("<4d", *grid)
-        if mode & 2:
-            for vals in (tables or self.tables()):
-                data += uv(len(vals)) + uv(zigzag(vals[0])) + b"".join(uv(b - a - 1) for a, b in zip(vals, vals[1:]))
-        for x in range(3):
-            data += b"".join(uv(zigzag(residuals[k][x])) for k in self.explicit)
-        return data
-
-    def shell(self, grid=(0.5, -1.0, 2.0, 0.125)):
-        return {"explicit": self.explicit, "vertex_planes": self.vertex_planes,
-                "grid": [self.coords[c] for c in self.explicit],
-                "origin": list(grid[:3]) if self.explicit else None,
-                "step": grid[3] if self.explicit else None, "facets": self.facets}
+        par = self.parallelograms(k) if kind == 10 else []
+        if par:
+            n = len(par)
+            return [math.floor(Fraction(sum(g[a][x] + g[b][x] - g[c][x] for a, b, c in par) + n // 2, n))
+                    for x in range(3)]
+        return super().predict(k, g, mode, kind)
 
 
 # --- meshes ---------------------------------------------------------------------------------------
-
-def from_trimesh(mesh, scale, rng):
-    """Explicit corners on an integer grid; triangles shuffled and rotated at random."""
-    vs = [[round(float(x) * scale) for x in v] for v in mesh.vertices]
-    tris = [[int(i) for i in f] for f in mesh.faces]
-    rng.shuffle(tris)
-    tris = [t[r:] + t[:r] for t in tris for r in [rng.randrange(3)]]
-    return tris, [-1] * len(tris), dict(enumerate(vs)), {}
-
-
-def icosphere(rng):
-    import trimesh
-    return from_trimesh(trimesh.creation.icosphere(subdivisions=2), 1000, rng)
-
-
-def torus(rng):
-    import trimesh
-    return from_trimesh(trimesh.creation.torus(major_radius=3.0, minor_radius=1.0, major_sections=16,
-                                               minor_sections=10), 300, rng)
-
 
 def patch(rng, nx=9, ny=7):
     """An open height field, each quad split along a random diagonal."""
@@ -356,22 +86,12 @@ def soup(rng, corners=10, count=36):
     return tris, [-1] * len(tris), {c: [rng.randrange(-50, 50) for _ in range(3)] for c in used}, {}
 
 
-def golden(name):
-    d = json.loads((SUITE / "valid" / f"{name}.json").read_text())
-    g = next(g for g in d["groups"] if "shell" in g)
-    sh = g["shell"]
-    xyz = dict(zip(sh["explicit"], sh["grid"]))
-    named = [c for c in range(len(xyz) + len(sh["vertex_planes"])) if c not in xyz]
-    mesh = ([f[1:] for f in sh["facets"]], [f[0] for f in sh["facets"]], xyz, dict(zip(named, sh["vertex_planes"])))
-    return d["planes"], g["refs"], g["bounding"], mesh
-
-
 PLANE = [[0.0, 0.0, 1.0]]
 MESHES = {"icosphere": icosphere, "torus": torus, "patch": patch, "soup": soup}
 
 
 def decoded(data, planes=PLANE, refs=(0,), bounding=(), kind=10, minor=2):
-    got = read(pln(planes, [(kind, list(refs), list(bounding), data)], minor=minor))
+    got = read(pln([(kind, list(refs), list(bounding), data)], planes, minor=minor))
     assert "error" not in got, got
     assert got["header"]["version"] == [4, minor]
     return got["groups"][0]["shell"]
@@ -386,7 +106,7 @@ def test_meshes_round_trip(mesh, mode):
         rng = random.Random(seed)
         walk = Walk(*MESHES[mesh](rng), rng=rng, escape_rate=0.25 * seed)
         data = walk.body(mode)
-        got = read(pln(PLANE, [(10, [0], [], data)]))
+        got = read(pln([(10, [0], [], data)], PLANE))
         assert "error" not in got, got
         assert got["header"]["version"] == [4, 2] and "NEWER_MINOR_VERSION" not in got["findings"]
         assert got["groups"][0]["kind"] == 10 and got["groups"][0]["shell"] == walk.shell()
@@ -396,10 +116,10 @@ def test_meshes_round_trip(mesh, mode):
                                   "shell_walk_torus_v4_1"])
 @pytest.mark.parametrize("mode", [0, 1, 2, 3])
 def test_golden_shells_round_trip(name, mode):
-    planes, refs, bounding, mesh = golden(name)
+    planes, g, mesh = golden_shell(name)
     for seed in range(3):
         walk = Walk(*mesh, rng=random.Random(seed), escape_rate=0.3 * (seed % 2))
-        assert decoded(walk.body(mode), planes, refs, bounding) == walk.shell()
+        assert decoded(walk.body(mode), planes, g["refs"], g["bounding"]) == walk.shell()
 
 
 @pytest.mark.parametrize("mesh", list(MESHES))
@@ -411,7 +131,7 @@ def test_the_reader_s_parallelograms_are_the_text_s(mesh):
     walk = Walk(*MESHES[mesh](rng), rng=rng)
     fast = plnspec.Reader.multi_parallelograms(walk.tris, walk.flags)
     counts = set()
-    for k in range(walk.v):
+    for k in range(len(walk.flags)):
         want = walk.parallelograms(k) if walk.flags[k] else []
         assert fast[k] == want, k
         counts.add(len(want))
@@ -428,7 +148,7 @@ def test_kind_10_differs_from_kind_9():
     for mode in range(4):
         data = walk.body(mode, kind=10)
         assert decoded(data) == walk.shell()
-        as_9 = read(pln(PLANE, [(9, [0], [], data)], minor=1))
+        as_9 = read(pln([(9, [0], [], data)], PLANE, minor=1))
         assert "error" in as_9 or as_9["groups"][0]["shell"] != walk.shell()
     r9 = walk.residuals(1, 9)
     r10 = walk.residuals(1, 10)
@@ -457,7 +177,7 @@ def test_mode_bit_0_matters_only_where_an_edge_is_in_two_triangles():
     planes = [[0.0, 0.0, 1.0], [1.0, 0.0, 1.0], [1.0, 2.0, 1.0]]
     walk = Walk(tris, faces, xyz, {N: [0, 1, 2]}, rng=random.Random(0))
     k = walk.tris[3][2]
-    assert walk.parents[3] == (2, 2) and not walk.flags[walk.tris[1][2]] and walk.parallelograms(k) == []
+    assert walk.parent[3] == (2, 2) and not walk.flags[walk.tris[1][2]] and walk.parallelograms(k) == []
     assert plnspec.Reader.multi_parallelograms(walk.tris, walk.flags)[k] == []
     assert walk.residuals(0, 10)[k] != walk.residuals(1, 10)[k]
     for mode in range(4):
@@ -490,15 +210,15 @@ def test_kind_10_by_minor_version():
     rng = random.Random(1)
     walk = Walk(*patch(rng, 4, 4), rng=rng)
     group = (10, [0], [], walk.body(1))
-    got = read(pln(PLANE, [group], minor=2))
+    got = read(pln([group], PLANE, minor=2))
     assert got["groups"][0]["shell"] == walk.shell() and "NEWER_MINOR_VERSION" not in got["findings"]
     for minor in (0, 1):  # §9.3: not a kind of 4.0 or 4.1, whose minor is not above 4.2
-        assert read(pln(PLANE, [group], minor=minor))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln(PLANE, [group], minor=3))  # a newer minor: read, and reported
+        assert read(pln([group], PLANE, minor=minor))["error"] == "UNKNOWN_GROUP_KIND"
+    got = read(pln([group], PLANE, minor=3))  # a newer minor: read, and reported
     assert got["groups"][0]["shell"] == walk.shell() and "NEWER_MINOR_VERSION" in got["findings"]
     # kind 12: a kind 4.2 lacks (kind 11 is a copy since §9.15, tests/test_independent_copies.py)
-    assert read(pln(PLANE, [(12, [0], [], b"\x01")], minor=2))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln(PLANE, [(12, [0], [], b"\x01"), group], minor=3))
+    assert read(pln([(12, [0], [], b"\x01")], PLANE, minor=2))["error"] == "UNKNOWN_GROUP_KIND"
+    got = read(pln([(12, [0], [], b"\x01"), group], PLANE, minor=3))
     assert "SKIPPED_GROUP_KIND" in got["findings"] and "shell" not in got["groups"][0]
     assert got["groups"][1]["shell"] == walk.shell()
 
@@ -516,7 +236,7 @@ def test_a_value_pushed_past_2_52_along_a_chain():
             residuals = {k: [r, -r, r // 3] for k in walk.explicit}
             g = walk.resolve(residuals, mode, 10)
             over = [k for k in walk.explicit if max(abs(x) for x in g[k]) > LIM]
-            got = read(pln(PLANE, [(10, [0], [], walk.body(mode, residuals=residuals))]))
+            got = read(pln([(10, [0], [], walk.body(mode, residuals=residuals))], PLANE))
             if over:
                 assert got.get("error") == "BAD_GROUP_STRUCTURE", got
                 assert over[0] != walk.explicit[0]  # along a chain, not at its start
@@ -541,11 +261,11 @@ def test_2_52_exactly():
             g[k] = [value, g[k][1], g[k][2]]
             residuals = walk.residuals(0, 10, g)
             assert all(abs(x) <= LIM for r in residuals.values() for x in r)
-            got = read(pln(PLANE, [(10, [0], [], walk.body(0, residuals=residuals))]))
+            got = read(pln([(10, [0], [], walk.body(0, residuals=residuals))], PLANE))
             assert ("error" not in got) == ok and (ok or got["error"] == "BAD_GROUP_STRUCTURE"), got
     residuals = walk.residuals(0, 10)
     residuals[walk.explicit[0]] = [LIM + 1, 0, 0]  # a residual beyond 2^52
-    got = read(pln(PLANE, [(10, [0], [], walk.body(0, residuals=residuals))]))
+    got = read(pln([(10, [0], [], walk.body(0, residuals=residuals))], PLANE))
     assert got.get("error") == "BAD_GROUP_STRUCTURE" and "residual" in got["why"]
 
 
@@ -561,7 +281,7 @@ def test_an_index_outside_its_table(mode):
         for index, ok in ((-1, False), (0, True), (len(tables[axis]) - 1, True), (len(tables[axis]), False)):
             g = walk.values(mode)
             g[k][axis] = index
-            got = read(pln(PLANE, [(10, [0], [], walk.body(mode, residuals=walk.residuals(mode, 10, g)))]))
+            got = read(pln([(10, [0], [], walk.body(mode, residuals=walk.residuals(mode, 10, g)))], PLANE))
             if ok:
                 assert "error" not in got, got
             else:
@@ -573,7 +293,7 @@ def test_an_index_outside_its_table(mode):
     g = walk.resolve(zero, mode, 10)
     assert all(0 <= g[c][x] < len(tables[x]) for c in walk.explicit[:2] for x in range(3))
     assert any(not 0 <= g[c][x] < len(tables[x]) for c in walk.explicit for x in range(3))
-    got = read(pln(PLANE, [(10, [0], [], walk.body(mode, residuals=zero))]))
+    got = read(pln([(10, [0], [], walk.body(mode, residuals=zero))], PLANE))
     assert got.get("error") == "BAD_GROUP_STRUCTURE" and "outside" in got["why"], got
 
 
@@ -590,4 +310,4 @@ def test_hand_built_errors_of_9_13_hold_for_kind_10():
                           "BAD_GROUP_STRUCTURE"),
     }
     for name, (data, code) in cases.items():
-        assert read(pln(PLANE, [(10, [0], [], data)])).get("error") == code, name
+        assert read(pln([(10, [0], [], data)], PLANE)).get("error") == code, name

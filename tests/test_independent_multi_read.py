@@ -1,12 +1,12 @@
 """Kind 10 (spec/pln.md §9.14, shell walks with multi-parallelograms) in the independent reader
 conformance/independent/plnread.py, on hand-built version 4.2 files.
 
-The files come from an encoder written here from the text of §9.13 and §9.14 (neither from
-planefmt nor from either independent reader, and not sharing code with tests/test_independent_walk.py).
-It differs from plnread on purpose where it can: it keeps the open edges of §9.13 as a plain list
-searched from its newest end, finds a far corner by scanning the triangles in order for the first
-that has the reverse edge, and rounds an average with exact fractions (math.floor of a Fraction)
-rather than integer floor division. Each mesh (golden shells with named and explicit corners,
+The files come from an encoder written from the text of §9.13 and §9.14 (neither from planefmt
+nor from either independent reader): tests/spec_files.py's walk, and the prediction here. It
+differs from plnread on purpose where it can: the walk keeps the open edges of §9.13 as a plain
+list searched from its newest end, a far corner is found by scanning the triangles in order for
+the first that has the reverse edge, and an average is rounded with exact fractions (math.floor
+of a Fraction) rather than integer floor division. Each mesh (golden shells with named and explicit corners,
 trimesh's primitives, open and shuffled meshes, triangle soups with non-manifold and repeated
 edges) is encoded in all four modes, read back, and compared with the shell the encoder meant;
 then hostile bodies (a resolved value pushed past 2^52 along a chain of corners whose residuals
@@ -15,212 +15,21 @@ BAD_GROUP_STRUCTURE, and the version rules of §9.3 and §13 hold for kind 10.""
 
 from __future__ import annotations
 
-import importlib.util
-import io
-import itertools
-import json
 import math
 import random
 import struct
-import zlib
 from fractions import Fraction
-from pathlib import Path
+from functools import partial
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "conformance"
+from spec_files import (Walk, golden_shell, pln_file, plnread, residual_bytes, shuffled, table_bytes,
+                        trimesh_meshes, uv, walk_head, zigzag)
+from spec_files import read_read as read
+
 LIMIT = 2**52
 
-
-def _load_plnread():
-    spec = importlib.util.spec_from_file_location("plnread", SUITE / "independent" / "plnread.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-plnread = _load_plnread()
-
-
-# --- bytes --------------------------------------------------------------------------------------
-
-def uv(v: int) -> bytes:
-    """An unsigned LEB128 varint (§2.2)."""
-    assert v >= 0
-    out = bytearray()
-    while v >= 0x80:
-        out.append((v & 0x7F) | 0x80)
-        v >>= 7
-    out.append(v)
-    return bytes(out)
-
-
-def zigzag(d: int) -> int:
-    return 2 * d if d >= 0 else -2 * d - 1
-
-
-def make_chunk(tag: bytes, payload: bytes) -> bytes:
-    return tag + struct.pack("<I", len(payload)) + payload + struct.pack("<I", zlib.crc32(tag + payload))
-
-
-def pln(planes, groups, minor=2):
-    """A version 4.`minor` file: planes in float32 where every value is a float32 (the goldens',
-    whose float32 pi is above binary64's), else float64; one object; `groups` as (kind, refs,
-    bounding, kind data), bodies stored uncompressed."""
-    f32 = all(struct.unpack("<f", struct.pack("<f", x))[0] == x for p in planes for x in p)
-    header = bytes([4, minor]) + struct.pack("<HB3BB", 0, 0 if f32 else 1, 0, 0, 0, 0)
-    header += struct.pack("<ff", math.nan, math.nan)
-    out = b"\x89PLN\r\n\x1a\n" + make_chunk(b"PHDR", header)
-    raw = b"".join(struct.pack("<3f" if f32 else "<3d", *p) for p in planes)
-    out += make_chunk(b"PLNS", uv(0) + uv(len(planes)) + b"\x00" + uv(len(raw)) + raw)
-    out += make_chunk(b"OBJT", uv(0) + uv(0) + b"\x00" + uv(1) + b"m")
-    for index, (kind, refs, bounding, data) in enumerate(groups):
-        body = uv(len(refs)) + b"".join(uv(r - p) for r, p in zip(refs, [0] + list(refs[:-1])))
-        roles = bytearray((len(refs) + 7) // 8)
-        for i in bounding:
-            roles[i // 8] |= 1 << (i % 8)
-        body += bytes(roles) + data
-        out += make_chunk(b"GRUP", uv(index) + uv(0) + bytes([kind, 0]) + uv(len(body)) + body)
-    return out + make_chunk(b"PEND", b"")
-
-
-def read(data: bytes):
-    reader = plnread.Reader(io.BytesIO(data), len(data))
-    try:
-        reader.read()
-    except plnread.PlnError as exc:
-        return {"error": exc.code, "why": exc.message}
-    return json.loads(json.dumps(reader.result()))
-
-
-# --- the walk (§9.13) -----------------------------------------------------------------------------
-
-def ordered_lists(free):
-    """§9.13: the ordered lists of distinct free edges, by length, then in lexicographic order of
-    the edges' places among the free edges."""
-    out = []
-    for length in range(len(free) + 1):
-        out += [tuple(free[i] for i in pl) for pl in itertools.permutations(range(len(free)), length)]
-    return out
-
-
-ROOT_CHILDREN = ordered_lists((0, 1, 2))
-ATTACHED_CHILDREN = ordered_lists((1, 2))
-assert len(ROOT_CHILDREN) == 16 and len(ATTACHED_CHILDREN) == 5
-
-
-class OpenList:
-    """§9.13's open edges, word for word: a list of directed edges in order of entry."""
-
-    def __init__(self):
-        self.items = []
-
-    def add(self, tri):
-        for s in range(3):
-            a, b = tri[s], tri[(s + 1) % 3]
-            for k in range(len(self.items) - 1, -1, -1):
-                if self.items[k] == (b, a):
-                    del self.items[k]
-                    break
-            else:
-                self.items.append((a, b))
-
-    def left(self, i1, x):
-        starts = [a for a, b in self.items[::-1] if b == i1]
-        if starts and starts[0] == x:
-            starts = starts[1:]
-        return starts[0] if starts else None
-
-    def right(self, i0, x):
-        ends = [b for a, b in self.items[::-1] if a == i0]
-        if ends and ends[0] == x:
-            ends = ends[1:]
-        return ends[0] if ends else None
-
-
-class Walk:
-    """A depth-first walk over a triangle list (source corner ids), with the symbols and escapes
-    that code it. Attributes: tris (walk order, corners numbered as the walk names them), parent
-    ((p, e) or None per triangle), creator (corner -> the triangle whose code 0 named it), source
-    (walk triangle -> source triangle), number (source corner -> corner number)."""
-
-    def __init__(self, tris, rng, escape_rate=0.0):
-        by_edge = {}
-        for t, tri in enumerate(tris):
-            for s in range(3):
-                by_edge.setdefault((tri[s], tri[(s + 1) % 3]), []).append(t)
-        claimed = [False] * len(tris)
-        self.tris, self.parent, self.creator, self.source = [], [], {}, []
-        self.symbols, self.escapes = [], []
-        self.number = {}
-        opened = OpenList()
-        stack = []
-        unwalked = iter(range(len(tris)))
-        while len(self.tris) < len(tris):
-            j = len(self.tris)
-            if stack:
-                p, e, t = stack.pop()
-                q = self.tris[p]
-                i0, i1, x = q[(e + 1) % 3], q[e], q[(e + 2) % 3]
-                back = {v: k for k, v in self.number.items()}
-                src = tris[t]
-                r = next(r for r in range(3) if src[r] == back[i0] and src[(r + 1) % 3] == back[i1])
-                rot = [src[r], src[(r + 1) % 3], src[(r + 2) % 3]]
-                if rot[2] not in self.number:
-                    code = 0
-                    self.number[rot[2]] = len(self.number)
-                    self.creator[self.number[rot[2]]] = j
-                else:
-                    w = self.number[rot[2]]
-                    if opened.left(i1, x) == w and rng.random() >= escape_rate:
-                        code = 1
-                    elif opened.right(i0, x) == w and rng.random() >= escape_rate:
-                        code = 2
-                    else:
-                        code = 3 + zigzag(w - i1)
-                corners = [i0, i1, self.number[rot[2]]]
-                self.parent.append((p, e))
-                free = (1, 2)
-            else:
-                t = next(u for u in unwalked if not claimed[u])
-                shift = rng.randrange(3)
-                rot = list(tris[t][shift:]) + list(tris[t][:shift])
-                corners, codes = [], []
-                for v in rot:
-                    if v not in self.number:
-                        codes.append(0)
-                        self.number[v] = len(self.number)
-                        self.creator[self.number[v]] = j
-                    else:
-                        codes.append(len(self.number) - self.number[v])
-                    corners.append(self.number[v])
-                self.parent.append(None)
-                free = (0, 1, 2)
-                code = None
-            claimed[t] = True
-            self.tris.append(corners)
-            self.source.append(t)
-            kids = []
-            for e in rng.sample(free, len(free)):
-                a, b = rot[e], rot[(e + 1) % 3]
-                for u in by_edge.get((b, a), []):
-                    if not claimed[u]:
-                        claimed[u] = True
-                        kids.append((e, u))
-                        break
-            edges = tuple(e for e, _ in kids)
-            if code is None:
-                self.symbols.append(ROOT_CHILDREN.index(edges))
-                self.escapes += codes
-            else:
-                self.symbols.append(4 * ATTACHED_CHILDREN.index(edges) + min(code, 3))
-                if code >= 3:
-                    self.escapes.append(code - 3)
-            opened.add(corners)
-            for e, u in kids[::-1]:
-                stack.append((j, e, u))
-        assert not stack
+pln = partial(pln_file, major=4, minor=2, units=0, name=b"m")
 
 
 # --- predictions (§9.11, §9.12, §9.13, §9.14) ----------------------------------------------------
@@ -307,90 +116,28 @@ ORIGIN, STEP = [0.25, -3.0, 1.5], 0.0625
 
 
 def kind_data(walk, faces, explicit_xyz, named_planes, mode, multi=True, residuals=None, tables=None, stats=None):
-    """Kind 10 data (kind 9 with multi=False) for a walk. faces: per source triangle, a local
-    reference or -1; explicit_xyz: source corner -> integer coordinates; named_planes: source
-    corner -> its three planes (a subset of its face planes, ascending). Returns the data and the
-    "shell" object a reader must report. `residuals` and `tables` override what the encoder
-    would compute (hostile bodies)."""
-    v = len(walk.number)
-    src = {k: s for s, k in walk.number.items()}
-    wfaces = [faces[t] for t in walk.source]
-    codes = []
-    for j, f in enumerate(wfaces):
-        if walk.parent[j] is not None:
-            inherit = wfaces[walk.parent[j][0]]
-        else:
-            inherit = wfaces[j - 1] if j else -1
-        codes.append(0 if f == inherit else 1 if f < 0 else f + 2)
-    explicit = {k for k in range(v) if src[k] in explicit_xyz}
-    flags = bytearray((v + 7) // 8)
-    for k in explicit:
-        flags[k // 8] |= 1 << (k % 8)
-    on = {k: set() for k in range(v)}
-    for tri, f in zip(walk.tris, wfaces):
-        if f >= 0:
-            for k in tri:
-                on[k].add(f)
-    picks, vertex_planes = [], []
-    for k in range(v):
-        if k in explicit:
-            continue
-        planes = sorted(on[k])
-        chosen = named_planes[src[k]]
-        vertex_planes.append(list(chosen))
-        if len(planes) > 3:
-            picks += [planes.index(p) for p in chosen]
-    data = uv(v) + uv(len(walk.tris)) + uv(len(walk.escapes))
-    data += b"".join(uv(s) for s in walk.symbols) + b"".join(uv(x) for x in walk.escapes)
-    data += b"".join(uv(c) for c in codes) + bytes(flags) + b"".join(uv(p) for p in picks)
-    grid = [list(explicit_xyz[src[k]]) for k in sorted(explicit)]
-    shell = {"explicit": sorted(explicit), "vertex_planes": vertex_planes, "grid": grid,
-             "origin": None, "step": None, "facets": [[f] + t for f, t in zip(wfaces, walk.tris)]}
-    if explicit:
+    """Kind 10 data (kind 9 with multi=False) for a walk, faces, explicit_xyz and named_planes as
+    walk_head takes them. Returns the data and the "shell" object a reader must report.
+    `residuals` and `tables` override what the encoder would compute (hostile bodies)."""
+    data, shell = walk_head(walk, faces, explicit_xyz, named_planes)
+    if shell["explicit"]:
         shell["origin"], shell["step"] = ORIGIN, STEP
         data += bytes([mode]) + struct.pack("<4d", *ORIGIN, STEP)
+        value = {k: list(g) for k, g in zip(shell["explicit"], shell["grid"])}
         if mode & 2:
             if tables is None:
-                tables = [sorted({g[a] for g in grid}) for a in range(3)]
-            for vals in tables:
-                data += uv(len(vals)) + uv(zigzag(vals[0])) + b"".join(uv(y - x - 1) for x, y in zip(vals, vals[1:]))
-            value = {k: [tables[a].index(explicit_xyz[src[k]][a]) for a in range(3)] for k in explicit}
-        else:
-            value = {k: list(explicit_xyz[src[k]]) for k in explicit}
+                tables = [sorted({g[a] for g in shell["grid"]}) for a in range(3)]
+            data += table_bytes(tables)
+            value = {k: [tables[a].index(g[a]) for a in range(3)] for k, g in value.items()}
         if residuals is None:
-            residuals = residuals_for(walk, explicit, value, mode, multi, stats)
-        for a in range(3):
-            data += b"".join(uv(zigzag(r[a])) for r in residuals)
+            residuals = residuals_for(walk, set(value), value, mode, multi, stats)
+        data += residual_bytes(residuals)
     return data, shell
 
 
 # --- meshes ---------------------------------------------------------------------------------------
 
-def trimesh_meshes():
-    import trimesh
-    out = {
-        "icosphere": trimesh.creation.icosphere(subdivisions=2, radius=50.0),
-        "box": trimesh.creation.box(extents=(30.0, 20.0, 10.0)),
-        "capsule": trimesh.creation.capsule(height=40.0, radius=12.0, count=[10, 10]),
-        "cylinder": trimesh.creation.cylinder(radius=20.0, height=30.0, sections=14),
-        "torus": trimesh.creation.torus(major_radius=40.0, minor_radius=12.0, major_sections=14,
-                                        minor_sections=9),
-        "cone": trimesh.creation.cone(radius=15.0, height=25.0, sections=11),
-    }
-    meshes = {}
-    for name, mesh in out.items():
-        xyz = {i: [int(round(c * 8)) for c in p] for i, p in enumerate(mesh.vertices.tolist())}
-        meshes[name] = ([list(map(int, f)) for f in mesh.faces.tolist()], xyz)
-    return meshes
-
-
-MESHES = trimesh_meshes()
-
-
-def shuffled(tris, rng):
-    tris = [list(t) for t in tris]
-    rng.shuffle(tris)
-    return [t[r:] + t[:r] for t in tris for r in [rng.randrange(3)]]
+MESHES = trimesh_meshes("icosphere", "box", "capsule", "cylinder", "torus", "cone")
 
 
 def open_mesh(tris, rng, drop=0.15):
@@ -414,7 +161,7 @@ def encode_free(tris, xyz, mode, rng, multi=True, escape_rate=0.0, stats=None):
     used = {c for t in tris for c in t}
     walk = Walk(tris, rng, escape_rate)
     data, shell = kind_data(walk, [-1] * len(tris), {c: xyz[c] for c in used}, {}, mode, multi, stats=stats)
-    return pln(PLANE, [(10 if multi else 9, [0], [], data)]), shell, walk
+    return pln([(10 if multi else 9, [0], [], data)], PLANE), shell, walk
 
 
 def check(data, shell, kind=10, minor=2):
@@ -456,27 +203,16 @@ GOLDENS = ["shell_tree_cube_v3_3", "shell_tree_mixed_v3_3", "shell_tree_apex_v3_
            "shell_walk_torus_v4_1", "shell_walk_multi_sphere_v4_2", "shell_walk_multi_tables_v4_2"]
 
 
-def golden(name):
-    d = json.loads((SUITE / "valid" / f"{name}.json").read_text())
-    g = next(g for g in d["groups"] if "shell" in g)
-    sh = g["shell"]
-    tris = [f[1:] for f in sh["facets"]]
-    faces = [f[0] for f in sh["facets"]]
-    xyz = dict(zip(sh["explicit"], sh["grid"]))
-    named = [c for c in range(len(sh["explicit"]) + len(sh["vertex_planes"])) if c not in xyz]
-    return d["planes"], g, tris, faces, xyz, dict(zip(named, sh["vertex_planes"]))
-
-
 @pytest.mark.parametrize("mode", [0, 1, 2, 3])
 @pytest.mark.parametrize("name", GOLDENS)
 def test_golden_shells_round_trip(name, mode):
     """Named and explicit corners together, faces on planes: the parallelograms skip named corners."""
-    planes, g, tris, faces, xyz, named = golden(name)
+    planes, g, (tris, faces, xyz, named) = golden_shell(name)
     for seed in range(4):
         rng = random.Random(seed)
         walk = Walk(tris, rng, escape_rate=0.3 * (seed % 2))
         data, shell = kind_data(walk, faces, xyz, named, mode)
-        check(pln(planes, [(10, g["refs"], g["bounding"], data)]), shell)
+        check(pln([(10, g["refs"], g["bounding"], data)], planes), shell)
 
 
 def test_every_count_of_parallelograms_is_met():
@@ -511,7 +247,7 @@ def test_kind_9_and_kind_10_read_one_body_differently():
         # retag the kind-10 group as kind 9: the CRC is recomputed by rebuilding the file
         walk = Walk(tris, random.Random(5))
         data, _ = kind_data(walk, [-1] * len(tris), xyz, {}, mode, multi=True)
-        got = read(pln(PLANE, [(9, [0], [], data)]))
+        got = read(pln([(9, [0], [], data)], PLANE))
         assert got.get("error") or got["groups"][0]["shell"]["grid"] != shell10["grid"]
 
 
@@ -569,11 +305,11 @@ def test_average_prediction_by_hand():
     res = [g[0], [10, 0, 0], [-10, 10, 0], [1, -1, 5], [-7, 0, 2]]
     for a in range(3):
         body += b"".join(uv(zigzag(r[a])) for r in res)
-    got = read(pln(PLANE, [(10, [0], [], body)]))
+    got = read(pln([(10, [0], [], body)], PLANE))
     assert got["groups"][0]["shell"]["grid"] == [g[k] for k in range(5)], got
     assert got["groups"][0]["shell"]["facets"] == [[-1, 0, 1, 2], [-1, 2, 1, 3], [-1, 3, 1, 4]]
     # kind 9 reads the same body with §9.11's prediction: corner 3 = g(2) + residual
-    got9 = read(pln(PLANE, [(9, [0], [], body)], minor=1))
+    got9 = read(pln([(9, [0], [], body)], PLANE, minor=1))
     assert got9["groups"][0]["shell"]["grid"][3] == [0 + 1, 10 - 1, 0 + 5]
 
 
@@ -597,7 +333,7 @@ def hostile(tris, residual_of, mode=1, rng_seed=0):
     xyz = {s: [0, 0, 0] for s in walk.number}  # unused: residuals are given
     data, _ = kind_data(walk, [-1] * len(tris), xyz, {}, mode, residuals=residuals)
     _, bad = resolve(walk, explicit, residuals, mode, True)
-    return pln(PLANE, [(10, [0], [], data)]), bad, walk
+    return pln([(10, [0], [], data)], PLANE), bad, walk
 
 
 @pytest.mark.parametrize("mode", [0, 1])
@@ -651,20 +387,20 @@ def test_index_outside_its_table(mode):
     value = {k: [tables[a].index(xyz[src[k]][a]) for a in range(3)] for k in explicit}
     residuals = residuals_for(walk, explicit, value, mode, True)
     data, shell = kind_data(walk, [-1] * len(tris), xyz, {}, mode, residuals=residuals, tables=tables)
-    check(pln(PLANE, [(10, [0], [], data)]), shell)
+    check(pln([(10, [0], [], data)], PLANE), shell)
     last = max(explicit)
     for axis in range(3):
         for push in (len(tables[axis]) - value[last][axis], -value[last][axis] - 1):  # to C, to -1
             bad = [list(r) for r in residuals]
             bad[-1][axis] += push
             data, _ = kind_data(walk, [-1] * len(tris), xyz, {}, mode, residuals=bad, tables=tables)
-            assert read(pln(PLANE, [(10, [0], [], data)])).get("error") == "BAD_GROUP_STRUCTURE"
+            assert read(pln([(10, [0], [], data)], PLANE)).get("error") == "BAD_GROUP_STRUCTURE"
     # an early corner out of its table: every later corner's prediction would build on it
     first_with = next(k for k in sorted(explicit) if parallelograms(walk.tris, k, explicit))
     bad = [list(r) for r in residuals]
     bad[sorted(explicit).index(first_with)][0] += len(tables[0])
     data, _ = kind_data(walk, [-1] * len(tris), xyz, {}, mode, residuals=bad, tables=tables)
-    assert read(pln(PLANE, [(10, [0], [], data)])).get("error") == "BAD_GROUP_STRUCTURE"
+    assert read(pln([(10, [0], [], data)], PLANE)).get("error") == "BAD_GROUP_STRUCTURE"
 
 
 def test_tables_chain_stays_in_table_only_by_its_residuals():
@@ -679,10 +415,10 @@ def test_tables_chain_stays_in_table_only_by_its_residuals():
     value = {k: [k, k % 2, 0] for k in explicit}
     residuals = residuals_for(walk, explicit, value, 2, True)
     data, _ = kind_data(walk, [-1] * len(tris), xyz, {}, 2, residuals=residuals, tables=tables)
-    got = read(pln(PLANE, [(10, [0], [], data)]))
+    got = read(pln([(10, [0], [], data)], PLANE))
     assert got["groups"][0]["shell"]["grid"] == [[tables[0][k], tables[1][k % 2], -3] for k in range(n)]
     data, _ = kind_data(walk, [-1] * len(tris), xyz, {}, 2, residuals=[[1, 0, 0]] * n, tables=tables)
-    assert read(pln(PLANE, [(10, [0], [], data)])).get("error") == "BAD_GROUP_STRUCTURE"
+    assert read(pln([(10, [0], [], data)], PLANE)).get("error") == "BAD_GROUP_STRUCTURE"
 
 
 # --- versions (§5, §9.3, §13) ---------------------------------------------------------------------
@@ -696,16 +432,16 @@ def small():
 def test_kind_10_by_version():
     data, shell = small()
     group = (10, [0], [], data)
-    got = read(pln(PLANE, [group], minor=2))
+    got = read(pln([group], PLANE, minor=2))
     assert got["groups"][0]["shell"] == shell and "NEWER_MINOR_VERSION" not in got["findings"]
     for minor in (0, 1):  # §9.3: kind 10 is not a kind of 4.0 or 4.1, minors this reader knows
-        assert read(pln(PLANE, [group], minor=minor))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln(PLANE, [group], minor=3))  # a newer minor: read, and said so
+        assert read(pln([group], PLANE, minor=minor))["error"] == "UNKNOWN_GROUP_KIND"
+    got = read(pln([group], PLANE, minor=3))  # a newer minor: read, and said so
     assert got["groups"][0]["shell"] == shell and "NEWER_MINOR_VERSION" in got["findings"]
     # kind 12: unknown in 4.2, skipped in 4.3 (its common body still checked, its group counted);
     # kind 11 is the copy of §9.15, a kind of 4.2 (tests/test_independent_copies_read.py)
-    assert read(pln(PLANE, [(12, [0], [], b"\x07")], minor=2))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln(PLANE, [(12, [0], [], b"\x07"), group], minor=3))
+    assert read(pln([(12, [0], [], b"\x07")], PLANE, minor=2))["error"] == "UNKNOWN_GROUP_KIND"
+    got = read(pln([(12, [0], [], b"\x07"), group], PLANE, minor=3))
     assert "SKIPPED_GROUP_KIND" in got["findings"] and "shell" not in got["groups"][0]
     assert got["groups"][1]["shell"] == shell
     # kind 9 is still a kind of 4.2
@@ -716,11 +452,11 @@ def test_kind_10_by_version():
 def test_kind_10_errors_are_kind_9_s():
     """§9.14: the errors are those of §9.13; a few of them, on a kind-10 body."""
     data, _ = small()
-    assert read(pln(PLANE, [(10, [0], [], data + b"\x00")])).get("error") == "BAD_GROUP_STRUCTURE"
-    assert read(pln(PLANE, [(10, [0], [], data[:-1])])).get("error") == "BAD_PAYLOAD"
+    assert read(pln([(10, [0], [], data + b"\x00")], PLANE)).get("error") == "BAD_GROUP_STRUCTURE"
+    assert read(pln([(10, [0], [], data[:-1])], PLANE)).get("error") == "BAD_PAYLOAD"
     cursor = plnread.Cursor(data, "t")
     v, t, x = cursor.varint(), cursor.varint(), cursor.varint()
     first_symbol = len(uv(v)) + len(uv(t)) + len(uv(x))
     bad = bytearray(data)
     bad[first_symbol] = 16  # a root symbol past its range
-    assert read(pln(PLANE, [(10, [0], [], bytes(bad))])).get("error") == "BAD_GROUP_STRUCTURE"
+    assert read(pln([(10, [0], [], bytes(bad))], PLANE)).get("error") == "BAD_GROUP_STRUCTURE"

@@ -1,260 +1,46 @@
 """Kind 12 (spec/pln.md §9.16, shell walks with reflections) and version 5.1 in the independent reader
 conformance/independent/plnspec.py, on hand-built version 5.1 files.
 
-The files come from an encoder written here from §9.13 and §9.16 alone (not from planefmt, nor from
-the reader, nor from the other tests' encoders): the walk keeps its open edges as a plain list in order
-of entry, as §9.13 words it, and the reflection is computed as the text explains it, d1 reflected in
-the line of d2 with exact fractions, 2(d1.d2)/D d2 - d1, rounded by floor(x + 1/2), not by the
-reader's integer formula. Each mesh (trimesh's icosphere and torus, a tube of rings walked round,
-and two golden shells with named corners) is encoded in the four modes, read back, and compared with
-the shell the encoder meant; the tube checks that chains turn and that their reflections predict
-better than kind 9. Then hostile bodies: a resolved value pushed past 2^52 by the reflection of a
-turning chain (its residual 0), and not by a chain that a component beyond 2^18 keeps from turning;
-indices pushed outside their tables; a mode bit above 1; and the versions of §9.3 and §13 (kind 12
-in a 5.0 file, kind 13 in 5.1 and 5.2, kind 12 in major 4)."""
+The files come from an encoder written from §9.13 and §9.16 alone (not from planefmt, nor from the
+reader): the walk, tests/spec_files.py's, keeps its open edges as a plain list in order of entry, as
+§9.13 words it, and the reflection is computed here as the text explains it, d1 reflected in the
+line of d2 with exact fractions, 2(d1.d2)/D d2 - d1, rounded by floor(x + 1/2), not by the reader's
+integer formula. Each mesh (trimesh's icosphere and torus, a tube of rings walked round, and two
+golden shells with named corners) is encoded in the four modes, read back, and compared with the
+shell the encoder meant; the tube checks that chains turn and that their reflections predict better
+than kind 9. Then hostile bodies: a resolved value pushed past 2^52 by the reflection of a turning
+chain (its residual 0), and not by a chain that a component beyond 2^18 keeps from turning; indices
+pushed outside their tables; a mode bit above 1; and the versions of §9.3 and §13 (kind 12 in a 5.0
+file, kind 13 in 5.1 and 5.2, kind 12 in major 4)."""
 
 from __future__ import annotations
 
-import importlib.util
-import itertools
-import json
 import math
 import random
-import struct
-import zlib
 from fractions import Fraction
-from pathlib import Path
+from functools import partial
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "conformance"
+from spec_files import CodedWalk, golden_shell, icosphere, pln_file, plnspec, torus, uv
+from spec_files import read_spec as read
+
 LIM = 1 << 52
 TURN = 1 << 18
 
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, SUITE / "independent" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+pln = partial(pln_file, major=5, minor=1)
 
 
-plnspec = _load("plnspec")
+class Walk(CodedWalk):
+    """A walk coded as kind 12 (§9.16), or with kind=9 as kind 9, in a version 5 file."""
 
-
-# --- bytes --------------------------------------------------------------------------------------
-
-def uv(v: int) -> bytes:
-    """§2.2: unsigned LEB128."""
-    assert v >= 0
-    out = bytearray()
-    while v >= 0x80:
-        out.append(0x80 | (v & 0x7F))
-        v >>= 7
-    out.append(v)
-    return bytes(out)
-
-
-def zigzag(d: int) -> int:
-    return 2 * d if d >= 0 else -2 * d - 1
-
-
-def u32_chunk(ctype: bytes, payload: bytes) -> bytes:
-    return ctype + struct.pack("<I", len(payload)) + payload + struct.pack("<I", zlib.crc32(ctype + payload))
-
-
-def varint_chunk(ctype: bytes, payload: bytes) -> bytes:
-    return ctype + uv(len(payload)) + payload + struct.pack("<I", zlib.crc32(ctype + payload))
-
-
-def pln(groups, planes=(), minor=1, major=5):
-    """A version `major`.`minor` file, one object, groups (kind, refs, bounding, data) uncompressed.
-    Version 5 (§4.1, §5): PHDR with a u32 length, every later chunk with a varint one, an 8-byte
-    fixed header part; version 4 (A.5): u32 lengths, a 9-byte fixed part. The planes float32 where
-    each value is one, else float64."""
-    f32 = all(struct.unpack("<f", struct.pack("<f", x))[0] == x for p in planes for x in p)
-    coding = 0 if f32 else 1
-    if major >= 5:
-        phdr, frame = bytes([5, minor, 0, coding, 0, 0, 0, 1]), varint_chunk
-    else:
-        phdr, frame = bytes([4, minor]) + struct.pack("<HB3BB", 0, coding, 0, 0, 0, 1), u32_chunk
-    out = b"\x89PLN\r\n\x1a\n" + u32_chunk(b"PHDR", phdr + struct.pack("<ff", math.nan, math.nan))
-    if planes:
-        raw = b"".join(struct.pack("<3f" if f32 else "<3d", *p) for p in planes)
-        out += frame(b"PLNS", uv(0) + uv(len(planes)) + b"\x00" + uv(len(raw)) + raw)
-    out += frame(b"OBJT", uv(0) + uv(0) + b"\x00" + uv(1) + b"o")
-    for index, (kind, refs, bounding, data) in enumerate(groups):
-        body = uv(len(refs)) + b"".join(uv(r - p) for p, r in zip([0] + refs, refs))
-        roles = bytearray((len(refs) + 7) // 8)
-        for i in bounding:
-            roles[i >> 3] |= 1 << (i & 7)
-        body += bytes(roles) + data
-        out += frame(b"GRUP", uv(index) + uv(0) + bytes([kind, 0]) + uv(len(body)) + body)
-    return out + frame(b"PEND", b"")
-
-
-def read(data: bytes):
-    try:
-        return plnspec.Reader(data).read()
-    except plnspec.PlnError as exc:
-        return {"error": exc.code, "why": str(exc)}
-
-
-# --- the walk (§9.13) ---------------------------------------------------------------------------
-
-def ordered_lists(free):
-    """The ordered lists of distinct free edges: by length, then lexicographically by places."""
-    return [tuple(free[i] for i in p) for n in range(len(free) + 1)
-            for p in itertools.permutations(range(len(free)), n)]
-
-
-ROOT_LISTS = ordered_lists((0, 1, 2))
-ATTACHED_LISTS = ordered_lists((1, 2))
-GRID = (0.5, -1.0, 2.0, 0.125)  # f32 values: §9.11 in version 5, four f32
-
-
-class Walk:
-    """A shell walked as §9.13 says: triangles in walk order over corners numbered in order of
-    first use, the kind data up to and including the picks (`head`), and what a body needs after
-    it. tris: source corner triples, consistently oriented where they share an edge; faces: local
-    reference or -1; xyz: {source corner: [x, y, z]} of the explicit corners; planes: {source
-    corner: [a, b, c]} of the named ones. A root is taken as its source triangle lists it. A
-    triangle's children are its untaken neighbours, in random order; with ``path``, only the first
-    in the order of its free edges, so that the walk goes on along a strip as far as it can."""
-
-    def __init__(self, tris, faces, xyz, planes, rng, escape_rate=0.0, path=False):
-        neighbours = {}
-        for t, tri in enumerate(tris):
-            for e in range(3):
-                neighbours.setdefault((tri[e], tri[(e + 1) % 3]), []).append(t)
-        taken = [False] * len(tris)
-        number, corner_of = {}, []
-        self.tris, self.parents, self.named_by = [], [], []
-        symbols, escapes = [], []
-        open_list = []  # directed edges in order of entry
-        slots = []  # (parent, edge, source triangle claimed for it), top last
-        order = []  # the source triangle of each walked one
-        next_root = 0
-
-        def name(c):
-            number[c] = len(corner_of)
-            corner_of.append(c)
-            self.named_by.append(len(self.tris))
-
-        def newest(items, x):
-            """The newest item, or the second newest where the newest is x (§9.13, left and right)."""
-            if items and items[0] == x:
-                items = items[1:]
-            return items[0] if items else None
-
-        while len(self.tris) < len(tris):
-            j = len(self.tris)
-            if slots:
-                p, e, t = slots.pop()
-                q = self.tris[p]
-                i0, i1, x = q[(e + 1) % 3], q[e], q[(e + 2) % 3]
-                s = tris[t]
-                r = next(r for r in range(3) if (number.get(s[r]), number.get(s[(r + 1) % 3])) == (i0, i1))
-                src = [s[r], s[(r + 1) % 3], s[(r + 2) % 3]]
-                if src[2] not in number:
-                    code = 0
-                    name(src[2])
-                else:
-                    w = number[src[2]]
-                    left = newest([a for a, b in reversed(open_list) if b == i1], x)
-                    right = newest([b for a, b in reversed(open_list) if a == i0], x)
-                    if left == w and rng.random() >= escape_rate:
-                        code = 1
-                    elif right == w and rng.random() >= escape_rate:
-                        code = 2
-                    else:
-                        code = 3 + zigzag(w - i1)
-                self.parents.append((p, e))
-                free = (1, 2)
-            else:
-                while taken[next_root]:
-                    next_root += 1
-                t = next_root
-                src = list(tris[t])
-                codes = []
-                for c in src:
-                    if c in number:
-                        codes.append(len(corner_of) - number[c])
-                    else:
-                        codes.append(0)
-                        name(c)
-                self.parents.append(None)
-                free = (0, 1, 2)
-            taken[t] = True
-            order.append(t)
-            tri = [number[c] for c in src]
-            self.tris.append(tri)
-            kids = []
-            for e in free if path else rng.sample(free, len(free)):
-                for u in neighbours.get((src[(e + 1) % 3], src[e]), []):
-                    if not taken[u] and not (path and kids):
-                        taken[u] = True
-                        kids.append((e, u))
-            edges = tuple(e for e, _ in kids)
-            if self.parents[j] is None:
-                symbols.append(ROOT_LISTS.index(edges))
-                escapes += codes
-            else:
-                symbols.append(4 * ATTACHED_LISTS.index(edges) + min(code, 3))
-                if code >= 3:
-                    escapes.append(code - 3)
-            for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
-                rev = [k for k, edge in enumerate(open_list) if edge == (b, a)]
-                if rev:
-                    del open_list[rev[-1]]
-                else:
-                    open_list.append((a, b))
-            for e, u in reversed(kids):
-                slots.append((j, e, u))
-        v = len(corner_of)
-        self.flags = [1 if corner_of[c] in xyz else 0 for c in range(v)]
-        self.explicit = [c for c in range(v) if self.flags[c]]
-        self.coords = {c: list(xyz[corner_of[c]]) for c in self.explicit}
-        walk_faces = [faces[t] for t in order]
-        face_codes = []
-        for j, f in enumerate(walk_faces):
-            inherit = walk_faces[self.parents[j][0]] if self.parents[j] else (walk_faces[j - 1] if j else -1)
-            face_codes.append(0 if f == inherit else 1 if f < 0 else f + 2)
-        around = [set() for _ in range(v)]
-        for tri, f in zip(self.tris, walk_faces):
-            if f >= 0:
-                for c in tri:
-                    around[c].add(f)
-        picks, self.vertex_planes = [], []
-        for c in range(v):
-            if not self.flags[c]:
-                abc = list(planes[corner_of[c]])
-                self.vertex_planes.append(abc)
-                if len(around[c]) > 3:
-                    picks += [sorted(around[c]).index(p) for p in abc]
-        flag_bytes = bytearray((v + 7) // 8)
-        for c in self.explicit:
-            flag_bytes[c >> 3] |= 1 << (c & 7)
-        self.head = (uv(v) + uv(len(self.tris)) + uv(len(escapes)) + b"".join(map(uv, symbols))
-                     + b"".join(map(uv, escapes)) + b"".join(map(uv, face_codes)) + bytes(flag_bytes)
-                     + b"".join(map(uv, picks)))
-        self.facets = [[f, *tri] for f, tri in zip(walk_faces, self.tris)]
-
-    # --- §9.16 --------------------------------------------------------------------------------
-
-    def source(self, k):
-        """The step source p(k): §9.11's predictor, whatever bit 0 of the mode."""
-        j = self.named_by[k]
-        if self.parents[j] is not None and self.flags[self.tris[j][0]]:
-            return self.tris[j][0]
-        before = [c for c in self.explicit if c < k]
-        return before[-1] if before else None
+    kind = 12
+    grid_format = "<4f"  # §9.11, version 5: four f32, which the grid's values are
 
     def chain(self, k):
-        a = self.source(k)
-        b = None if a is None else self.source(a)
-        c = None if b is None else self.source(b)
+        a = self.step_source(k)
+        b = None if a is None else self.step_source(a)
+        c = None if b is None else self.step_source(b)
         return None if c is None else (a, b, c)
 
     def reflection(self, k, g):
@@ -273,90 +59,16 @@ class Walk:
         return [g[a][x] + math.floor(along * d2[x] - d1[x] + Fraction(1, 2)) for x in range(3)]
 
     def predict(self, k, g, mode, kind):
-        """The prediction of explicit corner k from g (resolved values of the corners below k)."""
-        if kind == 12:
-            turned = self.reflection(k, g)
-            if turned is not None:
-                return turned
-        j = self.named_by[k]
-        tri = self.tris[j]
-        if mode & 1 and self.parents[j] is not None:  # §9.12
-            p, e = self.parents[j]
-            o = self.tris[p][(e + 2) % 3]
-            if self.flags[tri[0]] and self.flags[tri[1]] and self.flags[o]:
-                return [g[tri[0]][x] + g[tri[1]][x] - g[o][x] for x in range(3)]
-        a = self.source(k)
-        return [0, 0, 0] if a is None else list(g[a])
-
-    def tables(self):
-        return [sorted({self.coords[c][x] for c in self.explicit}) for x in range(3)]
-
-    def values(self, mode):
-        """g: the coordinates, or with tables the indices into each axis's table."""
-        if mode & 2:
-            t = self.tables()
-            return {c: [t[x].index(self.coords[c][x]) for x in range(3)] for c in self.explicit}
-        return {c: list(self.coords[c]) for c in self.explicit}
-
-    def residuals(self, mode, kind=12, g=None):
-        """The residuals of values g (by default the coordinates' values)."""
-        g = self.values(mode) if g is None else g
-        return {k: [g[k][x] - p for x, p in enumerate(self.predict(k, g, mode, kind))] for k in self.explicit}
-
-    def resolve(self, residuals, mode, kind=12):
-        """The values a reader resolves from residuals, unchecked."""
-        g = {}
-        for k in self.explicit:
-            g[k] = [p + r for p, r in zip(self.predict(k, g, mode, kind), residuals[k])]
-        return g
+        turned = self.reflection(k, g) if kind == 12 else None
+        return super().predict(k, g, mode, kind) if turned is None else turned
 
     def turning(self, mode):
         """The explicit corners whose chain turns on the encoder's values."""
         g = self.values(mode)
         return [k for k in self.explicit if self.reflection(k, g) is not None]
 
-    def body(self, mode, kind=12, residuals=None, tables=None):
-        data = self.head
-        if not self.explicit:
-            return data
-        if residuals is None:
-            residuals = self.residuals(mode, kind)
-        data += bytes([mode]) + struct.pack("<4f", *GRID)
-        if mode & 2:
-            for vals in (tables or self.tables()):
-                data += uv(len(vals)) + uv(zigzag(vals[0])) + b"".join(uv(b - a - 1) for a, b in zip(vals, vals[1:]))
-        for x in range(3):
-            data += b"".join(uv(zigzag(residuals[k][x])) for k in self.explicit)
-        return data
-
-    def shell(self):
-        return {"explicit": self.explicit, "vertex_planes": self.vertex_planes,
-                "grid": [self.coords[c] for c in self.explicit],
-                "origin": list(GRID[:3]) if self.explicit else None,
-                "step": GRID[3] if self.explicit else None, "facets": self.facets}
-
 
 # --- meshes ---------------------------------------------------------------------------------------
-
-def from_trimesh(mesh, scale, rng):
-    """Explicit corners on an integer grid; triangles shuffled and rotated at random."""
-    vs = [[round(float(x) * scale) for x in v] for v in mesh.vertices]
-    tris = [[int(i) for i in f] for f in mesh.faces]
-    rng.shuffle(tris)
-    tris = [t[r:] + t[:r] for t in tris for r in [rng.randrange(3)]]
-    return tris, [-1] * len(tris), dict(enumerate(vs)), {}
-
-
-def icosphere(rng):
-    import trimesh
-    return from_trimesh(trimesh.creation.icosphere(subdivisions=2), 1000, rng)
-
-
-def torus(rng):
-    import trimesh
-    return from_trimesh(trimesh.creation.torus(major_radius=3.0, minor_radius=1.0, major_sections=16,
-                                               minor_sections=10), 300, rng)
-
 
 def tube(sections=24, rings=6, radius=4000, pitch=900):
     """An open tube: rings of corners on circles, each band of quads split into two triangles;
@@ -379,18 +91,8 @@ def fan_walk(n):
     are placed by the residuals a test gives."""
     tris = [[0, 1, 2]] + [[k - 1, 1, k] for k in range(3, n + 2)]
     walk = Walk(tris, [-1] * len(tris), {c: [0, 0, 0] for c in range(n + 2)}, {}, rng=random.Random(0))
-    assert all(walk.source(k) == k - 1 for k in range(1, n + 2))
+    assert all(walk.step_source(k) == k - 1 for k in range(1, n + 2))
     return walk
-
-
-def golden(name):
-    d = json.loads((SUITE / "valid" / f"{name}.json").read_text())
-    g = next(g for g in d["groups"] if "shell" in g)
-    sh = g["shell"]
-    xyz = dict(zip(sh["explicit"], sh["grid"]))
-    named = [c for c in range(len(xyz) + len(sh["vertex_planes"])) if c not in xyz]
-    mesh = ([f[1:] for f in sh["facets"]], [f[0] for f in sh["facets"]], xyz, dict(zip(named, sh["vertex_planes"])))
-    return d["planes"], g["refs"], g["bounding"], mesh
 
 
 MESHES = {"icosphere": icosphere, "torus": torus, "tube": lambda rng: tube()}
@@ -424,10 +126,10 @@ def test_meshes_round_trip(mesh, mode):
 def test_golden_shells_round_trip(name, mode):
     """Named corners among the explicit ones: a step source is explicit, so a triangle whose i0 is
     named steps from the previous explicit corner, and so may the chain."""
-    planes, refs, bounding, mesh = golden(name)
+    planes, g, mesh = golden_shell(name)
     for seed in range(2):
         walk = Walk(*mesh, rng=random.Random(seed), escape_rate=0.3 * seed)
-        assert decoded(walk.body(mode), planes, refs, bounding) == walk.shell()
+        assert decoded(walk.body(mode), planes, g["refs"], g["bounding"]) == walk.shell()
 
 
 def test_chains_turn_round_a_tube():
@@ -438,7 +140,7 @@ def test_chains_turn_round_a_tube():
     corners."""
     sections = 24
     walk = Walk(*tube(sections=sections), rng=random.Random(4), path=True)
-    assert walk.parents.count(None) == 1 and len(walk.turning(0)) == len(walk.explicit) - 3
+    assert walk.parent.count(None) == 1 and len(walk.turning(0)) == len(walk.explicit) - 3
     later = walk.explicit[2 * sections:]
     step = walk.residuals(0, 9)
     for mode in (0, 1):

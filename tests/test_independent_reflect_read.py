@@ -1,236 +1,38 @@
 """Kind 12 (spec/pln.md §9.16, shell walks with reflections) and version 5.1 in the independent reader
 conformance/independent/plnread.py, on hand-built version 5.1 files.
 
-The files come from an encoder written here from the text of §9.13 and §9.16 (neither from planefmt
-nor from either independent reader, and not sharing code with the other tests). It differs from
-plnread on purpose where it can: it keeps the open edges of §9.13 as a plain list searched from its
-newest end, finds each corner's step source by scanning the triangles for the one whose code named
-it, and computes the reflection of §9.16 as a projection in exact fractions, rounded with Python's
-round() after checking that no component is a half (N/D never is: a lattice vector reflected in a
-lattice line has no half-integer component, so the text's rounding of halves never applies). Each
-mesh (trimesh's primitives, golden shells with named corners, and a cone whose open fan is walked
-round its rim) is encoded in all four modes, read back, and compared with the shell the encoder
-meant; then hostile bodies built field by field (a resolved value pushed past 2^52 by the
-reflection of a turning chain, and not by a chain a component beyond 2^18 keeps from turning; an
-index pushed outside its table; a mode bit above 1) must be refused with BAD_GROUP_STRUCTURE, and
+The files come from an encoder written from the text of §9.13 and §9.16 (neither from planefmt nor
+from either independent reader): tests/spec_files.py's walk, and the prediction here. It differs
+from plnread on purpose where it can: the walk keeps the open edges of §9.13 as a plain list
+searched from its newest end, each corner's step source is found by scanning the triangles for the
+one whose code named it, and the reflection of §9.16 is computed as a projection in exact fractions,
+rounded with Python's round() after checking that no component is a half (N/D never is: a lattice
+vector reflected in a lattice line has no half-integer component, so the text's rounding of halves
+never applies). Each mesh (trimesh's primitives, golden shells with named corners, and a cone whose
+open fan is walked round its rim) is encoded in all four modes, read back, and compared with the
+shell the encoder meant; then hostile bodies built field by field (a resolved value pushed past 2^52
+by the reflection of a turning chain, and not by a chain a component beyond 2^18 keeps from turning;
+an index pushed outside its table; a mode bit above 1) must be refused with BAD_GROUP_STRUCTURE, and
 the version rules of §9.2, §9.3 and §13 hold for kind 12 (UNKNOWN_GROUP_KIND in a 5.0 file)."""
 
 from __future__ import annotations
 
-import importlib.util
-import io
-import itertools
-import json
 import math
 import random
 import struct
-import zlib
 from fractions import Fraction
-from pathlib import Path
+from functools import partial
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "conformance"
+from spec_files import (Walk, golden_shell, pln_file, residual_bytes, shuffled, table_bytes, trimesh_meshes, uv,
+                        walk_head)
+from spec_files import read_read as read
+
 LIMIT = 2**52
 TURN = 2**18
 
-
-def _load_plnread():
-    spec = importlib.util.spec_from_file_location("plnread", SUITE / "independent" / "plnread.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-plnread = _load_plnread()
-
-
-# --- bytes --------------------------------------------------------------------------------------
-
-def uv(v: int) -> bytes:
-    """An unsigned LEB128 varint (§2.2)."""
-    assert v >= 0
-    out = bytearray()
-    while v >= 0x80:
-        out.append((v & 0x7F) | 0x80)
-        v >>= 7
-    out.append(v)
-    return bytes(out)
-
-
-def zigzag(d: int) -> int:
-    return 2 * d if d >= 0 else -2 * d - 1
-
-
-def make_chunk(tag: bytes, payload: bytes, u32_length: bool) -> bytes:
-    """§4.1: PHDR, and every chunk before version 5, with a u32 length; a later chunk of a version 5
-    file with a varint32 one."""
-    length = struct.pack("<I", len(payload)) if u32_length else uv(len(payload))
-    return tag + length + payload + struct.pack("<I", zlib.crc32(tag + payload))
-
-
-def pln(groups, planes=(), minor=1, major=5):
-    """A version major.minor file: planes in float32 where every value is a float32, else float64;
-    one object; `groups` as (kind, refs, bounding, kind data), bodies stored uncompressed. Version
-    5's header has an 8-byte fixed part (§5), version 4's a 9-byte one (A.5)."""
-    f32 = all(struct.unpack("<f", struct.pack("<f", x))[0] == x for p in planes for x in p)
-    flags = b"\x00" if major >= 5 else b"\x00\x00"
-    header = bytes([major, minor]) + flags + bytes([0 if f32 else 1, 0, 0, 0, 1])
-    header += struct.pack("<ff", math.nan, math.nan)
-    old = major < 5
-    out = b"\x89PLN\r\n\x1a\n" + make_chunk(b"PHDR", header, True)
-    if planes:
-        raw = b"".join(struct.pack("<3f" if f32 else "<3d", *p) for p in planes)
-        out += make_chunk(b"PLNS", uv(0) + uv(len(planes)) + b"\x00" + uv(len(raw)) + raw, old)
-    out += make_chunk(b"OBJT", uv(0) + uv(0) + b"\x00" + uv(1) + b"m", old)
-    for index, (kind, refs, bounding, data) in enumerate(groups):
-        body = uv(len(refs)) + b"".join(uv(r - p) for r, p in zip(refs, [0] + list(refs[:-1])))
-        roles = bytearray((len(refs) + 7) // 8)
-        for i in bounding:
-            roles[i // 8] |= 1 << (i % 8)
-        body += bytes(roles) + data
-        out += make_chunk(b"GRUP", uv(index) + uv(0) + bytes([kind, 0]) + uv(len(body)) + body, old)
-    return out + make_chunk(b"PEND", b"", old)
-
-
-def read(data: bytes):
-    reader = plnread.Reader(io.BytesIO(data), len(data))
-    try:
-        reader.read()
-    except plnread.PlnError as exc:
-        return {"error": exc.code, "why": exc.message}
-    return json.loads(json.dumps(reader.result()))
-
-
-# --- the walk (§9.13) -----------------------------------------------------------------------------
-
-def ordered_lists(free):
-    """§9.13: the ordered lists of distinct free edges, by length, then in lexicographic order of
-    the edges' places among the free edges."""
-    out = []
-    for length in range(len(free) + 1):
-        out += [tuple(free[i] for i in pl) for pl in itertools.permutations(range(len(free)), length)]
-    return out
-
-
-ROOT_CHILDREN = ordered_lists((0, 1, 2))
-ATTACHED_CHILDREN = ordered_lists((1, 2))
-
-
-class OpenList:
-    """§9.13's open edges, word for word: a list of directed edges in order of entry."""
-
-    def __init__(self):
-        self.items = []
-
-    def add(self, tri):
-        for s in range(3):
-            a, b = tri[s], tri[(s + 1) % 3]
-            for k in range(len(self.items) - 1, -1, -1):
-                if self.items[k] == (b, a):
-                    del self.items[k]
-                    break
-            else:
-                self.items.append((a, b))
-
-    def left(self, i1, x):
-        starts = [a for a, b in self.items[::-1] if b == i1]
-        if starts and starts[0] == x:
-            starts = starts[1:]
-        return starts[0] if starts else None
-
-    def right(self, i0, x):
-        ends = [b for a, b in self.items[::-1] if a == i0]
-        if ends and ends[0] == x:
-            ends = ends[1:]
-        return ends[0] if ends else None
-
-
-class Walk:
-    """A depth-first walk over a triangle list (source corner ids), with the symbols and escapes
-    that code it, each root rotated at random. Attributes: tris (walk order, corners numbered as
-    the walk names them), parent ((p, e) or None per triangle), new (per triangle, the corners its
-    codes 0 name anew), source (walk triangle -> source triangle), number (source corner -> corner
-    number)."""
-
-    def __init__(self, tris, rng, escape_rate=0.0):
-        by_edge = {}
-        for t, tri in enumerate(tris):
-            for s in range(3):
-                by_edge.setdefault((tri[s], tri[(s + 1) % 3]), []).append(t)
-        claimed = [False] * len(tris)
-        self.tris, self.parent, self.source, self.new = [], [], [], []
-        self.symbols, self.escapes = [], []
-        self.number = {}
-        opened = OpenList()
-        stack = []
-        unwalked = iter(range(len(tris)))
-        while len(self.tris) < len(tris):
-            j = len(self.tris)
-            named = []
-            if stack:
-                p, e, t = stack.pop()
-                q = self.tris[p]
-                i0, i1, x = q[(e + 1) % 3], q[e], q[(e + 2) % 3]
-                back = {v: k for k, v in self.number.items()}
-                src = tris[t]
-                r = next(r for r in range(3) if src[r] == back[i0] and src[(r + 1) % 3] == back[i1])
-                rot = [src[r], src[(r + 1) % 3], src[(r + 2) % 3]]
-                if rot[2] not in self.number:
-                    code = 0
-                    self.number[rot[2]] = len(self.number)
-                    named.append(self.number[rot[2]])
-                else:
-                    w = self.number[rot[2]]
-                    if opened.left(i1, x) == w and rng.random() >= escape_rate:
-                        code = 1
-                    elif opened.right(i0, x) == w and rng.random() >= escape_rate:
-                        code = 2
-                    else:
-                        code = 3 + zigzag(w - i1)
-                corners = [i0, i1, self.number[rot[2]]]
-                self.parent.append((p, e))
-                free = (1, 2)
-            else:
-                t = next(u for u in unwalked if not claimed[u])
-                shift = rng.randrange(3)
-                rot = list(tris[t][shift:]) + list(tris[t][:shift])
-                corners, codes = [], []
-                for v in rot:
-                    if v not in self.number:
-                        codes.append(0)
-                        self.number[v] = len(self.number)
-                        named.append(self.number[v])
-                    else:
-                        codes.append(len(self.number) - self.number[v])
-                    corners.append(self.number[v])
-                self.parent.append(None)
-                free = (0, 1, 2)
-                code = None
-            claimed[t] = True
-            self.tris.append(corners)
-            self.source.append(t)
-            self.new.append(named)
-            kids = []
-            for e in rng.sample(free, len(free)):
-                a, b = rot[e], rot[(e + 1) % 3]
-                for u in by_edge.get((b, a), []):
-                    if not claimed[u]:
-                        claimed[u] = True
-                        kids.append((e, u))
-                        break
-            edges = tuple(e for e, _ in kids)
-            if code is None:
-                self.symbols.append(ROOT_CHILDREN.index(edges))
-                self.escapes += codes
-            else:
-                self.symbols.append(4 * ATTACHED_CHILDREN.index(edges) + min(code, 3))
-                if code >= 3:
-                    self.escapes.append(code - 3)
-            opened.add(corners)
-            for e, u in kids[::-1]:
-                stack.append((j, e, u))
+pln = partial(pln_file, major=5, minor=1, name=b"m")
 
 
 # --- predictions (§9.11, §9.12, §9.13, §9.16) ----------------------------------------------------
@@ -303,67 +105,21 @@ ORIGIN, STEP = [0.25, -3.0, 1.5], 0.0625  # float32 values
 GRID = struct.pack("<4f", *ORIGIN, STEP)  # §9.11, version 5: four f32
 
 
-def table_bytes(tables):
-    """§9.13: per axis a count, the first value (zigzag), then each gap less one."""
-    return b"".join(uv(len(vals)) + uv(zigzag(vals[0])) + b"".join(uv(y - x - 1) for x, y in zip(vals, vals[1:]))
-                    for vals in tables)
-
-
-def residual_bytes(residuals):
-    """§9.13: zigzag residuals, every corner's x, then every y, then every z."""
-    return b"".join(uv(zigzag(r[a])) for a in range(3) for r in residuals)
-
-
 def kind_data(walk, faces, explicit_xyz, named_planes, mode, kind=12):
-    """Kind 12 data (kind 9 with kind=9) for a walk. faces: per source triangle, a local reference
-    or -1; explicit_xyz: source corner -> integer coordinates; named_planes: source corner -> its
-    three planes (a subset of its face planes, ascending). Returns the data, the "shell" object a
-    reader must report, and g, the values the prediction works on (coordinates, or indices into
-    the tables)."""
-    v = len(walk.number)
-    src = {k: s for s, k in walk.number.items()}
-    wfaces = [faces[t] for t in walk.source]
-    codes = []
-    for j, f in enumerate(wfaces):
-        if walk.parent[j] is not None:
-            inherit = wfaces[walk.parent[j][0]]
-        else:
-            inherit = wfaces[j - 1] if j else -1
-        codes.append(0 if f == inherit else 1 if f < 0 else f + 2)
-    explicit = {k for k in range(v) if src[k] in explicit_xyz}
-    flags = bytearray((v + 7) // 8)
-    for k in explicit:
-        flags[k // 8] |= 1 << (k % 8)
-    on = {k: set() for k in range(v)}
-    for tri, f in zip(walk.tris, wfaces):
-        if f >= 0:
-            for k in tri:
-                on[k].add(f)
-    picks, vertex_planes = [], []
-    for k in range(v):
-        if k in explicit:
-            continue
-        planes = sorted(on[k])
-        chosen = named_planes[src[k]]
-        vertex_planes.append(list(chosen))
-        if len(planes) > 3:
-            picks += [planes.index(p) for p in chosen]
-    data = uv(v) + uv(len(walk.tris)) + uv(len(walk.escapes))
-    data += b"".join(uv(s) for s in walk.symbols) + b"".join(uv(x) for x in walk.escapes)
-    data += b"".join(uv(c) for c in codes) + bytes(flags) + b"".join(uv(p) for p in picks)
-    grid = [list(explicit_xyz[src[k]]) for k in sorted(explicit)]
-    shell = {"explicit": sorted(explicit), "vertex_planes": vertex_planes, "grid": grid,
-             "origin": None, "step": None, "facets": [[f] + t for f, t in zip(wfaces, walk.tris)]}
+    """Kind 12 data (kind 9 with kind=9) for a walk, faces, explicit_xyz and named_planes as
+    walk_head takes them. Returns the data, the "shell" object a reader must report, and g, the
+    values the prediction works on (coordinates, or indices into the tables)."""
+    data, shell = walk_head(walk, faces, explicit_xyz, named_planes)
     value = {}
-    if explicit:
+    if shell["explicit"]:
         shell["origin"], shell["step"] = ORIGIN, STEP
         data += bytes([mode]) + GRID
-        value = {k: list(explicit_xyz[src[k]]) for k in explicit}
+        value = {k: list(g) for k, g in zip(shell["explicit"], shell["grid"])}
         if mode & 2:
-            tables = [sorted({g[a] for g in grid}) for a in range(3)]
+            tables = [sorted({g[a] for g in shell["grid"]}) for a in range(3)]
             data += table_bytes(tables)
             value = {k: [tables[a].index(g[a]) for a in range(3)] for k, g in value.items()}
-        data += residual_bytes(residuals_for(walk, explicit, value, mode, kind))
+        data += residual_bytes(residuals_for(walk, set(value), value, mode, kind))
     return data, shell, value
 
 
@@ -391,22 +147,7 @@ def fan_shell(grid):
 
 # --- meshes ---------------------------------------------------------------------------------------
 
-def trimesh_meshes():
-    import trimesh
-    out = {
-        "icosphere": trimesh.creation.icosphere(subdivisions=2, radius=50.0),
-        "capsule": trimesh.creation.capsule(height=40.0, radius=12.0, count=[10, 10]),
-        "torus": trimesh.creation.torus(major_radius=40.0, minor_radius=12.0, major_sections=14,
-                                        minor_sections=9),
-    }
-    meshes = {}
-    for name, mesh in out.items():
-        xyz = {i: [int(round(c * 8)) for c in p] for i, p in enumerate(mesh.vertices.tolist())}
-        meshes[name] = ([list(map(int, f)) for f in mesh.faces.tolist()], xyz)
-    return meshes
-
-
-MESHES = trimesh_meshes()
+MESHES = trimesh_meshes("icosphere", "capsule", "torus")
 
 
 def cone(sections=40, radius=3000, height=2000):
@@ -416,12 +157,6 @@ def cone(sections=40, radius=3000, height=2000):
     xyz.update({j + 1: [round(radius * math.cos(2 * math.pi * j / sections)),
                         round(radius * math.sin(2 * math.pi * j / sections)), 0] for j in range(sections)})
     return [[j, 0, j + 1] for j in range(1, sections)], xyz
-
-
-def shuffled(tris, rng):
-    tris = [list(t) for t in tris]
-    rng.shuffle(tris)
-    return [t[r:] + t[:r] for t in tris for r in [rng.randrange(3)]]
 
 
 def encode_free(tris, xyz, mode, rng, kind=12, escape_rate=0.0):
@@ -460,22 +195,11 @@ def test_trimesh_meshes_round_trip(name, mode):
 GOLDENS = ["shell_tree_mixed_v3_3", "shell_tree_pyramid_v3_4", "shell_walk_sphere_v4_1"]
 
 
-def golden(name):
-    d = json.loads((SUITE / "valid" / f"{name}.json").read_text())
-    g = next(g for g in d["groups"] if "shell" in g)
-    sh = g["shell"]
-    tris = [f[1:] for f in sh["facets"]]
-    faces = [f[0] for f in sh["facets"]]
-    xyz = dict(zip(sh["explicit"], sh["grid"]))
-    named = [c for c in range(len(sh["explicit"]) + len(sh["vertex_planes"])) if c not in xyz]
-    return d["planes"], g, tris, faces, xyz, dict(zip(named, sh["vertex_planes"]))
-
-
 @pytest.mark.parametrize("mode", [0, 1, 2, 3])
 @pytest.mark.parametrize("name", GOLDENS)
 def test_golden_shells_round_trip(name, mode):
     """Named and explicit corners together, faces on planes: a step source is always explicit."""
-    planes, g, tris, faces, xyz, named = golden(name)
+    planes, g, (tris, faces, xyz, named) = golden_shell(name)
     for seed in range(2):
         walk = Walk(tris, random.Random(seed), escape_rate=0.3 * seed)
         data, shell, _ = kind_data(walk, faces, xyz, named, mode)

@@ -11,63 +11,12 @@ without references in a newer minor version, and the version 4 rules of Appendix
 
 from __future__ import annotations
 
-import importlib.util
-import math
 import struct
-import zlib
-from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "conformance"
-
-_spec = importlib.util.spec_from_file_location("plnspec", SUITE / "independent" / "plnspec.py")
-plnspec = importlib.util.module_from_spec(_spec)
-_spec.loader.exec_module(plnspec)
-
-SIGNATURE = b"\x89PLN\r\n\x1a\n"
-
-
-def uv(v: int) -> bytes:
-    """§2.2: unsigned LEB128, minimal."""
-    out = bytearray()
-    while v >= 0x80:
-        out.append(0x80 | (v & 0x7F))
-        v >>= 7
-    out.append(v)
-    return bytes(out)
-
-
-def zz(d: int) -> int:
-    return 2 * d if d >= 0 else -2 * d - 1
-
-
-def crc(ctype: bytes, payload: bytes) -> bytes:
-    return struct.pack("<I", zlib.crc32(ctype + payload))
-
-
-def u32_chunk(ctype: bytes, payload: bytes) -> bytes:
-    return ctype + struct.pack("<I", len(payload)) + payload + crc(ctype, payload)
-
-
-def varint_chunk(ctype: bytes, payload: bytes, length: bytes | None = None) -> bytes:
-    """§4.1, version 5: the length as a varint32 (``length``: other bytes in its place)."""
-    return ctype + (uv(len(payload)) if length is None else length) + payload + crc(ctype, payload)
-
-
-def phdr(major=5, minor=0, flags=0, coding=0, units=1, up=0, counts=None) -> bytes:
-    """§5 (version 5: flags a u8, the up axis in bits 4-5 of units) or A.5 (version 4: flags a u16)."""
-    if counts is not None:
-        flags |= 2
-    if major >= 5:
-        p = bytes([major, minor, flags, coding, 0, 0, 0, units | up << 4])
-    else:
-        p = bytes([major, minor]) + struct.pack("<HB3BB", flags, coding, 0, 0, 0, units | up << 4)
-    p += struct.pack("<ff", math.nan, math.nan)
-    if counts is not None:
-        p += b"".join(uv(n) for n in counts)
-    return p
+from spec_files import SIGNATURE, group_body, grup, objt, phdr, plns, u32_chunk, uv, varint_chunk, zigzag
+from spec_files import read_spec as read
 
 
 def pln(chunks, header: bytes | None = None, index: bool = False, framing=None) -> bytes:
@@ -90,24 +39,9 @@ def pln(chunks, header: bytes | None = None, index: bool = False, framing=None) 
     return out + frame(b"PEND", struct.pack("<Q", at))
 
 
-def objt(k: int, name: bytes = b"o") -> bytes:
-    return uv(k) + uv(0) + b"\x00" + uv(len(name)) + name
-
-
-def body(refs, data: bytes) -> bytes:
-    """§9.2: ref_count, the differences, the role bits (all 0), the kind data."""
-    return uv(len(refs)) + b"".join(uv(r - p) for p, r in zip([0] + refs, refs)) + bytes((len(refs) + 7) // 8) + data
-
-
-def grup(k: int, kind: int, refs, data: bytes, obj: int = 0) -> bytes:
-    raw = body(refs, data)
-    return uv(k) + uv(obj) + bytes([kind, 0]) + uv(len(raw)) + raw
-
-
-def plns(planes) -> bytes:
-    """§7.1, coding 0 (float32)."""
-    raw = b"".join(struct.pack("<3f", *p) for p in planes)
-    return uv(0) + uv(len(planes)) + b"\x00" + uv(len(raw)) + raw
+def group(k: int, kind: int, refs, data: bytes, obj: int = 0) -> bytes:
+    """§9.1 and §9.2: a GRUP payload, stored, its role bits all 0."""
+    return grup(k, obj, kind, group_body(refs, (), data))
 
 
 # A tetrahedron as a shell walk (§9.13), every corner explicit, every triangle free: root (0 1 2),
@@ -121,21 +55,14 @@ TET_RESIDUALS = [[0, 0, 0], [0, 1, 0], [1, -1, 0], [0, -1, 1]]
 def walk_data(grid: bytes) -> bytes:
     data = uv(4) + uv(4) + uv(3) + b"".join(uv(s) for s in (10, 0, 1, 1)) + uv(0) * 3 + uv(1) * 4 + b"\x0f"
     data += b"\x00" + grid  # mode 0, then the grid
-    return data + b"".join(uv(zz(r[a])) for a in range(3) for r in TET_RESIDUALS)
+    return data + b"".join(uv(zigzag(r[a])) for a in range(3) for r in TET_RESIDUALS)
 
 
 F32_GRID = struct.pack("<4f", 0.5, -0.25, 0.0, 0.125)  # §9.13 as §9.11, version 5: 16 bytes
 F64_GRID = struct.pack("<4d", 0.5, -0.25, 0.0, 0.125)  # A.5: 32 bytes
 TET_SHELL = {"explicit": [0, 1, 2, 3], "vertex_planes": [], "grid": TET_XYZ, "origin": [0.5, -0.25, 0.0],
              "step": 0.125, "facets": [[-1, *t] for t in TET_TRIS]}
-WALK = grup(0, 9, [], walk_data(F32_GRID))
-
-
-def read(data: bytes) -> dict:
-    try:
-        return plnspec.Reader(data).read()
-    except plnspec.PlnError as exc:
-        return {"error": exc.code, "why": str(exc)}
+WALK = group(0, 9, [], walk_data(F32_GRID))
 
 
 def error(data: bytes) -> str | None:
@@ -151,7 +78,7 @@ def test_a_planeless_walk_its_copy_a_three_byte_length_and_an_index():
     big = bytes(range(256)) * 78 + bytes(32)  # 20,000 bytes
     assert len(uv(len(big))) == 3
     chunks = [(b"mETA", b"author\x00me"), (b"zZZZ", big), (b"OBJT", objt(0, b"tet")), (b"GRUP", WALK),
-              (b"OBJT", objt(1, b"twin")), (b"GRUP", grup(1, 11, [], uv(0), obj=1))]
+              (b"OBJT", objt(1, b"twin")), (b"GRUP", group(1, 11, [], uv(0), obj=1))]
     got = read(pln(chunks, header=phdr(up=2, counts=(0, 2, 2)), index=True))
     assert "error" not in got, got
     assert got["header"]["version"] == [5, 0] and got["header"]["units"] == 1 and got["header"]["coding"] == 0
@@ -178,10 +105,10 @@ def test_a_shell_on_planes_beside_one_without():
     """Kind 6 (§9.10) with an f32 grid: a shell without references whose triangles are all free, and a
     cOLR only for a group with references."""
     # corners 0-2 explicit, one free triangle: flags 0x07, grid, steps, then codes 0 0 0
-    shell = uv(3) + uv(1) + uv(1) + b"\x07" + F32_GRID + b"".join(uv(zz(s)) for s in (0, 0, 0, 1, 0, 0, -1, 1, 0))
+    shell = uv(3) + uv(1) + uv(1) + b"\x07" + F32_GRID + b"".join(uv(zigzag(s)) for s in (0, 0, 0, 1, 0, 0, -1, 1, 0))
     shell += uv(0) * 3
-    chunks = [(b"OBJT", objt(0)), (b"PLNS", plns([[0.0, 0.0, 1.0]])), (b"GRUP", grup(0, 0, [0], b"")),
-              (b"cOLR", struct.pack("<II", 0, 1) + bytes(4)), (b"GRUP", grup(1, 6, [], shell))]
+    chunks = [(b"OBJT", objt(0)), (b"PLNS", plns([[0.0, 0.0, 1.0]], 0)), (b"GRUP", group(0, 0, [0], b"")),
+              (b"cOLR", struct.pack("<II", 0, 1) + bytes(4)), (b"GRUP", group(1, 6, [], shell))]
     got = read(pln(chunks, index=True))
     assert "error" not in got, got
     assert got["groups"][1]["shell"] == {"explicit": [0, 1, 2], "vertex_planes": [],
@@ -244,16 +171,16 @@ def test_a_second_phdr_is_framed_as_every_chunk_after_the_first():
 def test_version_4_framing_and_grids_stay():
     """A.5: a version 4.2 file has u32 lengths and 32-byte grids and no group without references."""
     v4 = phdr(major=4, minor=2)
-    walk = grup(0, 9, [0], walk_data(F64_GRID))
-    chunks = [(b"OBJT", objt(0)), (b"PLNS", plns([[0.0, 0.0, 1.0]])), (b"GRUP", walk)]
+    walk = group(0, 9, [0], walk_data(F64_GRID))
+    chunks = [(b"OBJT", objt(0)), (b"PLNS", plns([[0.0, 0.0, 1.0]], 0)), (b"GRUP", walk)]
     got = read(pln(chunks, header=v4, index=True))
     assert "error" not in got, got
     assert got["groups"][0]["shell"] == TET_SHELL
     assert error(pln(chunks, header=v4, framing=varint_chunk)) in ("CRC_MISMATCH", "TRUNCATED")
-    assert error(pln([(b"OBJT", objt(0)), (b"GRUP", grup(0, 9, [], walk_data(F64_GRID)))], header=v4)) \
+    assert error(pln([(b"OBJT", objt(0)), (b"GRUP", group(0, 9, [], walk_data(F64_GRID)))], header=v4)) \
         == "BAD_GROUP_STRUCTURE"
     # a version 5 walk with the 32 bytes of version 4: 16 bytes too many where the coordinates end
-    assert error(pln([(b"OBJT", objt(0)), (b"GRUP", grup(0, 9, [], walk_data(F64_GRID)))])) == "BAD_GROUP_STRUCTURE"
+    assert error(pln([(b"OBJT", objt(0)), (b"GRUP", group(0, 9, [], walk_data(F64_GRID)))])) == "BAD_GROUP_STRUCTURE"
 
 
 # --- header (§5) ----------------------------------------------------------------------------------
@@ -267,7 +194,7 @@ def test_header_checks():
     assert error(pln(CUBE_LIKE, header=phdr(units=8))) == "BAD_HEADER_VALUE"
     assert error(pln(CUBE_LIKE, header=phdr(major=6))) == "UNSUPPORTED_VERSION"
     # A.5: in a version 4 header units is the unit alone: 0x21 is above 7
-    v4 = [(b"OBJT", objt(0)), (b"PLNS", plns([[0.0, 0.0, 1.0]])), (b"GRUP", grup(0, 0, [0], b""))]
+    v4 = [(b"OBJT", objt(0)), (b"PLNS", plns([[0.0, 0.0, 1.0]], 0)), (b"GRUP", group(0, 0, [0], b""))]
     assert error(pln(v4, header=phdr(major=4, minor=2, units=1, up=2))) == "BAD_HEADER_VALUE"
 
 
@@ -276,8 +203,8 @@ def test_up_axis_in_meta():
     whatever its value, and allowed in a version 4 file."""
     for value in (b"Z", b"Y", b"X"):
         assert error(pln([(b"mETA", b"up_axis\x00" + value)] + CUBE_LIKE)) == "BAD_METADATA"
-    v4 = [(b"mETA", b"up_axis\x00Z"), (b"OBJT", objt(0)), (b"PLNS", plns([[0.0, 0.0, 1.0]])),
-          (b"GRUP", grup(0, 0, [0], b""))]
+    v4 = [(b"mETA", b"up_axis\x00Z"), (b"OBJT", objt(0)), (b"PLNS", plns([[0.0, 0.0, 1.0]], 0)),
+          (b"GRUP", group(0, 0, [0], b""))]
     assert read(pln(v4, header=phdr(major=4, minor=2)))["metadata"] == {"up_axis": "Z"}
 
 
@@ -285,13 +212,13 @@ def test_up_axis_in_meta():
 
 @pytest.mark.parametrize("kind", [0, 1, 2, 3, 4, 5])
 def test_no_references_in_kinds_0_to_5(kind):
-    assert error(pln([(b"OBJT", objt(0)), (b"GRUP", grup(0, kind, [], b"\x00"))])) == "BAD_GROUP_STRUCTURE"
+    assert error(pln([(b"OBJT", objt(0)), (b"GRUP", group(0, kind, [], b"\x00"))])) == "BAD_GROUP_STRUCTURE"
 
 
 def test_no_references_in_a_kind_of_a_newer_minor_version():
     """§9.2 step 2: a kind of a newer minor version decides for itself, so a reader that skips it
     accepts m = 0 (SPEC_NOTES 56); version 4 rejects m = 0 in every kind (A.5)."""
-    chunks = [(b"OBJT", objt(0)), (b"GRUP", grup(0, 13, [], b"\x01\x02"))]
+    chunks = [(b"OBJT", objt(0)), (b"GRUP", group(0, 13, [], b"\x01\x02"))]
     got = read(pln(chunks, header=phdr(minor=2)))
     assert "error" not in got, got
     assert set(got["findings"]) == {"SKIPPED_GROUP_KIND", "NEWER_MINOR_VERSION"}
@@ -304,6 +231,6 @@ def test_a_shell_without_references_names_no_plane():
     data = bytearray(walk_data(F32_GRID))
     faces_at = 3 + 4 + 3  # the counts, the symbols, the escapes
     data[faces_at] = 2  # triangle 0 on local reference 0
-    assert error(pln([(b"OBJT", objt(0)), (b"GRUP", grup(0, 9, [], bytes(data)))])) == "BAD_GROUP_STRUCTURE"
-    got = read(pln([(b"OBJT", objt(0)), (b"GRUP", grup(0, 10, [], walk_data(F32_GRID)))]))
+    assert error(pln([(b"OBJT", objt(0)), (b"GRUP", group(0, 9, [], bytes(data)))])) == "BAD_GROUP_STRUCTURE"
+    got = read(pln([(b"OBJT", objt(0)), (b"GRUP", group(0, 10, [], walk_data(F32_GRID)))]))
     assert "error" not in got and got["groups"][0]["refs"] == []  # kind 10 alike

@@ -1,8 +1,8 @@
 """Kind 9 (spec/pln.md §9.13, shell walks) in the two independent readers,
 conformance/independent/plnspec.py and plnread.py, on hand-built version 4.1 files.
 
-The files come from a small walk encoder written here from §9.13 (not from the readers): it keeps
-the open edges as a plain list searched from its newest end, so it also checks the readers'
+The files come from a walk encoder written from §9.13 (not from the readers), tests/spec_files.py's:
+it keeps the open edges as a plain list searched from its newest end, so it also checks the readers'
 constant-time structures (a map of edge stacks and per-corner linked lists) against the text's
 definition. Each mesh is encoded, read back by both readers, and compared with the shell the
 encoder meant (corners, triangles in walk order, faces, named corners' planes, explicit corners'
@@ -11,293 +11,23 @@ for agreement between the two readers."""
 
 from __future__ import annotations
 
-import importlib.util
-import io
-import itertools
-import json
 import math
 import random
 import struct
-import zlib
-from pathlib import Path
+from functools import partial
 
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-SUITE = ROOT / "conformance"
+from spec_files import CodedWalk, golden_shell, pln_file, plnspec, read_read, read_spec, shuffled, uv, zigzag
 
-
-def _load(name):
-    spec = importlib.util.spec_from_file_location(name, SUITE / "independent" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-plnspec = _load("plnspec")
-plnread = _load("plnread")
-
-
-# --- bytes --------------------------------------------------------------------------------------
-
-def varint(v: int) -> bytes:
-    assert v >= 0
-    out = bytearray()
-    while True:
-        b = v & 0x7F
-        v >>= 7
-        if v:
-            out.append(b | 0x80)
-        else:
-            out.append(b)
-            return bytes(out)
-
-
-def zz(d: int) -> int:
-    return 2 * d if d >= 0 else -2 * d - 1
-
-
-def chunk(ctype: bytes, payload: bytes) -> bytes:
-    return ctype + struct.pack("<I", len(payload)) + payload + struct.pack("<I", zlib.crc32(ctype + payload))
-
-
-def pln_file(planes, groups, minor=1):
-    """A version 4.`minor` file: float32 planes where each value is one (the goldens' float32
-    planes, whose pi is above binary64's), else float64; one object; `groups` as (kind, refs,
-    bounding, kind data), no compression."""
-    f32 = all(struct.unpack("<f", struct.pack("<f", x))[0] == x for p in planes for x in p)
-    phdr = bytes([4, minor]) + struct.pack("<HB3BB", 0, 0 if f32 else 1, 0, 0, 0, 1)
-    phdr += struct.pack("<ff", math.nan, math.nan)
-    out = b"\x89PLN\r\n\x1a\n" + chunk(b"PHDR", phdr)
-    raw = b"".join(struct.pack("<3f" if f32 else "<3d", *p) for p in planes)
-    out += chunk(b"PLNS", varint(0) + varint(len(planes)) + b"\x00" + varint(len(raw)) + raw)
-    out += chunk(b"OBJT", varint(0) + varint(0) + b"\x00" + varint(1) + b"o")
-    for index, (kind, refs, bounding, data) in enumerate(groups):
-        body = varint(len(refs))
-        last = 0
-        for r in refs:
-            body += varint(r - last)
-            last = r
-        roles = bytearray((len(refs) + 7) // 8)
-        for i in bounding:
-            roles[i >> 3] |= 1 << (i & 7)
-        body += bytes(roles) + data
-        out += chunk(b"GRUP", varint(index) + varint(0) + bytes([kind, 0]) + varint(len(body)) + body)
-    return out + chunk(b"PEND", b"")
-
-
-def read_spec(data: bytes):
-    try:
-        return plnspec.Reader(data).read()
-    except plnspec.PlnError as exc:
-        return {"error": exc.code, "why": str(exc)}
-
-
-def read_read(data: bytes):
-    reader = plnread.Reader(io.BytesIO(data), len(data))
-    try:
-        reader.read()
-    except plnread.PlnError as exc:
-        return {"error": exc.code, "why": exc.message}
-    return json.loads(json.dumps(reader.result()))
-
-
-# --- the walk encoder ---------------------------------------------------------------------------
-
-def child_lists(free):
-    """§9.13: the ordered lists of distinct free edges, by length, then lexicographically by the
-    edges' places among the free edges."""
-    out = []
-    for length in range(len(free) + 1):
-        out += [tuple(free[i] for i in places) for places in itertools.permutations(range(len(free)), length)]
-    return out
-
-
-ROOT_LISTS = child_lists((0, 1, 2))
-ATTACHED_LISTS = child_lists((1, 2))
-
-
-class NaiveOpenEdges:
-    """The open edges exactly as §9.13 words them: a list in order of entry."""
-
-    def __init__(self):
-        self.entries = []
-
-    def add(self, tri):
-        for a in range(3):
-            x, y = tri[a], tri[(a + 1) % 3]
-            for k in range(len(self.entries) - 1, -1, -1):
-                if self.entries[k] == (y, x):
-                    del self.entries[k]
-                    break
-            else:
-                self.entries.append((x, y))
-
-    def left(self, i1, opp):
-        starts = [a for a, b in reversed(self.entries) if b == i1]
-        if starts and starts[0] == opp:
-            starts = starts[1:]
-        return starts[0] if starts else None
-
-    def right(self, i0, opp):
-        ends = [b for a, b in reversed(self.entries) if a == i0]
-        if ends and ends[0] == opp:
-            ends = ends[1:]
-        return ends[0] if ends else None
+pln = partial(pln_file, major=4, minor=1)
 
 
 def encode_walk(tris, faces, explicit_xyz, named_planes, mode, rng, prefer_escape=0.0):
-    """Encode a shell as kind 9 data. tris: corner triples (source numbering); faces: local
-    reference or -1 per triangle; explicit_xyz: {source corner: [x, y, z]}; named_planes:
-    {source corner: [a, b, c]} (ascending, a subset of the corner's face planes). Returns the kind
-    data and the "shell" a reader must report."""
-    by_edge = {}
-    for t, tri in enumerate(tris):
-        for a in range(3):
-            by_edge.setdefault((tri[a], tri[(a + 1) % 3]), []).append(t)
-    done = [False] * len(tris)
-    order = []  # the source triangle of each walked one
-    stack = []
-    symbols, escapes = [], []
-    number = {}  # source corner -> corner number
-    n = 0
-    open_edges = NaiveOpenEdges()
-    walk_tris = []
-    named_by = {}
-    parents = []
-    pending = iter(range(len(tris)))
-    for _ in range(len(tris)):
-        if stack:
-            p, e, t = stack.pop()
-            q = walk_tris[p]
-            src = tris[t]
-            i0, i1 = q[(e + 1) % 3], q[e]
-            # rotate the source triangle so that its first two corners are i0, i1 (source numbers)
-            inv = {v: k for k, v in number.items()}
-            a0, a1 = inv[i0], inv[i1]
-            r = next(r for r in range(3) if src[r] == a0 and src[(r + 1) % 3] == a1)
-            rot = [src[r], src[(r + 1) % 3], src[(r + 2) % 3]]
-            third = rot[2]
-            opp = q[(e + 2) % 3]
-            if third not in number:
-                k = 0
-                number[third] = n
-                named_by[n] = len(walk_tris)
-                n += 1
-            else:
-                w = number[third]
-                if open_edges.left(i1, opp) == w and rng.random() >= prefer_escape:
-                    k = 1
-                elif open_edges.right(i0, opp) == w and rng.random() >= prefer_escape:
-                    k = 2
-                else:
-                    k = 3 + zz(w - i1)
-            corners = [i0, i1, number[third]]
-            free = (1, 2)
-            parents.append((p, e))
-        else:
-            t = next(x for x in pending if not done[x])
-            rot = list(tris[t])
-            corners = []
-            codes = []
-            for c in rot:
-                if c not in number:
-                    number[c] = n
-                    named_by[n] = len(walk_tris)
-                    n += 1
-                    codes.append(0)
-                else:
-                    codes.append(n - number[c])
-                corners.append(number[c])
-            free = (0, 1, 2)
-            parents.append(None)
-            k = None
-        done[t] = True
-        j = len(walk_tris)
-        walk_tris.append(corners)
-        order.append(t)
-        # children: across free edges, to triangles not yet walked or claimed, in a random order
-        kids = []
-        for e in rng.sample(free, len(free)):
-            a, b = rot[e], rot[(e + 1) % 3]
-            for u in by_edge.get((b, a), []):
-                if not done[u]:
-                    done[u] = True  # claimed
-                    kids.append((e, u))
-                    break
-        kid_edges = tuple(e for e, _ in kids)
-        if k is None:
-            symbols.append(ROOT_LISTS.index(kid_edges))
-            escapes += codes
-        else:
-            symbols.append(4 * ATTACHED_LISTS.index(kid_edges) + min(k, 3))
-            if k >= 3:
-                escapes.append(k - 3)
-        open_edges.add(corners)
-        for e, u in reversed(kids):
-            stack.append((j, e, u))
-    assert not stack and n == len(number)
-    src_of = {v: k for k, v in number.items()}
-    v_count = n
-    walk_faces = [faces[t] for t in order]
-    face_codes = []
-    for j, f in enumerate(walk_faces):
-        ref = walk_faces[parents[j][0]] if parents[j] is not None else (walk_faces[j - 1] if j else -1)
-        face_codes.append(0 if f == ref else 1 if f == -1 else f + 2)
-    flags = bytearray((v_count + 7) // 8)
-    explicit = [c for c in range(v_count) if src_of[c] in explicit_xyz]
-    for c in explicit:
-        flags[c >> 3] |= 1 << (c & 7)
-    around = {c: set() for c in range(v_count)}
-    for tri, f in zip(walk_tris, walk_faces):
-        if f >= 0:
-            for c in tri:
-                around[c].add(f)
-    picks, vertex_planes = [], []
-    for c in range(v_count):
-        if src_of[c] in explicit_xyz:
-            continue
-        pk = sorted(around[c])
-        abc = named_planes[src_of[c]]
-        vertex_planes.append(list(abc))
-        if len(pk) > 3:
-            picks += [pk.index(x) for x in abc]
-    data = varint(v_count) + varint(len(walk_tris)) + varint(len(escapes))
-    data += b"".join(map(varint, symbols)) + b"".join(map(varint, escapes)) + b"".join(map(varint, face_codes))
-    data += bytes(flags) + b"".join(map(varint, picks))
-    grid = [explicit_xyz[src_of[c]] for c in explicit]
-    shell = {"explicit": explicit, "vertex_planes": vertex_planes, "grid": grid, "origin": None, "step": None,
-             "facets": [[f, *tri] for f, tri in zip(walk_faces, walk_tris)]}
-    if explicit:
-        shell["origin"], shell["step"] = [0.5, -1.0, 2.0], 0.125
-        data += bytes([mode]) + struct.pack("<4d", 0.5, -1.0, 2.0, 0.125)
-        if mode & 2:
-            tables = [sorted({g[a] for g in grid}) for a in range(3)]
-            for vals in tables:
-                data += varint(len(vals)) + varint(zz(vals[0])) + b"".join(
-                    varint(y - x - 1) for x, y in zip(vals, vals[1:]))
-            value = {c: [tables[a].index(explicit_xyz[src_of[c]][a]) for a in range(3)] for c in explicit}
-        else:
-            value = {c: list(explicit_xyz[src_of[c]]) for c in explicit}
-        residuals = {}
-        prev = None
-        for c in explicit:  # the predictions of §9.11 and, with mode bit 0, §9.12
-            j = named_by[c]
-            pred = [0, 0, 0]
-            if parents[j] is not None and walk_tris[j][0] in value:
-                pred = value[walk_tris[j][0]]
-            elif prev is not None:
-                pred = value[prev]
-            if mode & 1 and parents[j] is not None:
-                p, e = parents[j]
-                i0, i1, o = walk_tris[j][0], walk_tris[j][1], walk_tris[p][(e + 2) % 3]
-                if i0 in value and i1 in value and o in value:
-                    pred = [value[i0][a] + value[i1][a] - value[o][a] for a in range(3)]
-            residuals[c] = [value[c][a] - pred[a] for a in range(3)]
-            prev = c
-        for a in range(3):
-            data += b"".join(varint(zz(residuals[c][a])) for c in explicit)
-    return data, shell
+    """Kind 9 data for a shell, and the "shell" a reader must report: tests/spec_files.py's
+    CodedWalk, whose arguments these are."""
+    walk = CodedWalk(tris, faces, explicit_xyz, named_planes, rng, escape_rate=prefer_escape)
+    return walk.body(mode), walk.shell()
 
 
 # --- meshes ---------------------------------------------------------------------------------------
@@ -312,8 +42,7 @@ def torus(nu, nv, rng):
         for j in range(nv):
             a, b, cc, d = c(i, j), c(i + 1, j), c(i + 1, j + 1), c(i, j + 1)
             tris += [[a, b, cc], [a, cc, d]] if rng.random() < 0.5 else [[a, b, d], [b, cc, d]]
-    rng.shuffle(tris)
-    tris = [t[r:] + t[:r] for t in tris for r in [rng.randrange(3)]]
+    tris = shuffled(tris, rng)
     xyz = {}
     for i in range(nu):
         for j in range(nv):
@@ -339,17 +68,6 @@ GOLDEN_SHELLS = ["shell_tree_cube_v3_3", "shell_tree_mixed_v3_3", "shell_tree_ap
                  "shell_walk_cube_v4_1", "shell_walk_sphere_v4_1"]
 
 
-def golden_mesh(name):
-    d = json.loads((SUITE / "valid" / f"{name}.json").read_text())
-    g = next(g for g in d["groups"] if "shell" in g)
-    sh = g["shell"]
-    tris = [f[1:] for f in sh["facets"]]
-    faces = [f[0] for f in sh["facets"]]
-    xyz = dict(zip(sh["explicit"], sh["grid"]))
-    named = [c for c in range(len(sh["explicit"]) + len(sh["vertex_planes"])) if c not in xyz]
-    return d["planes"], g, (tris, faces, xyz, dict(zip(named, sh["vertex_planes"])))
-
-
 def check_both(data, shell):
     for read in (read_spec, read_read):
         got = read(data)
@@ -362,10 +80,10 @@ def check_both(data, shell):
 @pytest.mark.parametrize("name", GOLDEN_SHELLS)
 @pytest.mark.parametrize("mode", [0, 1, 2, 3])
 def test_golden_shells_walked(name, mode):
-    planes, g, mesh = golden_mesh(name)
+    planes, g, mesh = golden_shell(name)
     for seed in range(6):
         data, shell = encode_walk(*mesh, mode=mode, rng=random.Random(seed), prefer_escape=0.3 * (seed % 2))
-        check_both(pln_file(planes, [(9, g["refs"], g["bounding"], data)]), shell)
+        check_both(pln([(9, g["refs"], g["bounding"], data)], planes), shell)
 
 
 PLANE = [[0.0, 0.0, 1.0]]
@@ -377,14 +95,14 @@ def test_tori_and_soups_walked(seed):
     for mesh in (torus(6 + seed, 5, rng), soup(rng), soup(rng, corners=5, count=30)):
         for mode in range(4):
             data, shell = encode_walk(*mesh, mode=mode, rng=rng, prefer_escape=0.2 if seed % 3 == 0 else 0.0)
-            check_both(pln_file(PLANE, [(9, [0], [], data)]), shell)
+            check_both(pln([(9, [0], [], data)], PLANE), shell)
 
 
 def test_a_torus_walk_uses_left_right_and_escapes():
     rng = random.Random(7)
     tris, faces, xyz, named = torus(12, 8, rng)
     data, shell = encode_walk(tris, faces, xyz, named, mode=3, rng=rng)
-    check_both(pln_file(PLANE, [(9, [0], [], data)]), shell)
+    check_both(pln([(9, [0], [], data)], PLANE), shell)
     cursor = plnspec.Cursor(data)
     v, t, x = cursor.varint(), cursor.varint(), cursor.varint()
     codes = {cursor.varint() % 4 for _ in range(t)}
@@ -403,14 +121,14 @@ def small_walk():
 def test_kind_9_by_minor_version(read):
     data, shell = small_walk()
     group = (9, [0], [], data)
-    assert read(pln_file(PLANE, [group], minor=1))["groups"][0]["shell"] == shell
-    assert read(pln_file(PLANE, [group], minor=0))["error"] == "UNKNOWN_GROUP_KIND"
+    assert read(pln([group], PLANE, minor=1))["groups"][0]["shell"] == shell
+    assert read(pln([group], PLANE, minor=0))["error"] == "UNKNOWN_GROUP_KIND"
     # 4.3 is newer than either reader knows (4.2 since §9.14): kind 9 read, kind 12 skipped
     # (kind 11, the copy of §9.15, is a kind of 4.2)
-    got = read(pln_file(PLANE, [group], minor=3))
+    got = read(pln([group], PLANE, minor=3))
     assert "shell" in got["groups"][0] and "NEWER_MINOR_VERSION" in got["findings"]
-    assert read(pln_file(PLANE, [(10, [0], [], b"\x01")], minor=1))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln_file(PLANE, [(12, [0], [], b"\x01"), group], minor=3))
+    assert read(pln([(10, [0], [], b"\x01")], PLANE, minor=1))["error"] == "UNKNOWN_GROUP_KIND"
+    got = read(pln([(12, [0], [], b"\x01"), group], PLANE, minor=3))
     assert "SKIPPED_GROUP_KIND" in got["findings"] and "shell" not in got["groups"][0]
 
 
@@ -418,8 +136,8 @@ def test_kind_9_by_minor_version(read):
 
 def body(v, t, symbols, escapes, faces, flags, rest=b"", x=None):
     x = len(escapes) if x is None else x
-    return (varint(v) + varint(t) + varint(x) + b"".join(map(varint, symbols)) + b"".join(map(varint, escapes))
-            + b"".join(map(varint, faces)) + bytes(flags) + rest)
+    return (uv(v) + uv(t) + uv(x) + b"".join(map(uv, symbols)) + b"".join(map(uv, escapes))
+            + b"".join(map(uv, faces)) + bytes(flags) + rest)
 
 
 GRID = struct.pack("<4d", 0.0, 0.0, 0.0, 1.0)
@@ -431,8 +149,8 @@ OK = body(4, 2, [2, 0], [0, 0, 0], [1, 0], [0x0F], b"\x00" + GRID + COORDS0)
 CASES = {
     "ok": (OK, None),
     "V below 3": (body(2, 2, [2, 0], [0, 0, 0], [1, 0], [0x03], b"\x00" + GRID + COORDS0), "BAD_GROUP_STRUCTURE"),
-    "T above half the bytes left": (varint(4) + varint(9) + varint(0) + bytes(16), "BAD_GROUP_STRUCTURE"),
-    "X above the bytes left": (varint(4) + varint(1) + varint(20) + bytes(19), "BAD_GROUP_STRUCTURE"),
+    "T above half the bytes left": (uv(4) + uv(9) + uv(0) + bytes(16), "BAD_GROUP_STRUCTURE"),
+    "X above the bytes left": (uv(4) + uv(1) + uv(20) + bytes(19), "BAD_GROUP_STRUCTURE"),
     "root symbol 16": (body(4, 2, [16, 0], [0, 0, 0], [1, 0], [0x0F], b"\x00" + GRID + COORDS0), "BAD_GROUP_STRUCTURE"),
     "attached symbol 20": (body(4, 2, [2, 20], [0, 0, 0], [1, 0], [0x0F], b"\x00" + GRID + COORDS0),
                            "BAD_GROUP_STRUCTURE"),
@@ -464,13 +182,13 @@ CASES = {
     "negative index": (body(4, 2, [2, 0], [0, 0, 0], [1, 0], [0x0F],
                             b"\x02" + GRID + b"\x01\x00" * 3 + b"\x01" + bytes(11)), "BAD_GROUP_STRUCTURE"),
     "table value beyond 2^52": (body(4, 2, [2, 0], [0, 0, 0], [1, 0], [0x0F],
-                                     b"\x02" + GRID + b"\x02\x00" + varint(1 << 52) + b"\x01\x00" * 2 + COORDS0),
+                                     b"\x02" + GRID + b"\x02\x00" + uv(1 << 52) + b"\x01\x00" * 2 + COORDS0),
                                 "BAD_GROUP_STRUCTURE"),
     "table value at 2^52": (body(4, 2, [2, 0], [0, 0, 0], [1, 0], [0x0F],
-                                 b"\x02" + GRID + b"\x02\x00" + varint((1 << 52) - 1) + b"\x01\x00" * 2 + COORDS0),
+                                 b"\x02" + GRID + b"\x02\x00" + uv((1 << 52) - 1) + b"\x01\x00" * 2 + COORDS0),
                             None),
     "residual beyond 2^52": (body(4, 2, [2, 0], [0, 0, 0], [1, 0], [0x0F],
-                                  b"\x00" + GRID + varint(zz(1 << 52) + 2) + bytes(11)), "BAD_GROUP_STRUCTURE"),
+                                  b"\x00" + GRID + uv(zigzag(1 << 52) + 2) + bytes(11)), "BAD_GROUP_STRUCTURE"),
     "bytes after the coordinates": (OK + b"\x00", "BAD_GROUP_STRUCTURE"),
     "ends inside the coordinates": (OK[:-1], "BAD_PAYLOAD"),
     "ends inside the tables": (body(4, 2, [2, 0], [0, 0, 0], [1, 0], [0x0F], b"\x02" + GRID + b"\x01\x00\x01"),
@@ -482,7 +200,7 @@ CASES = {
     "named corner on one plane": (body(4, 2, [2, 0], [0, 0, 0], [2, 0], [0x0E], b"\x00" + GRID + bytes(9)),
                                   "BAD_GROUP_STRUCTURE"),
     # a walk error before a body cut short in the faces: the faces are read first (BAD_PAYLOAD)
-    "symbol and cut faces": (varint(4) + varint(2) + varint(3) + bytes([16, 0, 0, 0, 0, 1]), "BAD_PAYLOAD"),
+    "symbol and cut faces": (uv(4) + uv(2) + uv(3) + bytes([16, 0, 0, 0, 0, 1]), "BAD_PAYLOAD"),
     # a walk error with the picks cut short: the walk comes first
     "walk before the picks": (body(4, 2, [2, 20], [0, 0, 0], [1, 0], [0x0F], b"\x00" + GRID), "BAD_GROUP_STRUCTURE"),
     "grid step 0": (body(4, 2, [2, 0], [0, 0, 0], [1, 0], [0x0F], b"\x00" + struct.pack("<4d", 0, 0, 0, 0) + COORDS0),
@@ -494,7 +212,7 @@ CASES = {
 @pytest.mark.parametrize("read", [read_spec, read_read])
 def test_hand_built_bodies(name, read):
     data, code = CASES[name]
-    got = read(pln_file(PLANE, [(9, [0], [], data)]))
+    got = read(pln([(9, [0], [], data)], PLANE))
     if code is None:
         assert "error" not in got, got
     else:
@@ -508,14 +226,14 @@ def test_left_and_right_skip_the_parent_s_opposite_corner():
     xyz = {c: [c, c * c, 0] for c in range(5)}
     for seed in range(4):
         data, shell = encode_walk(tris, [-1] * 4, xyz, {}, mode=seed, rng=random.Random(seed))
-        check_both(pln_file(PLANE, [(9, [0], [], data)]), shell)
+        check_both(pln([(9, [0], [], data)], PLANE), shell)
 
 
 def test_random_damage_gets_the_same_answer_from_both_readers():
     rng = random.Random(11)
     samples = []
     for name in GOLDEN_SHELLS[:3]:
-        planes, g, mesh = golden_mesh(name)
+        planes, g, mesh = golden_shell(name)
         for mode in range(4):
             data, _ = encode_walk(*mesh, mode=mode, rng=rng)
             samples.append((planes, g["refs"], g["bounding"], data))
@@ -532,7 +250,7 @@ def test_random_damage_gets_the_same_answer_from_both_readers():
                 for _ in range(rng.choice((1, 2))):
                     k = rng.randrange(len(b))
                     b[k] = rng.choice((0, 1, 2, 3, 4, 0x7F, 0x80, 0xFF, b[k] ^ (1 << rng.randrange(8))))
-            f = pln_file(planes, [(9, refs, bounding, bytes(b))])
+            f = pln([(9, refs, bounding, bytes(b))], planes)
             a, c = read_spec(f), read_read(f)
             if (a.get("error"), c.get("error")) == ("BAD_PAYLOAD", "BAD_GROUP_STRUCTURE") and \
                     c["why"].startswith("named corner") and "face planes" in c["why"]:
