@@ -586,11 +586,12 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
 
 
 def _walk_kinds(obj: _Object) -> _Object:
-    """``obj`` with each shell walk in whichever allowed walk kind and mode codes it smallest (spec §9.13, §9.14:
-    kind 10 is kind 9 with its corners predicted by averaged parallelograms, smaller on irregular
-    surfaces, ballA.off's coordinates 4 % at draco-14's error, larger on regular tessellations whose
-    single parallelograms repeat exactly, torus.STL and capsule.obj). The corners are the same in
-    either kind, so the bound measured holds."""
+    """``obj`` with each shell walk in whichever allowed walk kind and mode codes it smallest (spec §9.13,
+    §9.14, §9.16: kind 10 is kind 9 with its corners predicted by averaged parallelograms, smaller on
+    irregular surfaces, ballA.off's coordinates 4 % at draco-14's error, larger on regular tessellations
+    whose single parallelograms repeat exactly, torus.STL and capsule.obj; kind 12 predicts them by
+    turning the last step, smaller where a walk goes round tubes, quadknot.obj's 33 %, larger on CAD
+    parts and scans). The corners are the same in every kind, so the bound measured holds."""
     walks = tuple(layout for layout in shellwalk.WALK_KINDS if layout in SHELL_LAYOUTS)
     return replace(obj, groups=tuple(replace(g, kind=shellwalk.shell_walk_choice(g.shell, walks)[0])
                                      if g.kind in walks else g for g in obj.groups))
