@@ -581,7 +581,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
                             f"{tolerance:g}: {why}", code="TOLERANCE_NOT_MET")
     close = sorted((t for t in tried if t[0] <= SHELL_RANK_CLOSE * best[0]), key=lambda t: t[0])[:SHELL_RANK_TOP]
     if len(close) > 1:
-        best = min(close, key=lambda t: size(t[1], t[2], brotli=True))
+        best = min(close, key=lambda t: size([_walk_kinds(o) for o in t[1]], t[2], brotli=True))
     return [_walk_kinds(o) for o in best[1]], best[2]
 
 
