@@ -580,9 +580,8 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
         raise GeometryError(f"no coding keeps the source's structure with corners within the tolerance "
                             f"{tolerance:g}: {why}", code="TOLERANCE_NOT_MET")
     close = sorted((t for t in tried if t[0] <= SHELL_RANK_CLOSE * best[0]), key=lambda t: t[0])[:SHELL_RANK_TOP]
-    if len(close) > 1:
-        best = min(close, key=lambda t: size([_walk_kinds(o) for o in t[1]], t[2], brotli=True))
-    return [_walk_kinds(o) for o in best[1]], best[2]
+    walked = [([_walk_kinds(o) for o in objs], choice) for _, objs, choice in close]
+    return walked[0] if len(walked) == 1 else min(walked, key=lambda w: size(*w, brotli=True))
 
 
 def _walk_kinds(obj: _Object) -> _Object:

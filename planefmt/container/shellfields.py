@@ -444,10 +444,12 @@ def _resolve_reflected(residual: np.ndarray, terms: np.ndarray, explicit: np.nda
             continue
         b = ps[a]
         c = ps[b] if b >= 0 else -1
-        d1 = [got[b][i] - got[c][i] for i in range(3)] if c >= 0 else None
-        d2 = [got[a][i] - got[b][i] for i in range(3)] if c >= 0 else None
-        d = sum(x * x for x in d2) if d2 else 0
-        if d and max(map(abs, d1 + d2)) <= MAX_TURN:
+        d = 0
+        if c >= 0:
+            d1 = [got[b][i] - got[c][i] for i in range(3)]
+            d2 = [got[a][i] - got[b][i] for i in range(3)]
+            d = sum(x * x for x in d2) if max(map(abs, d1 + d2)) <= MAX_TURN else 0
+        if d:
             dot = sum(x * y for x, y in zip(d1, d2))
             x = [got[k][i] + got[a][i] + (2 * (2 * dot * d2[i] - d * d1[i]) + d) // (2 * d) for i in range(3)]
         else:
