@@ -96,6 +96,25 @@ done:
 }
 
 
+/* floor(num / den) for den > 0: C's division truncates toward zero. */
+static int64_t
+floor_div(int64_t num, int64_t den)
+{
+    int64_t q = num / den;
+    return (num % den != 0 && num < 0) ? q - 1 : q;
+}
+
+/* The error of a pass over corners that stopped at corner bad (none where bad < 0): a resolved value
+ * beyond limit, or a term not before the corner. */
+static void
+corner_error(Py_ssize_t bad, int beyond, long long limit)
+{
+    if (bad >= 0 && beyond)
+        PyErr_Format(PyExc_OverflowError, "corner %zd resolves beyond %lld", bad, limit);
+    else if (bad >= 0)
+        PyErr_Format(PyExc_ValueError, "corner %zd is predicted from a corner not before it", bad);
+}
+
 static PyObject *
 reflect(PyObject *self, PyObject *args)
 {
@@ -192,25 +211,6 @@ edge_hash(int64_t a, int64_t b, int64_t mask)
 {
     uint64_t h = ((uint64_t)a * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)b * 0xC2B2AE3D27D4EB4FULL);
     return (int64_t)(h >> 24) & mask;
-}
-
-/* floor(num / den) for den > 0: C's division truncates toward zero. */
-static int64_t
-floor_div(int64_t num, int64_t den)
-{
-    int64_t q = num / den;
-    return (num % den != 0 && num < 0) ? q - 1 : q;
-}
-
-/* The error of a pass over corners that stopped at corner bad (none where bad < 0): a resolved value
- * beyond limit, or a term not before the corner. */
-static void
-corner_error(Py_ssize_t bad, int beyond, long long limit)
-{
-    if (bad >= 0 && beyond)
-        PyErr_Format(PyExc_OverflowError, "corner %zd resolves beyond %lld", bad, limit);
-    else if (bad >= 0)
-        PyErr_Format(PyExc_ValueError, "corner %zd is predicted from a corner not before it", bad);
 }
 
 static PyObject *
