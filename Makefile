@@ -7,7 +7,7 @@ OUT    := out
 
 .PHONY: setup browser demo test test-slow mutate bench benchmarks roundtrip clean
 
-$(STAMP): pyproject.toml planefmt/container/_chains.c js/package-lock.json
+$(STAMP): pyproject.toml planefmt/container/_chains.c planefmt/geometry/_collapse.c js/package-lock.json
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e '.[test]'

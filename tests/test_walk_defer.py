@@ -28,9 +28,10 @@ def _faces(rel: str) -> np.ndarray:
 
 
 def _encoded(rel: str, tolerance: float) -> bytes:
+    """The file with every source corner kept: the walks compared are the source triangles'."""
     scene, _ = registry.read(CORPUS / rel)
     buf = io.BytesIO()
-    codec.encode_scene(scene, buf, tolerance=tolerance)
+    codec.encode_scene(scene, buf, tolerance=tolerance, keep_corners=True)
     return buf.getvalue()
 
 

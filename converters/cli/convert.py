@@ -1,7 +1,7 @@
 """``pln convert``: between any two supported formats, .pln on either side.
 
-    pln convert IN OUT [--tolerance T] [--bits N] [--scheme shell|paper] [--allow-open] [--lossy --delta D --tau A]
-        [-v] [--force]
+    pln convert IN OUT [--tolerance T] [--bits N] [--scheme shell|paper] [--allow-open] [--keep-corners]
+        [--lossy --delta D --tau A] [-v] [--force]
     pln convert A B C -d OUTDIR --to glb [--jobs N]
     pln convert meshes/ -d OUTDIR [--resume] [--engine local|dask]   (see batch.py: ledger, limits)
 
@@ -76,6 +76,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="shell (default): convex bodies as convex groups, the rest as one shell group, fast, "
                         "error by construction; paper: BSP trees, sealed groups and patches, verified by a "
                         "certified Hausdorff search (minutes for a few thousand CAD triangles)")
+    g.add_argument("--keep-corners", action="store_true",
+                   help="at a tolerance above 1e-6, keep the corners that carry no shape (inside one plane, or on a "
+                        "straight crease between two) and every triangle, which are otherwise dropped: the "
+                        "surface is the same either way")
     g.add_argument("--lossy", action="store_true", help="allow the paper's lossy options below")
     g.add_argument("--delta", type=float, help="lossy: drop planes of faces under delta x total area")
     g.add_argument("--tau", type=float, help="lossy: merge neighbour planes whose normals differ < tau radians")
@@ -110,7 +114,8 @@ def _pln_options(args: argparse.Namespace) -> dict:
     from planefmt.model import Coding
 
     opts = {"tolerance": args.tolerance, "compress": args.compress, "compact": args.compact,
-            "watertight": not args.allow_open, "scheme": args.scheme, "major": args.major}
+            "watertight": not args.allow_open, "scheme": args.scheme, "major": args.major,
+            "keep_corners": args.keep_corners}
     if args.bits is not None:
         opts["bits"] = args.bits
     if args.coding:

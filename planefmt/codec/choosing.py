@@ -535,11 +535,15 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
         budget = tolerance * diag_src / (1.0 + 2.0 * tolerance)
         # A smaller budget names fewer corners: none named at the first budget, none after tightening.
         if len(variants) > 1 and objs is objects and not sum(
-                _named_corners(o, pl, rt[a:b], budget / sc)
+                _named_corners(o, pl, rt[a:b], budget / sc - o.mended)
                 for o, pl, a, b, sc in zip(objs, plans[id(objs)], offsets[:-1], offsets[1:], scale)):
             continue
         for _ in range(_SHELL_TIGHTENINGS):
-            built, moved = zip(*(_shells_for(o, pl, rt[a:b], budget / sc)
+            if any(budget / sc <= o.mended for o, sc in zip(objs, scale)):
+                why = "the corners dropped took the whole budget"
+                continue
+            # Dropped corners moved an object's source by up to its ``mended``: its corners get the rest.
+            built, moved = zip(*(_shells_for(o, pl, rt[a:b], budget / sc - o.mended)
                                  for o, pl, a, b, sc in zip(objs, plans[id(objs)], offsets[:-1], offsets[1:], scale)))
             error = plane_error(cod, q, tolerance, diag_src)
             meshes = [_concatenate(_decode_object(rt[a:b], o, error))
@@ -559,7 +563,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
             continue
         world = np.concatenate([transform_points(m.vertices, o.world) for m, o in zip(meshes, built)])
         diagonal = _diagonal(world)
-        err = max([convex_error] + [d * sc for d, sc in zip(moved, scale)])
+        err = max([convex_error] + [(d + o.mended) * sc for d, o, sc in zip(moved, built, scale)])
         bound = err / diagonal if diagonal > 0 else 0.0
         choice = _Choice(coding=cod, quantization=q, meshes=meshes,
                          bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,

@@ -70,7 +70,7 @@ class Encoded:
 def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1e-6,
                 coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
                 delta: float | None = None, tau: float | None = None, watertight: bool = True,
-                scheme: str = "shell") -> Encoded:
+                scheme: str = "shell", keep_corners: bool = False) -> Encoded:
     """Encode a triangle mesh (model units, counter-clockwise from outside) as planes.
 
     ``tolerance``: the two-sided Hausdorff distance allowed between decoded
@@ -93,6 +93,14 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     groups and patches for non-convex bodies, verified by a certified
     Hausdorff search (slow: minutes for a few thousand CAD triangles).
 
+    At a tolerance above 1e-6 the shell scheme first drops the corners
+    that carry no shape: corners inside one plane's faces and corners on a
+    straight crease between two planes, collapsed into a neighbour so that
+    the surface stays where it is (within a bound by construction, counted
+    in the error: :mod:`planefmt.geometry.redundant`). The decoded mesh then
+    has fewer corners and triangles than the source (box.STL: 1,060 corners of
+    4,455). ``keep_corners=True`` keeps every corner and triangle.
+
     Raises ``GeometryError``: ``DEGENERATE_GEOMETRY`` for malformed input,
     ``TOLERANCE_NOT_MET`` when no coding meets the tolerance and keeps the
     source's structure.
@@ -101,7 +109,7 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
 
     def prepare(_: int, splitters: tuple[Splitter, ...] = STRATEGIES) -> _Object:
         return _prepare(vertices, faces, np.eye(4), tolerance, delta, tau, diagonal=None if forced else 0.0,
-                        splitters=splitters, scheme=scheme)
+                        splitters=splitters, scheme=scheme, keep_corners=keep_corners)
 
     def size(objects: list[_Object], choice: _Choice, brotli: bool = True) -> int:
         buf = io.BytesIO()
@@ -120,7 +128,8 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
 def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, tolerance: float = 1e-6,
                  coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
                  delta: float | None = None, tau: float | None = None, compress: bool = True,
-                 compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 5) -> Header:
+                 compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 5,
+                 keep_corners: bool = False) -> Header:
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
     One object per node, keeping name, parent and transform; each node's
@@ -161,7 +170,7 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     def prepare(k: int, splitters: tuple[Splitter, ...] = STRATEGIES) -> _Object:
         node = scene.nodes[meshes[k]]
         return replace(_prepare(node.mesh.vertices, node.mesh.faces, worlds[meshes[k]], tolerance, delta, tau,
-                                node.mesh.face_colours, diagonal, splitters, scheme), name=node.name)
+                                node.mesh.face_colours, diagonal, splitters, scheme, keep_corners), name=node.name)
 
     def size(objects: list[_Object], choice: _Choice, brotli: bool = False) -> int:
         buf = io.BytesIO()
