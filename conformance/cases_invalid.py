@@ -1981,3 +1981,38 @@ def _():
     r = _reflect_residuals(f)
     r[0, -1] += 2
     return reflect_file(TREE_BOX, {**f, "coordinates": varint.encode(varint.zigzag(r).reshape(-1))})
+
+
+# -- version 5.2: shell walks stepping from the later gate corner (spec/pln.md §9.17) -----------------
+
+LATER = int(GroupKind.SHELL_WALK_LATER)
+
+
+def later_file(shell, fields: dict[str, bytes], version: tuple[int, int] = (5, 2)) -> bytes:
+    """``shell`` as a shell walk stepping from the later gate corner (kind 13) of kind data ``fields`` (its
+    grid in f32) on the cube's six planes, in a version 5.2 file (or ``version``), uncompressed."""
+    body = CUBE_REFS + b"".join({**fields, "grid": shellfields.grid_bytes(shell, 5)}.values())
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=LATER, compression=0, raw_size=len(body), body=body))
+    return v5_file(v5_layout(groups=[group], version=version))
+
+
+@case("xv52_later_in_5_1", "UNKNOWN_GROUP_KIND", "a well-formed shell walk stepping from the later gate corner "
+      "(kind 13) of the all-explicit box in a version 5.1 file, whose version has no kind 13")
+def _():
+    return later_file(TREE_BOX, walk_fields(TREE_BOX, 0, GroupKind.SHELL_WALK_LATER), version=(5, 1))
+
+
+@case("xv52_later_mode_bits", "BAD_GROUP_STRUCTURE", "version 5.2 shell walk stepping from the later gate corner "
+      "of the all-explicit box whose coordinate mode is 4: a bit above bit 1")
+def _():
+    return later_file(TREE_BOX, walk_fields(TREE_BOX, 0, GroupKind.SHELL_WALK_LATER, mode=b"\x04"))
+
+
+@case("xv52_later_table_index", "BAD_GROUP_STRUCTURE", "version 5.2 shell walk stepping from the later gate corner "
+      "of the all-explicit box in mode 2 (x table of 2 values) whose last corner has an x residual 2 larger: "
+      "every earlier index is in its table, the last resolves past it")
+def _():
+    f = walk_fields(TREE_BOX, 2, GroupKind.SHELL_WALK_LATER)
+    r = _reflect_residuals(f)
+    r[0, -1] += 2
+    return later_file(TREE_BOX, {**f, "coordinates": varint.encode(varint.zigzag(r).reshape(-1))})

@@ -488,6 +488,7 @@ V41_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 1))
 V42_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 2))
 V50_CUBE = dataclasses.replace(SPEC_HEADER, version=(5, 0))
 V51_CUBE = dataclasses.replace(SPEC_HEADER, version=(5, 1))
+V52_CUBE = dataclasses.replace(SPEC_HEADER, version=(5, 2))
 
 
 def _explicit_walk(mesh, edge_two_first: bool = False, steps: float = 4.0) -> Shell:
@@ -542,6 +543,42 @@ def _trimesh(name: str, **kwargs):
 #: trimesh's icosphere of one subdivision (42 corners, 80 triangles) along planefmt's walk: as a shell
 #: walk (spec §9.13) it has a branching triangle, left codes, a corner step in an escape and leaves.
 WALK_SPHERE = _explicit_walk(_trimesh("icosphere", subdivisions=1))
+#: The same walked edge 2 first: a gate's later-named corner is mostly not its first (spec §9.17).
+WALK_SPHERE_TWO = _explicit_walk(_trimesh("icosphere", subdivisions=1), True)
+
+
+def _split_cube_walk() -> Shell:
+    """The unit cube, each face split into eight triangles over its corners, its edges' midpoints and its
+    centre (26 corners, 48 triangles on CUBE's six planes): the cube's eight corners named by their three
+    planes, the other 18 explicit on a grid of step 0.5, walked edge 2 first."""
+    import trimesh
+
+    from planefmt.container.shellfields import first_use_order
+    from planefmt.groups.shells import shell_tree
+
+    cube = _trimesh("box", extents=[1.0, 1.0, 1.0])
+    cube.apply_translation([0.5, 0.5, 0.5])
+    v, f = trimesh.remesh.subdivide(cube.vertices, cube.faces)
+    normal = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    omega = np.stack([np.sin(CUBE[:, 0]) * np.cos(CUBE[:, 1]), np.sin(CUBE[:, 0]) * np.sin(CUBE[:, 1]),
+                      np.cos(CUBE[:, 0])], axis=1)
+    face = np.argmax(normal @ omega.T, axis=1)
+    rank = first_use_order(f, len(v))
+    corner = np.empty_like(v)
+    corner[rank] = v
+    named = np.all((corner == 0.0) | (corner == 1.0), axis=1)
+    tri = rank[f]
+    planes = [sorted({int(face[j]) for j in np.flatnonzero((tri == k).any(axis=1))}) for k in np.flatnonzero(named)]
+    flat = Shell(explicit=~named, vertex_planes=np.array(planes, dtype=np.int64),
+                 grid=np.rint(corner[~named] * 2).astype(np.int64), origin=np.zeros(3), step=0.5,
+                 facets=np.column_stack([face, tri]))
+    return shell_tree(flat, _edge_two_first(tri))[0]
+
+
+#: The cube split and walked so that, of its explicit corners, some step from a later gate corner that is
+#: explicit and some (whose later gate corner is named) from the previous explicit corner (spec §9.17).
+WALK_SPLIT_CUBE = _split_cube_walk()
 #: trimesh's torus of 6 by 4 sections (24 corners, 48 triangles) walked edge 2 first: right codes,
 #: children in the order (2, 1), corner steps in escapes.
 WALK_TORUS = _explicit_walk(_trimesh("torus", major_radius=1.0, minor_radius=0.4, major_sections=6, minor_sections=4),
@@ -571,7 +608,7 @@ WALK_RING_FINE = _explicit_walk(_trimesh("torus", major_radius=1.0, minor_radius
 
 def walk_mode(shell: Shell, mode: int, major: int = 4) -> Callable[[list], list]:
     """An edit replacing every shell walk GRUP body's kind data by ``shell``'s with its explicit
-    corners in coordinate ``mode`` (spec §9.13, §9.14, §9.16), whichever a writer would pick: a reader
+    corners in coordinate ``mode`` (spec §9.13, §9.14, §9.16, §9.17), whichever a writer would pick: a reader
     must decode each; its grid as a version ``major`` file stores it."""
     from planefmt.container import shellfields, shellwalk, varint
 
@@ -943,6 +980,28 @@ CASES = [
               (Obj("pair"), Group(0, GroupKind.SHELL_WALK_REFLECT, (), shell=WALK_EXACT),
                Colour(0, np.array([[200, 200, 40, 255]], dtype=np.uint8))),
               decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_EXACT, 0, 5)),
+    ValidCase("shell_walk_later_values_v5_2", "version 5.2: the icosphere of shell_walk_sphere_v4_1, walked edge 2 "
+              "first, as a shell walk stepping from the later gate corner (kind 13) without references, in mode 0: "
+              "each explicit corner named by an attached triangle is its residual from corner max(i0, i1) of that "
+              "triangle (spec §9.17), which is not i0 for 39 of its 42 corners: from i0 a reader decodes another "
+              "sphere", V52_CUBE,
+              (Obj("sphere"), Group(0, GroupKind.SHELL_WALK_LATER, (), shell=WALK_SPHERE_TWO),
+               Colour(0, np.array([[60, 90, 200, 255]], dtype=np.uint8))),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_SPHERE_TWO, 0, 5)),
+    ValidCase("shell_walk_later_named_v5_2", "version 5.2: the unit cube, each face split into eight triangles "
+              "(26 corners, 48 triangles on the cube's planes), as a shell walk stepping from the later gate corner "
+              "walked edge 2 first, in mode 0: its eight corners named by their three planes, of its 18 explicit "
+              "corners 11 stepping from a later gate corner that is not the gate's first and 5, whose later gate "
+              "corner is named, from the previous explicit corner (spec §9.17), neither from the gate's other "
+              "corner", V52_CUBE,
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.SHELL_WALK_LATER, tuple(range(6)), shell=WALK_SPLIT_CUBE)),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_SPLIT_CUBE, 0, 5)),
+    ValidCase("shell_walk_later_tables_v5_2", "version 5.2: the torus of shell_walk_torus_v4_1 as a shell walk "
+              "stepping from the later gate corner on one reference, in mode 2: steps over indices into each axis's "
+              "table of values, from the later gate corner, which is not the gate's first for 20 of its 24 "
+              "corners (in mode 3 parallelograms would predict every one, as in kind 9)", V52_CUBE,
+              (Obj("torus"), Planes(CUBE[4:5]), Group(0, GroupKind.SHELL_WALK_LATER, (0,), shell=WALK_TORUS)),
+              decoded_bbox=True, assembled_only=True, edit=walk_mode(WALK_TORUS, 2, 5)),
     ValidCase("shells_v5_0", "version 5.0, written to a pipe (no counts): shells with explicit corners on f32 grids "
               "(spec §9.10: 16 bytes) of kinds 6 (the mixed cube), 7 (the mixed cube as a tree), 8 (the box) and 6 "
               "again without references (the open pyramid, m = 0)", V50_CUBE,

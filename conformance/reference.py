@@ -232,7 +232,7 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
     """
     omega, h = planes_of(triplets)
     volume = None
-    if kind in (6, 7, 8, 9, 10, 12):
+    if kind in (6, 7, 8, 9, 10, 12, 13):
         # spec §9.10 (§9.11 to §9.14 and §9.16 the same once read): named corners as sealed vertices, explicit ones on
         # the grid; no volume (a shell may be open).
         explicit = np.asarray(shell.explicit, dtype=bool)

@@ -67,14 +67,16 @@ class GroupKind(IntEnum):
     SHELL_WALK_MULTI = 10
     COPY = 11
     SHELL_WALK_REFLECT = 12
+    SHELL_WALK_LATER = 13
 
 
 #: The shell trees (spec §9.11): kind 7, kind 8 whose explicit corners parallelograms predict (§9.12),
 #: kind 9 whose tree and corners are coded as a walk (§9.13), and kind 10, a walk whose explicit corners
-#: averaged parallelograms predict (§9.14), and kind 12, a walk whose explicit corners a turning chain of
-#: steps predicts (§9.16).
+#: averaged parallelograms predict (§9.14), kind 12, a walk whose explicit corners a turning chain of
+#: steps predicts (§9.16), and kind 13, a walk whose explicit corners step from the later-named corner
+#: of their gate (§9.17).
 TREE_KINDS = (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM, GroupKind.SHELL_WALK,
-              GroupKind.SHELL_WALK_MULTI, GroupKind.SHELL_WALK_REFLECT)
+              GroupKind.SHELL_WALK_MULTI, GroupKind.SHELL_WALK_REFLECT, GroupKind.SHELL_WALK_LATER)
 
 
 #: BSP tree leaf tokens in version 1.0's numbering (spec Appendix A.1), which the model uses for every

@@ -59,7 +59,8 @@ def groups_for(n: int, draw, version: tuple[int, int] = (1, 0)) -> list[dict]:
     kinds = [k for k in GroupKind if (k != GroupKind.SEALED or (version >= (3, 1) and n >= 3))
              and (k != GroupKind.SHELL or version >= (3, 2)) and (k != GroupKind.SHELL_TREE or version >= (3, 3))
              and (k != GroupKind.SHELL_TREE_PARALLELOGRAM or version >= (3, 4))
-             and k not in (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI, GroupKind.COPY, GroupKind.SHELL_WALK_REFLECT)]
+             and k not in (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI, GroupKind.COPY, GroupKind.SHELL_WALK_REFLECT,
+                           GroupKind.SHELL_WALK_LATER)]
     out = []
     for kind in draw(st.lists(st.sampled_from(kinds), min_size=1, max_size=4)):
         m = draw(st.integers(3 if kind == GroupKind.SEALED else 1, min(n, 12)))

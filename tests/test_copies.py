@@ -43,8 +43,10 @@ def test_a_scene_of_one_mesh_placed_six_times_stores_it_once(monkeypatch):
     with planefmt.open(io.BytesIO(with_copies)) as r:
         version = r.header.version
         groups = list(r.part_groups())
-    # 5.1 where a walk (the source) is kind 12, spec §11: the lowest minor version that holds the kinds.
-    assert version == ((5, 1) if any(g.kind == GroupKind.SHELL_WALK_REFLECT for g in groups) else (5, 0))
+    # 5.1 where a walk (the source) is kind 12, 5.2 where kind 13, spec §11: the lowest minor version that
+    # holds the kinds.
+    assert version == ((5, 2) if any(g.kind == GroupKind.SHELL_WALK_LATER for g in groups) else
+                       (5, 1) if any(g.kind == GroupKind.SHELL_WALK_REFLECT for g in groups) else (5, 0))
     copies = [g for g in groups if g.source is not None]
     assert len(copies) == 5 and {g.source for g in copies} == {1}
     assert all(g.kind == groups[1].kind and np.array_equal(g.shell.facets, groups[1].shell.facets) for g in copies)

@@ -11,7 +11,7 @@ shell the encoder meant; the tube checks that chains turn and that their reflect
 than kind 9. Then hostile bodies: a resolved value pushed past 2^52 by the reflection of a turning
 chain (its residual 0), and not by a chain that a component beyond 2^18 keeps from turning; indices
 pushed outside their tables; a mode bit above 1; and the versions of §9.3 and §13 (kind 12 in a 5.0
-file, kind 13 in 5.1 and 5.2, kind 12 in major 4)."""
+file, kind 14 in 5.1 and 5.3, kind 12 in major 4)."""
 
 from __future__ import annotations
 
@@ -287,11 +287,11 @@ def test_kind_12_by_version():
     walk = Walk(*tube(sections=8, rings=3), rng=rng)
     group = (12, [], [], walk.body(1))
     assert read(pln([group], minor=0))["error"] == "UNKNOWN_GROUP_KIND"  # 5.0 is not above 5.1
-    got = read(pln([group], minor=2))  # a newer minor of major 5: read, and said so
+    got = read(pln([group], minor=3))  # a newer minor of major 5: read, and said so
     assert got["groups"][0]["shell"] == walk.shell() and got["findings"] == ["NEWER_MINOR_VERSION"]
-    # kind 13: unknown in 5.1, skipped in 5.2 with m = 0 (its own minor version decides, §9.2)
-    assert read(pln([(13, [], [], b"\x01")]))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln([(13, [], [], b"\x01"), group], minor=2))
+    # kind 14: unknown in 5.1, skipped in 5.3 with m = 0 (its own minor version decides, §9.2)
+    assert read(pln([(14, [], [], b"\x01")]))["error"] == "UNKNOWN_GROUP_KIND"
+    got = read(pln([(14, [], [], b"\x01"), group], minor=3))
     assert set(got["findings"]) == {"SKIPPED_GROUP_KIND", "NEWER_MINOR_VERSION"} and "shell" not in got["groups"][0]
     assert got["groups"][1]["shell"] == walk.shell()
     # major 4 has no kind 12: unknown in 4.2, skipped in 4.3, where every group has a reference (A.5)

@@ -327,11 +327,11 @@ def test_kind_12_by_version():
     assert shell["grid"] == [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 1]]  # d1 = (1, 0, 0) reflected: (-1, 0, 0)
     # §9.3: 5.0 is a minor this reader knows, and kind 12 not one of its kinds
     assert read(pln([group], minor=0))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln([group], minor=2))  # a newer minor: read, and said so
+    got = read(pln([group], minor=3))  # a newer minor: read, and said so
     assert got["groups"][0]["shell"] == shell and got["findings"] == ["NEWER_MINOR_VERSION"]
-    # kind 13: unknown in 5.1; skipped in 5.2, its m = 0 not an error (§9.2), the next group read
-    assert read(pln([(13, [], [], b"\x05")]))["error"] == "UNKNOWN_GROUP_KIND"
-    got = read(pln([(13, [], [], b"\x05"), group], minor=2))
+    # kind 14: unknown in 5.2; skipped in 5.3, its m = 0 not an error (§9.2), the next group read
+    assert read(pln([(14, [], [], b"\x05")], minor=2))["error"] == "UNKNOWN_GROUP_KIND"
+    got = read(pln([(14, [], [], b"\x05"), group], minor=3))
     assert set(got["findings"]) == {"SKIPPED_GROUP_KIND", "NEWER_MINOR_VERSION"}
     assert "shell" not in got["groups"][0] and got["groups"][1]["shell"] == shell
     # major 4 has no kind 12: unknown in 4.2, skipped in 4.3 (with a reference, A.5)

@@ -218,11 +218,11 @@ def test_no_references_in_kinds_0_to_5(kind):
 def test_no_references_in_a_kind_of_a_newer_minor_version():
     """§9.2 step 2: a kind of a newer minor version decides for itself, so a reader that skips it
     accepts m = 0 (SPEC_NOTES 56); version 4 rejects m = 0 in every kind (A.5)."""
-    chunks = [(b"OBJT", objt(0)), (b"GRUP", group(0, 13, [], b"\x01\x02"))]
-    got = read(pln(chunks, header=phdr(minor=2)))
+    chunks = [(b"OBJT", objt(0)), (b"GRUP", group(0, 14, [], b"\x01\x02"))]
+    got = read(pln(chunks, header=phdr(minor=3)))
     assert "error" not in got, got
     assert set(got["findings"]) == {"SKIPPED_GROUP_KIND", "NEWER_MINOR_VERSION"}
-    assert error(pln(chunks, header=phdr(minor=1))) == "UNKNOWN_GROUP_KIND"  # 5.1 has no kind 13
+    assert error(pln(chunks, header=phdr(minor=2))) == "UNKNOWN_GROUP_KIND"  # 5.2 has no kind 14
     assert error(pln(chunks, header=phdr(major=4, minor=3))) == "BAD_GROUP_STRUCTURE"
 
 

@@ -75,8 +75,8 @@ def test_no_references_by_kind_and_version():
     assert got["groups"][1] == {"index": 1, "object": 0, "kind": 11, "refs": [], "bounding": [], "source": 0}
     # kinds 0 to 5 need one (kind 5 here; kind 0 is xv50_convex_no_refs)
     assert read(v5_file((b"OBJT", objt(0)), (b"GRUP", grup(0, 0, 5, uv(0)))))["error"] == "BAD_GROUP_STRUCTURE"
-    # a kind of a newer minor version (13 in 5.2) decides for itself: skipped, m = 0 accepted
-    got = read(v5_file((b"OBJT", objt(0)), (b"GRUP", grup(0, 0, 13, uv(0) + b"\x2a")), minor=2))
+    # a kind of a newer minor version (14 in 5.3) decides for itself: skipped, m = 0 accepted
+    got = read(v5_file((b"OBJT", objt(0)), (b"GRUP", grup(0, 0, 14, uv(0) + b"\x2a")), minor=3))
     assert "SKIPPED_GROUP_KIND" in got["findings"] and got["groups"][0]["refs"] == []
     # before version 5 every group has one (Appendix A.5), a shell of 4.2 too
     old = (SIGNATURE + header(4, 2) + u32_chunk(b"OBJT", objt(0))

@@ -268,7 +268,8 @@ def test_shell_tree_is_chosen_where_smaller_and_its_bound_holds(path, tolerance,
     with planefmt.open(io.BytesIO(data)) as r:
         (group,) = list(r.part_groups())
     assert group.kind in TREE_KINDS and header.error_bound <= tolerance
-    assert header.version == (5, 0)
+    # 5.0, or 5.2 where the walk is kind 13 (the CAD parts'), spec §11.
+    assert header.version == (5, 2 if group.kind == GroupKind.SHELL_WALK_LATER else 0)
     # The same corners and triangles in the layout of kind 6 take ``gain`` times the deflated bytes or more
     # (CAD at draco-14's error: 1.5; at 1e-6 the coordinates are most of either).
     flat = reordered(dataclasses.replace(group.shell, links=None), np.arange(len(group.refs)))
@@ -366,20 +367,20 @@ def test_the_smaller_predictor_is_chosen(path, kind, gain, monkeypatch):
     assert len(decoded.faces) == len(f) and header.error_bound <= 3.5e-5
 
 
-@pytest.mark.parametrize("path, kind, mode, gain", [("cad/box.STL", GroupKind.SHELL_WALK, 2, 1.3),
-                                                    ("cad/1002_tray_bottom.STL", GroupKind.SHELL_WALK, 2, 1.5),
+@pytest.mark.parametrize("path, kind, mode, gain", [("cad/box.STL", GroupKind.SHELL_WALK_LATER, 2, 1.3),
+                                                    ("cad/1002_tray_bottom.STL", GroupKind.SHELL_WALK_LATER, 2, 1.5),
                                                     ("smooth_dense/npm_bunny.ply", GroupKind.SHELL_WALK_MULTI, 0, 1.05)])
 def test_a_shell_walk_is_chosen_where_smaller_in_its_smallest_mode(path, kind, mode, gain):
     # At draco-14's error: the walk's one symbol per triangle against kinds 7 and 8's links and codes,
-    # and CAD's corners as indices into each axis's few values (mode 2), a scan's by parallelograms (1),
-    # averaged over the triangles around a corner (kind 10).
+    # and CAD's corners as indices into each axis's few values (mode 2) stepped from the later gate corner
+    # (kind 13), a scan's by parallelograms (1), averaged over the triangles around a corner (kind 10).
     scene, _ = registry.read(CORPUS / path)
     (mesh,) = [n.mesh for n in scene.nodes if n.mesh is not None]
     v, f = np.asarray(mesh.vertices, dtype=np.float64), np.asarray(mesh.faces)
     header, decoded, data = encode(v, f, 3.5e-5)
     with planefmt.open(io.BytesIO(data)) as r:
         (group,) = list(r.part_groups())
-    assert group.kind == kind and header.version == (5, 0)
+    assert group.kind == kind and header.version == (5, 2 if kind == GroupKind.SHELL_WALK_LATER else 0)
     fields = shellwalk.shell_walk_fields(group.shell, kind=kind)
     assert fields["mode"] == bytes([mode])
     trees = shellfields.shell_tree_bodies(group.shell)

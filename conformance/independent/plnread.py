@@ -8,7 +8,7 @@ the Python 3.11 standard library, and for the Brotli payloads of version
 4.0 (compression method 2) the PyPI package `brotli` (1.2 bounds the output
 of each call; with 1.1 the stored bytes are given one at a time), imported only when such a payload is met: files of versions 1.0 to 3.4, and
 4.0 files without Brotli payloads, need nothing else.  It reads versions
-1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 and 5.1 (pln.md §13: files of major versions 1 to 5,
+1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2 and 5.0 to 5.2 (pln.md §13: files of major versions 1 to 5,
 each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
 was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
@@ -95,6 +95,16 @@ adding half (reflected_step); reported as kind 9 is.  Kind 12 is a kind of
 5.1 and later minors of major 5 (UNKNOWN_GROUP_KIND in a 5.0 file), and
 like the other shells may have no references.
 
+Version 5.2 (pln.md §9.17, kind 13, shell walks stepping from the later gate
+corner) was added from the 5.2 text of §9.17 and of §9.3, §9.11, §9.13 and
+§13, without planefmt's code or plnspec.py: kind 9 with one rule changed,
+§9.11's predictor of an explicit corner, which is corner max(i0, i1) of the
+triangle whose code named it anew (where that triangle is attached and that
+corner explicit), not i0; otherwise the previous explicit corner, or none.
+Mode bit 0's parallelogram is kind 9's.  Reported as kind 9 is.  Kind 13 is a
+kind of 5.2 and later minors of major 5 (UNKNOWN_GROUP_KIND in a 5.0 or 5.1
+file), and like the other shells may have no references.
+
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
 a code it never raises; a file whose last chunk is not PEND is TRUNCATED or
@@ -133,9 +143,9 @@ import zlib
 SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 
 # the versions this reader implements: major -> highest minor it knows
-# (1.0, 2.0, 3.4, 4.2 and 5.1, as pln.md §9.3 says, not §5's 0 for major 5:
-# SPEC_NOTES 62; pln.md §13: a reader of 5.1 reads major versions 1 to 5)
-READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 1}
+# (1.0, 2.0, 3.4, 4.2 and 5.2, as pln.md §9.3 says, not §5's 1 for major 5:
+# SPEC_NOTES 62; pln.md §13: a reader of 5.2 reads major versions 1 to 5)
+READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 # pln.md §4.1, version 5: every chunk after PHDR has its length as a minimal
@@ -168,20 +178,23 @@ KNOWN_KINDS = {0, 1, 2, 3, 4}  # §8.2
 # §9.3: kind 8 in 3.4 and later, kind 9, the shell walk (pln.md §9.13), in 4.1
 # and later, kind 10, the shell walk with multi-parallelograms (pln.md
 # §9.14), and kind 11, the copy (pln.md §9.15), in 4.2 and later, kind 12,
-# the shell walk with reflections (pln.md §9.16), in 5.1 and later; in older
-# files each is a kind the file's version does not have
+# the shell walk with reflections (pln.md §9.16), in 5.1 and later, kind 13,
+# the shell walk stepping from the later gate corner (pln.md §9.17), in 5.2
+# and later; in older files each is a kind the file's version does not have
 SEALED_KIND, SHELL_KIND, SHELL_TREE_KIND, PARALLELOGRAM_KIND, WALK_KIND = 5, 6, 7, 8, 9
 MULTI_WALK_KIND = 10
 COPY_KIND = 11  # pln.md §9.15, the copy, in 4.2 and later
 REFLECT_WALK_KIND = 12
+LATER_WALK_KIND = 13
 KIND_SINCE = {SEALED_KIND: (3, 1), SHELL_KIND: (3, 2), SHELL_TREE_KIND: (3, 3), PARALLELOGRAM_KIND: (3, 4),
-              WALK_KIND: (4, 1), MULTI_WALK_KIND: (4, 2), COPY_KIND: (4, 2), REFLECT_WALK_KIND: (5, 1)}
+              WALK_KIND: (4, 1), MULTI_WALK_KIND: (4, 2), COPY_KIND: (4, 2), REFLECT_WALK_KIND: (5, 1),
+              LATER_WALK_KIND: (5, 2)}
 MULTI_PARALLELOGRAMS = 4  # pln.md §9.14: a corner has at most four parallelograms
 TURN_LIMIT = 2**18  # pln.md §9.16: a chain turns only where every component of its steps is within it
 SHELL_COORD_LIMIT = 2**52  # pln-3 §8.9: each grid step and coordinate of magnitude at most 2^52
 SHELL_GRID_BYTES = 32  # pln-3 §8.9: origin x, y, z and step s, f64 each
 F32_GRID_MAJOR = 5  # pln.md §9.10-§9.14: version 5's grids are f32 each, 16 bytes (Appendix A.5)
-NO_REFS_MAJOR = 5  # pln.md §9.2: in version 5, m may be 0 in kinds 6 to 12
+NO_REFS_MAJOR = 5  # pln.md §9.2: in version 5, m may be 0 in kinds 6 to 12 (and 13, a shell walk)
 LAST_KIND_NEEDING_REFS = 5  # pln.md §9.2: m = 0 in kinds 0 to 5 is BAD_GROUP_STRUCTURE
 
 F32_PI = struct.unpack("<f", struct.pack("<I", 0x40490FDB))[0]  # §7.1
@@ -1193,9 +1206,9 @@ class Reader:
             g["shell"] = self.read_shell(c, m, set(bounding))
         elif kind in (SHELL_TREE_KIND, PARALLELOGRAM_KIND):
             g["shell"] = self.read_shell_tree(c, m, set(bounding), kind == PARALLELOGRAM_KIND)
-        elif kind in (WALK_KIND, MULTI_WALK_KIND, REFLECT_WALK_KIND):
+        elif kind in (WALK_KIND, MULTI_WALK_KIND, REFLECT_WALK_KIND, LATER_WALK_KIND):
             g["shell"] = self.read_shell_walk(c, m, set(bounding), kind == MULTI_WALK_KIND,
-                                              kind == REFLECT_WALK_KIND)
+                                              kind == REFLECT_WALK_KIND, kind == LATER_WALK_KIND)
         self.groups.append(g)
         self.group_refcounts.append(m)
         self.group_kinds.append(kind)
@@ -1249,7 +1262,7 @@ class Reader:
         """pln.md §9.2 step 2: m above the limit (LIMIT_EXCEEDED); m = 0
         (BAD_GROUP_STRUCTURE) in every group before version 5 (Appendix
         A.5), and in version 5 in kinds 0 to 5 only: a shell or a copy
-        (kinds 6 to 12) may have none, and a kind of a newer minor version,
+        (kinds 6 to 13) may have none, and a kind of a newer minor version,
         skipped here, decides for itself."""
         if m > LIMIT_REFS:
             raise PlnError("LIMIT_EXCEEDED", "ref_count %d above %d" % (m, LIMIT_REFS))
@@ -1610,7 +1623,7 @@ class Reader:
                                          parallelogram)
 
     def read_shell_tree_rest(self, c, m, bounding, v, flags, face_codes, tris, parents, creator,
-                             parallelogram=False, walk=False, multi=False, reflect=False):
+                             parallelogram=False, walk=False, multi=False, reflect=False, later=False):
         """What pln.md §9.11 and §9.13 have in common once the triangles,
         each one's parent (or None) and the triangle that named each corner
         anew are known: the faces (checked here, since they decide the
@@ -1623,7 +1636,9 @@ class Reader:
         average, and any other as a shell walk does; a shell walk with
         reflections (``reflect``, pln.md §9.16) one whose chain of step
         sources turns by reflected_step, and any other as a shell walk
-        does."""
+        does; a shell walk stepping from the later gate corner (``later``,
+        pln.md §9.17) as a shell walk does, but with §9.11's predictor
+        corner max(i0, i1) of the naming triangle, not i0."""
         explicit = [k for k in range(v) if (flags[k >> 3] >> (k & 7)) & 1]
         is_explicit = set(explicit)
         faces = []
@@ -1704,7 +1719,9 @@ class Reader:
             for r, k in enumerate(explicit):  # corner order: every predictor comes first
                 j = creator[k]
                 first = tris[j][0]
-                pred = first if parents[j] is not None and first in is_explicit else previous
+                # pln.md §9.17, kind 13: the later-named of the gate's corners i0, i1
+                gate = max(first, tris[j][1]) if later else first
+                pred = gate if parents[j] is not None and gate in is_explicit else previous
                 sources[k] = pred
                 base = [xyz[pred][a] if pred is not None else 0 for a in range(3)]
                 if k in grams:
@@ -1762,7 +1779,7 @@ class Reader:
     WALK_CHILDREN_ROOT = ((), (0,), (1,), (2,), (0, 1), (0, 2), (1, 0), (1, 2), (2, 0), (2, 1),
                           (0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0))
 
-    def read_shell_walk(self, c, m, bounding, multi=False, reflect=False):
+    def read_shell_walk(self, c, m, bounding, multi=False, reflect=False, later=False):
         """pln.md §9.13, kind 9: corner_count V, triangle_count T,
         escape_count X (read, then checked against the bytes left after the
         three); T symbols, X escapes, T face codes and the corner flags
@@ -1780,7 +1797,10 @@ class Reader:
         (``multi``): the same, but an explicit corner with parallelograms
         (see multi_parallelograms) is predicted by their rounded average.
         pln.md §9.16, kind 12 (``reflect``): the same, but an explicit
-        corner whose chain turns is predicted by reflected_step."""
+        corner whose chain turns is predicted by reflected_step.
+        pln.md §9.17, kind 13 (``later``): the same, but an explicit corner
+        named anew by an attached triangle steps from the later-named of its
+        gate's corners, max(i0, i1), where that one is explicit."""
         v = c.varint("corner_count")
         t = c.varint("triangle_count")
         x = c.varint("escape_count")
@@ -1876,7 +1896,7 @@ class Reader:
         if n != v:
             raise PlnError("BAD_GROUP_STRUCTURE", "%d corners named anew, corner_count %d" % (n, v))
         return self.read_shell_tree_rest(c, m, bounding, v, flags, face_codes, tris, parents, creator,
-                                         walk=True, multi=multi, reflect=reflect)
+                                         walk=True, multi=multi, reflect=reflect, later=later)
 
     def check_tree(self, tokens, m):
         """§8.4: exactly one complete tree in preorder (tokens numbered as in §8.4)."""

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 and 5.1), written from
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 to 5.2), written from
 spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
 
     python conformance/independent/plnspec.py FILE
@@ -47,6 +47,14 @@ added to a, in exact integers (reflection); §9.13's prediction where there is n
 turn. Kind 12 is a kind of 5.1 and later minors of major 5 (UNKNOWN_GROUP_KIND in 5.0, skipped in
 major 3 and 4 files of a newer minor) and may have no references.
 
+Version 5.2 (§9.17, kind 13, shell walks stepping from the later gate corner) was added from the 5.2 text
+of §9.17 and of §9.11, §9.13, §9.2, §9.3, §5, §11, §13 and Appendix A.4: kind 9's walk and everything after
+it, with one rule changed, §9.11's predictor of an explicit corner: max(i0, i1), the gate corner named
+later, of the attached triangle whose code names it anew, where that corner is explicit (else, as before,
+the previous explicit corner); mode bit 0's parallelogram is kind 9's. Kind 13 is a kind of 5.2 and later
+minors of major 5 (UNKNOWN_GROUP_KIND in 5.0 and 5.1, skipped in major 3 and 4 files of a newer minor) and
+may have no references.
+
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
 comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
 """
@@ -74,7 +82,7 @@ OBJECT_LIMIT = 1 << 24
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 # §10.3: the values of the keywords the spec defines
 META_VALUES = {"up_axis": ("Y", "Z")}
-NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 2, 5: 1}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.2, 5.1" (SPEC_NOTES 62)
+NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.2, 5.2" (SPEC_NOTES 62, 66)
 UP_AXES = {1: "Y", 2: "Z"}  # §5, version 5: bits 4-5 of units (0 not said, 3 BAD_HEADER_VALUE)
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
@@ -760,7 +768,8 @@ class Reader:
     # §9
     def kinds(self) -> set[int]:
         if self.major >= 5:
-            return set(range(12 + (self.minor >= 1)))  # §9.3: kinds 0-11 in 5.0, 0-12 in 5.1 (and later)
+            # §9.3: kinds 0-11 in 5.0, 0-12 in 5.1, 0-13 in 5.2 (and later)
+            return set(range(12 + (self.minor >= 1) + (self.minor >= 2)))
         if self.major >= 4:
             # §9.3: kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later: SPEC_NOTES 29)
             return set(range(9 + min(self.minor, 1) + 2 * (self.minor >= 2)))
@@ -814,8 +823,9 @@ class Reader:
             group["shell"] = self.shell(b, refs, roles)
         elif kind in (7, 8):
             group["shell"] = self.shell_tree(b, refs, roles, parallelogram=kind == 8)
-        elif kind in (9, 10, 12):
-            group["shell"] = self.shell_walk(b, refs, roles, multi=kind == 10, reflect=kind == 12)
+        elif kind in (9, 10, 12, 13):
+            group["shell"] = self.shell_walk(b, refs, roles, multi=kind == 10, reflect=kind == 12,
+                                             later=kind == 13)
         elif kind == 11:
             group["source"], skipped = self.copy(b, index, refs, roles)
             if skipped:
@@ -855,7 +865,7 @@ class Reader:
         m = b.varint("ref_count")
         if m > REF_LIMIT:
             fail("LIMIT_EXCEEDED", f"ref_count {m}")
-        # version 5: m = 0 in kinds 0-5 only (shells and copies, kinds 6-12, may have none); a
+        # version 5: m = 0 in kinds 0-5 only (shells and copies, kinds 6-13, may have none: SPEC_NOTES 67); a
         # skipped kind of a newer minor version "decides for itself", which a reader that skips it
         # cannot know, so it is accepted (SPEC_NOTES 56).
         # Versions 2 to 4 (A.5): in every kind, skipped ones included.
@@ -1138,12 +1148,12 @@ class Reader:
     def shell_tree_rest(self, b: Cursor, m: int, roles: list[int], v: int, flags: list[int],
                         face_codes: list[int], parents: list, tris: list[list[int]], named_by: list[int],
                         parallelogram: bool = False, walk: bool = False, multi: bool = False,
-                        reflect: bool = False) -> dict:
+                        reflect: bool = False, later: bool = False) -> dict:
         """What §9.11 and §9.13 share after the triangles are known: the faces checked, the picks,
-        (kinds 9, 10, 12: the mode byte), the grid, (kinds 9, 10, 12: the value tables), the
+        (kinds 9, 10, 12, 13: the mode byte), the grid, (kinds 9, 10, 12, 13: the value tables), the
         coordinates; then the rest checked. ``parents`` holds (p, e) for an attached triangle, None
-        for a root. Kinds 10 (``multi``, §9.14) and 12 (``reflect``, §9.16) change only the
-        prediction of explicit corners."""
+        for a root. Kinds 10 (``multi``, §9.14), 12 (``reflect``, §9.16) and 13 (``later``, §9.17)
+        change only the prediction of explicit corners."""
         faces = []  # local reference of each triangle, -1 for a free one
         for j, fc in enumerate(face_codes):
             if fc == 0:
@@ -1224,7 +1234,10 @@ class Reader:
             # Kind 9 with tables: the values predicted and resolved are indices into each axis's
             # table, resolved the same way, each within [0, C) (§9.13). Kind 10: the average of the
             # corner's parallelograms where it has one, this prediction otherwise (§9.14). Kind 12:
-            # this predictor is the step source (§9.16), whatever bit 0 of the mode.
+            # this predictor is the step source (§9.16), whatever bit 0 of the mode. Kind 13 (§9.17):
+            # the predictor is max(i0, i1) instead of i0, where that corner is explicit (else the
+            # previous explicit corner, not the other gate corner: SPEC_NOTES 68); mode bit 0's
+            # parallelogram is unchanged.
             res = [[unzigzag(r) for r in residuals[a * e_count:(a + 1) * e_count]] for a in range(3)]
             # kind 10 (§9.14): each explicit corner's parallelograms (a, b, c), at most four
             parallelograms = self.multi_parallelograms(tris, flags) if multi else None
@@ -1236,8 +1249,9 @@ class Reader:
                     fail("BAD_GROUP_STRUCTURE", f"explicit corner {c}: residual {r} beyond 2^52")
                 j = named_by[c]
                 pred = None
-                if parents[j] is not None and flags[tris[j][0]]:
-                    pred = tris[j][0]
+                gate = max(tris[j][0], tris[j][1]) if later else tris[j][0]  # i0, or kind 13's later one
+                if parents[j] is not None and flags[gate]:
+                    pred = gate
                 elif x > 0:
                     pred = explicit[x - 1]
                 sources[c] = pred
@@ -1356,14 +1370,15 @@ class Reader:
                      (0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
 
     def shell_walk(self, b: Cursor, refs: list[int], roles: list[int], multi: bool = False,
-                   reflect: bool = False) -> dict:
+                   reflect: bool = False, later: bool = False) -> dict:
         """Kind 9, a shell tree coded as a depth-first walk: one symbol per triangle (its
         children's edges and, attached, the kind of its third corner), escapes for what the
         symbols cannot say, then what §9.11 stores after its corner codes, with a mode byte and
         optional per-axis value tables before the coordinates. Reported as kinds 7 and 8 are.
         Kind 10 (§9.14, ``multi``) is the same body with explicit corners predicted by the
         average of their parallelograms (multi_parallelograms); kind 12 (§9.16, ``reflect``) with
-        those whose chain of step sources turns predicted by the reflection of its earlier step."""
+        those whose chain of step sources turns predicted by the reflection of its earlier step;
+        kind 13 (§9.17, ``later``) with explicit corners stepping from the later-named gate corner."""
         # 1. the three counts, read, then checked against the bytes left after all three
         v = b.varint("corner_count")
         t = b.varint("triangle_count")
@@ -1454,7 +1469,7 @@ class Reader:
             fail("BAD_GROUP_STRUCTURE", f"{n} corners named, V = {v}")
         # 4. the faces checked, then the picks and the rest, as §9.11 (with the links the walk gives)
         return self.shell_tree_rest(b, len(refs), roles, v, flags, face_codes, parents, tris, named_by,
-                                    walk=True, multi=multi, reflect=reflect)
+                                    walk=True, multi=multi, reflect=reflect, later=later)
 
     # §10.1
     def colr(self, p: bytes):

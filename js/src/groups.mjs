@@ -17,11 +17,11 @@ import { readShellWalk } from './shellwalk.mjs';
  * @property {Uint8Array} roles 1 where the reference's role bit is set, one byte per reference
  * @property {boolean} skipped a kind of a newer minor version (§9.3), or a copy of such a group
  *   (§9.15 step 3): no kind data read (a copy's source is read)
- * @property {any} data the kind data: cells, tree, a Shell (kinds 5-10 and 12), or {source} (kind 11)
+ * @property {any} data the kind data: cells, tree, a Shell (kinds 5-10, 12 and 13), or {source} (kind 11)
  */
 
-/** The newest minor version this reader knows, per major (§5, §9.3): 5.1 (kind 12), 4.2 (kinds 10, 11), 3.4 (kind 8). */
-export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2, 5: 1 };
+/** The newest minor version this reader knows, per major (§5, §9.3): 5.2 (kind 13), 4.2 (kinds 10, 11), 3.4 (kind 8). */
+export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2, 5: 2 };
 
 /**
  * Whether `kind` is a kind of the file's version (§9.3).
@@ -29,8 +29,8 @@ export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2, 5: 1 };
  */
 function kindOfVersion(kind, [major, minor]) {
   if (kind <= 4) return true;
-  // kinds 0-11 in 5.0, 0-12 in 5.1 (and later minors); kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later minors)
-  if (major >= 5) return kind <= (minor >= 1 ? 12 : 11);
+  // kinds 0-11 in 5.0, 0-12 in 5.1, 0-13 in 5.2 (and later minors); kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later minors)
+  if (major >= 5) return kind <= (minor >= 2 ? 13 : minor >= 1 ? 12 : 11);
   if (major >= 4) return kind <= (minor >= 2 ? 11 : minor >= 1 ? 9 : 8);
   return major === 3 && kind <= 8 && minor >= kind - 4;
 }
@@ -82,8 +82,8 @@ export function readGroup(payload, ctx) {
   }
   const body = decompress(method, rawSize, payload.subarray(c.pos), ctx.limits, ctx.codecs, major);
   const b = new Cursor(body);
-  // version 5: a shell (kinds 6-10 and 12) or a copy (11) may have no reference, and a kind this reader skips decides for itself (§9.2)
-  const none = major >= 5 && (skipped || (kind >= 6 && kind <= 12));
+  // version 5: a shell (kinds 6-10, 12 and 13) or a copy (11) may have no reference, and a kind this reader skips decides for itself (§9.2)
+  const none = major >= 5 && (skipped || (kind >= 6 && kind <= 13));
   const { refs, roles } = major === 1 ? readBodyV1(b, ctx) : readBody(b, ctx, none);
   const m = refs.length;
   let data = null;
@@ -101,7 +101,7 @@ export function readGroup(payload, ctx) {
       // version 5's shell grids are f32 (16 bytes), earlier ones f64 (32 bytes): §9.10, A.5
       const f32Grid = major >= 5;
       if (kind === 6) data = readShell(b, roles, f32Grid);
-      else if (kind === 9 || kind === 10 || kind === 12) data = readShellWalk(b, roles, kind, f32Grid);
+      else if (kind === 9 || kind === 10 || kind === 12 || kind === 13) data = readShellWalk(b, roles, kind, f32Grid);
       else data = readShellTree(b, roles, kind === 8, f32Grid);
     }
   }

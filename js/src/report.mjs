@@ -47,7 +47,7 @@ function groupJson(g) {
     const s = g.data;
     out.vertex_planes = triples(s.cornerPlanes, s.V, null);
     out.facets = facets(s);
-  } else if ((g.kind >= 6 && g.kind <= 10) || g.kind === 12) {
+  } else if ((g.kind >= 6 && g.kind <= 10) || g.kind === 12 || g.kind === 13) {
     const s = g.data;
     const explicit = [];
     const grid = [];

@@ -8,9 +8,10 @@
  * at (the corners each triangle takes from its parent are known when the loop reaches it).
  *
  * shellTreeRest, everything after the corner codes, is shared with shell walks (kind 9, §9.13, kind
- * 10, §9.14, and kind 12, §9.16, shellwalk.mjs), whose links and corners come from a walk instead;
- * kind 10's multi-parallelogram prediction (parallelograms, averaged) and kind 12's reflection (the
- * turn of a chain of steps) are here, with the other predictions.
+ * 10, §9.14, kind 12, §9.16, and kind 13, §9.17, shellwalk.mjs), whose links and corners come from a
+ * walk instead; kind 10's multi-parallelogram prediction (parallelograms, averaged), kind 12's
+ * reflection (the turn of a chain of steps) and kind 13's step source (the later-named gate corner)
+ * are here, with the other predictions.
  */
 import { fail } from './errors.mjs';
 import { unzigzag, readBits } from './varint.mjs';
@@ -116,13 +117,14 @@ export function readShellTree(b, roles, parallelogram = false, f32Grid = false) 
  * @param {Int32Array} s.parent per triangle, -1 for a root
  * @param {Int32Array} s.opposite per triangle, the parent's corner off the shared edge, -1 for a root
  * @param {Float64Array} s.faceCodes per triangle, as read
- * @param {{parallelogram: boolean, walk?: boolean, multi?: boolean, reflect?: boolean, f32Grid?: boolean}} how kind 8
+ * @param {{parallelogram: boolean, walk?: boolean, multi?: boolean, reflect?: boolean, later?: boolean, f32Grid?: boolean}} how kind 8
  *   (parallelogram), kind 9 (walk: a mode byte decides both), kind 10 (walk and multi: §9.14's
  *   averaged parallelograms first), kind 12 (walk and reflect: §9.16's turn first, where a chain
- *   turns); f32Grid: the grid in f32 (version 5, §9.10)
+ *   turns), kind 13 (walk and later: §9.17's predictor, the naming triangle's max(i0, i1) rather
+ *   than its i0; the parallelogram unchanged); f32Grid: the grid in f32 (version 5, §9.10)
  * @returns {import('./shells.mjs').Shell}
  */
-export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, walk = false, multi = false, reflect = false, f32Grid = false }) {
+export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram, walk = false, multi = false, reflect = false, later = false, f32Grid = false }) {
   const m = roles.length;
   // faces: 0 the parent's (the previous triangle's for a root), 1 free, r + 2 reference r
   const face = new Int32Array(T);
@@ -229,11 +231,11 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
     return values;
   });
 
-  // explicit corners: predicted from the naming triangle's first corner, else the previous explicit
-  // one; kind 8 (a walk's parallelogram bit): by the parallelogram i0 + i1 - opposite where all three
-  // are explicit. What is predicted and resolved is the integer coordinates, or with a walk's tables
-  // the indices into each axis's table. Every term is within 2^52 (checked as made), so each sum is
-  // exact in binary64.
+  // explicit corners: predicted from the naming triangle's first corner (kind 13: the later-named of
+  // its first two), else the previous explicit one; kind 8 (a walk's parallelogram bit): by the
+  // parallelogram i0 + i1 - opposite where all three are explicit. What is predicted and resolved is
+  // the integer coordinates, or with a walk's tables the indices into each axis's table. Every term is
+  // within 2^52 (checked as made), so each sum is exact in binary64.
   // kind 10 (§9.14): up to four parallelograms (a, b, c) per explicit corner, averaged where there are any
   const multiGrams = multi && E > 0 ? parallelograms(V, T, explicit, tri) : null;
   // kind 12 (§9.16): each explicit corner's step source p (the §9.11 predictor, whatever the mode),
@@ -246,7 +248,9 @@ export function shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, op
   for (let k = 0, e = 0; k < V; k++) {
     if (!explicit[k]) continue;
     const t = namer[k];
-    const pred = t >= 0 && explicit[tri[3 * t]] ? tri[3 * t] : previous;
+    // the gate corner stepped from: i0 (§9.11), or for kind 13 the later-named of i0 and i1 (§9.17)
+    const from = t < 0 ? -1 : later ? Math.max(tri[3 * t], tri[3 * t + 1]) : tri[3 * t];
+    const pred = from >= 0 && explicit[from] ? from : previous;
     let turns = false;
     if (steps) {
       steps[k] = pred;

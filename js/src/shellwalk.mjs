@@ -1,8 +1,9 @@
 /**
  * Shell walks (kind 9, spec §9.13, version 4.1), shell walks with multi-parallelograms (kind 10,
- * §9.14, version 4.2) and shell walks with reflections (kind 12, §9.16, version 5.1): the same data,
- * kinds 10 and 12 another prediction of explicit corners (in shelltree.mjs), read into the Shell
- * structure of shells.mjs.
+ * §9.14, version 4.2), shell walks with reflections (kind 12, §9.16, version 5.1) and shell walks
+ * stepping from the later gate corner (kind 13, §9.17, version 5.2): the same data, kinds 10, 12 and
+ * 13 another prediction of explicit corners (in shelltree.mjs), read into the Shell structure of
+ * shells.mjs.
  *
  * A walk is a shell tree (§9.11) whose tree is a depth-first walk (a stack of slots, one symbol per
  * triangle naming the edges that have children) and whose third corners are mostly "left" or
@@ -198,10 +199,11 @@ export class OpenEdges {
 /**
  * Kind 9 data, read and checked in §9.13's order; kind 10 (§9.14) is the same data with its explicit
  * corners predicted by averaged parallelograms where they have any, kind 12 (§9.16) by the turn of
- * the two steps before them where those turn.
+ * the two steps before them where those turn, kind 13 (§9.17) stepping from the later-named corner
+ * of their gate (max(i0, i1)) rather than from i0.
  * @param {import('./varint.mjs').Cursor} b
  * @param {Uint8Array} roles
- * @param {9 | 10 | 12} [kind]
+ * @param {9 | 10 | 12 | 13} [kind]
  * @param {boolean} [f32Grid] version 5: the grid in f32 (§9.10)
  * @returns {import('./shells.mjs').Shell}
  */
@@ -303,5 +305,5 @@ export function readShellWalk(b, roles, kind = 9, f32Grid = false) {
   if (top !== 0) fail('BAD_GROUP_STRUCTURE', `${top} slots left on the stack after the last triangle`);
   if (x !== X) fail('BAD_GROUP_STRUCTURE', `${X - x} escapes left over`);
   if (n !== V) fail('BAD_GROUP_STRUCTURE', `${n} corners named, ${V} declared`);
-  return shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram: false, walk: true, multi: kind === 10, reflect: kind === 12, f32Grid });
+  return shellTreeRest(b, roles, { V, T, explicit, tri, namer, parent, opposite, faceCodes }, { parallelogram: false, walk: true, multi: kind === 10, reflect: kind === 12, later: kind === 13, f32Grid });
 }

@@ -248,10 +248,11 @@ test('§9.2: m = 0 in kinds 0-5 is BAD_GROUP_STRUCTURE; a kind of a newer minor 
     return assemble(c);
   };
   for (const kind of [0, 1, 2, 3, 4, 5]) expectBoth(withGroup(kind, [0, 1, 2, 3]), 'BAD_GROUP_STRUCTURE');
-  // kind 12 is 5.1's (§9.3): unknown in 5.0; kind 13 unknown in 5.1 and skipped in 5.2
+  // kind 12 is 5.1's (§9.3): unknown in 5.0; kind 13 (5.2's) unknown in 5.1; kind 14 unknown in 5.2 and skipped in 5.3
   expectBoth(withGroup(12, [0, 1, 2, 3]), 'UNKNOWN_GROUP_KIND');
   expectBoth(withGroup(13, [0, 1, 2, 3], 1), 'UNKNOWN_GROUP_KIND');
-  const skipped = readNode(withGroup(13, [0, 1, 2, 3], 2));
+  expectBoth(withGroup(14, [0, 1, 2, 3], 2), 'UNKNOWN_GROUP_KIND');
+  const skipped = readNode(withGroup(14, [0, 1, 2, 3], 3));
   assert.deepEqual([...skipped.findings].sort(), ['NEWER_MINOR_VERSION', 'SKIPPED_GROUP_KIND']);
   assert.equal(skipped.meshes[0], null);
   // the golden shell walk's body in a 4.2 file: m = 0 is BAD_GROUP_STRUCTURE in every kind of major 4 (A.5)

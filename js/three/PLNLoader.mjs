@@ -32,7 +32,7 @@ import { readPln } from '../src/browser.mjs';
 export const KIND_NAMES = [
   'convex solid', 'cells', 'tree', 'pseudo-convex patch', 'pseudo-concave patch', 'sealed surface',
   'shell', 'shell tree', 'shell tree with parallelograms', 'shell walk', 'shell walk with multi-parallelograms',
-  'copy', 'shell walk with reflections',
+  'copy', 'shell walk with reflections', 'shell walk from the later gate corner',
 ];
 
 export class PLNLoader extends Loader {

@@ -161,6 +161,7 @@ DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], Deco
     GroupKind.SHELL_WALK: decode_shell_group,
     GroupKind.SHELL_WALK_MULTI: decode_shell_group,
     GroupKind.SHELL_WALK_REFLECT: decode_shell_group,
+    GroupKind.SHELL_WALK_LATER: decode_shell_group,
 }
 #: The kinds of shell groups, which the encoder chooses between by size once their corners are known
 #: (:data:`planefmt.codec.choosing.SHELL_LAYOUTS`).

@@ -405,9 +405,10 @@ def _as_tree(g: GroupSpec) -> GroupSpec:
 
 
 def _unreflected(g: GroupSpec) -> GroupSpec:
-    """``g``, a shell walk with reflections (version 5.1) written for readers of 4.x: kind 9 or 10,
-    whichever codes it smaller (the corners are the same, so is the bound)."""
-    if g.kind != GroupKind.SHELL_WALK_REFLECT:
+    """``g``, a shell walk with reflections or steps from the later gate corner (versions 5.1, 5.2)
+    written for readers of 4.x: kind 9 or 10, whichever codes it smaller (the corners are the same, so is
+    the bound)."""
+    if g.kind not in (GroupKind.SHELL_WALK_REFLECT, GroupKind.SHELL_WALK_LATER):
         return g
     return replace(g, kind=shellwalk.shell_walk_choice(g.shell, shellwalk.WALK_KINDS[:2])[0])
 

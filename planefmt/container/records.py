@@ -24,7 +24,7 @@ from .shellfields import _decode_shell, _decode_shell_tree
 from .shellwalk import WALK_KINDS, decode_shell_walk, shell_kind_data
 
 #: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 1}
+VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2}
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3), 5: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
@@ -32,7 +32,7 @@ KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3),
                 int(GroupKind.SHELL_TREE_PARALLELOGRAM): (3, 4), int(GroupKind.SHELL_WALK): (4, 1),
                 int(GroupKind.SHELL_WALK_MULTI): (4, 2), int(GroupKind.COPY): (4, 2),
-                int(GroupKind.SHELL_WALK_REFLECT): (5, 1)}
+                int(GroupKind.SHELL_WALK_REFLECT): (5, 1), int(GroupKind.SHELL_WALK_LATER): (5, 2)}
 #: Kinds whose groups may have no reference in version 5 (spec §9.2): shells of free triangles over
 #: explicit corners, and copies of them.
 UNREFERENCED_KINDS = frozenset({int(GroupKind.SHELL), *map(int, TREE_KINDS), int(GroupKind.COPY)})

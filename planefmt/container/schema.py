@@ -232,8 +232,9 @@ def shell_grid(major: int) -> tuple[cs.Struct, int]:
 # flag bit per corner, picks, then where a corner is explicit a mode byte (bit 0 parallelogram, bit 1
 # tables), the same ShellGrid, per axis a table of values where bit 1 says so (count, first, gaps),
 # and the zigzag varint residuals (the walk is sequential: shellwalk.py and _chains.c)
-# spec §9.14 (kind 10, version 4.2) and §9.16 (kind 12, version 5.1): the same data, explicit corners
-# predicted otherwise (averaged parallelograms; a turning chain of step sources, resolved in _chains.c)
+# spec §9.14 (kind 10, version 4.2), §9.16 (kind 12, version 5.1) and §9.17 (kind 13, version 5.2): the
+# same data, explicit corners predicted otherwise (averaged parallelograms; a turning chain of step
+# sources, resolved in _chains.c; steps from the later-named gate corner)
 SHELL_WALK_MODES = 0b11
 
 # spec §10.1 Face colours (cOLR, ancillary)

@@ -294,17 +294,20 @@ def _tree_parents(links: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray
 
 
 def _tree_predictors(links: np.ndarray, triangles: np.ndarray, explicit: np.ndarray, per: np.ndarray,
-                     new: np.ndarray, parallelogram: bool = False) -> np.ndarray:
+                     new: np.ndarray, parallelogram: bool = False, later: bool = False) -> np.ndarray:
     """For each corner, the corners its grid coordinates are coded from, ``(V, 3)``: ``(p, a, b)``
     for the prediction p + a - b, -1 where a term is absent (spec §9.11, §9.12). Kind 7 (§9.11): p the
     first corner of the attached triangle that names the corner anew, where that corner is explicit;
-    otherwise the previous explicit corner; -1 for none (coded from 0). Kind 8 (``parallelogram``,
-    §9.12): where that triangle's first two corners and its parent's corner opposite them are all
-    explicit, those three. ``per``: each triangle's corner codes (3 or 1); ``new``: which codes name a
-    corner anew."""
+    otherwise the previous explicit corner; -1 for none (coded from 0); with ``later`` (kind 13, §9.17)
+    the later-named of that triangle's first two corners instead of its first. Kind 8
+    (``parallelogram``, §9.12): where that triangle's first two corners and its parent's corner
+    opposite them are all explicit, those three. ``per``: each triangle's corner codes (3 or 1);
+    ``new``: which codes name a corner anew."""
     v = len(explicit)
     creator = np.repeat(np.arange(len(triangles)), per)[new]
-    gate = triangles[creator, 0]
+    gate, second = triangles[creator, 0], triangles[creator, 1]
+    if later:
+        gate, second = np.maximum(gate, second), np.minimum(gate, second)
     attached = links[creator] != 0
     previous = np.r_[-1, np.maximum.accumulate(np.where(explicit, np.arange(v), -1))[:-1]]
     out = np.full((v, 3), -1, dtype=np.int64)
@@ -313,7 +316,6 @@ def _tree_predictors(links: np.ndarray, triangles: np.ndarray, explicit: np.ndar
         link = links[creator]
         parent, edge = creator - (link - 1) // 3 - 1, (link - 1) % 3
         opposite = triangles[np.maximum(parent, 0), (edge + 2) % 3]
-        second = triangles[creator, 1]
         use = attached & explicit[gate] & explicit[second] & explicit[opposite]
         out[use, 1], out[use, 2] = second[use], opposite[use]
     return out
@@ -637,11 +639,12 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: boo
 
 def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, links: np.ndarray,
               faces: np.ndarray, explicit: np.ndarray, new: np.ndarray, parallelogram: bool | None,
-              averaged: bool = False, major: int = 4, reflected: bool = False) -> Shell:
+              averaged: bool = False, major: int = 4, reflected: bool = False, later: bool = False) -> Shell:
     """A shell tree's body from its faces' checks on (spec §9.11 and §9.12; §9.13 with
     ``parallelogram`` None, whose mode byte and tables come before the coordinates; §9.14 with
     ``averaged`` too, whose corners parallelograms average where they can; §9.16 with ``reflected``,
-    whose corners a turning chain of steps predicts): ``tri`` and
+    whose corners a turning chain of steps predicts; §9.17 with ``later``, whose corners step from the
+    later-named gate corner): ``tri`` and
     ``links`` as decoded, ``faces`` the face codes and ``explicit`` the flags as read, ``new`` which of
     the corner code stream's entries (3 per root, 1 per attached triangle) name a corner anew."""
     def bad(reason: str) -> FormatError:
@@ -698,7 +701,7 @@ def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, 
         steps = varint.unzigzag(deltas).reshape(3, -1).T
         if np.abs(steps).max(initial=0) > MAX_GRID:
             raise bad("a grid residual is beyond 2^52")
-        terms = _tree_predictors(links, tri, explicit, per, new, parallelogram)
+        terms = _tree_predictors(links, tri, explicit, per, new, parallelogram, later)
         ex = np.flatnonzero(explicit)
         residual = np.zeros((3, v), dtype=np.int64)
         residual[:, ex] = steps.T

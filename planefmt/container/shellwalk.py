@@ -222,7 +222,7 @@ def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray,
 def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, kind: GroupKind = GroupKind.SHELL_WALK,
                       major: int = 4) -> Shell:
     """The corners and triangles of a ``kind`` body (a shell walk kind: SHELL_WALK, spec §9.13;
-    SHELL_WALK_MULTI, §9.14; SHELL_WALK_REFLECT, §9.16), checked."""
+    SHELL_WALK_MULTI, §9.14; SHELL_WALK_REFLECT, §9.16; SHELL_WALK_LATER, §9.17), checked."""
     (v, t, x), pos = varint.decode(raw, 3, "shell walk counts")
     v, t, x = int(v), int(t), int(x)
     left = len(raw) - pos
@@ -239,7 +239,8 @@ def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, kind: GroupKind = G
     tri, links = _walk(symbols, escapes, v)
     _, new, _ = code_stream(tri, links == 0)
     return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None,
-                     kind == GroupKind.SHELL_WALK_MULTI, major, kind == GroupKind.SHELL_WALK_REFLECT)
+                     kind == GroupKind.SHELL_WALK_MULTI, major, kind == GroupKind.SHELL_WALK_REFLECT,
+                     kind == GroupKind.SHELL_WALK_LATER)
 
 
 def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarray,
@@ -260,22 +261,28 @@ def _coordinates(shell: Shell, tri: np.ndarray, links: np.ndarray, new: np.ndarr
                       varint.encode(np.diff(table) - 1)]
         tables = b"".join(parts)
     per = np.where(links == 0, 3, 1)
-    terms = {p: _tree_predictors(links, tri, explicit, per, new, p)
-             for p in {bool(m & MODE_PARALLELOGRAM) for _, m in options}}
+    terms = {key: _tree_predictors(links, tri, explicit, per, new, *key)
+             for key in {_terms_key(k, m) for k, m in options}}
     averaged = parallelograms(tri, explicit) if any(k == GroupKind.SHELL_WALK_MULTI for k, _ in options) else None
     grid = grid_bytes(shell, 4)
     fields = []
     for kind, m in options:
         v = indices if m & MODE_TABLES else values
-        prediction = _predict(v, terms[bool(m & MODE_PARALLELOGRAM)])
+        prediction = _predict(v, terms[_terms_key(kind, m)])
         if kind == GroupKind.SHELL_WALK_MULTI:
             prediction = predict_averaged(v, *averaged, prediction)
         elif kind == GroupKind.SHELL_WALK_REFLECT:
-            prediction = predict_reflected(v, terms[bool(m & MODE_PARALLELOGRAM)][:, 0], prediction)
+            prediction = predict_reflected(v, terms[_terms_key(kind, m)][:, 0], prediction)
         fields.append({"mode": bytes([m]), "grid": grid, "tables": tables if m & MODE_TABLES else b"",
                        "coordinates": varint.encode(varint.zigzag((v - prediction)[explicit].T))})
     best = _smallest(fields, decide)
     return options[fields.index(best)][0], best
+
+
+def _terms_key(kind: GroupKind, mode: int) -> tuple[bool, bool]:
+    """The arguments of ``_tree_predictors`` after ``new`` for a walk of ``kind`` in ``mode``: whether
+    parallelograms predict (mode bit 0), whether steps are from the later gate corner (kind 13)."""
+    return bool(mode & MODE_PARALLELOGRAM), kind == GroupKind.SHELL_WALK_LATER
 
 
 #: Deflate level that ranks a walk's codings (kind and mode), and how many of the best (within what
@@ -332,14 +339,16 @@ def _brotli_size(part: bytes) -> int:
 #: 1e-4 and Draco-14's error no kind 10 group was smallest with it; its near copies of the bit-0-clear
 #: bodies only crowded the ranking's best two (on quadknot.obj they pushed out the smallest coding, 7 %
 #: smaller).
-WALK_KINDS = (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI, GroupKind.SHELL_WALK_REFLECT)
+WALK_KINDS = (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI, GroupKind.SHELL_WALK_REFLECT,
+              GroupKind.SHELL_WALK_LATER)
 
 
 def codings(kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[tuple[GroupKind, int], ...]:
     """The (kind, mode) pairs the encoder tries for a walk of one of ``kinds``: ``mode`` alone if given,
-    else every mode of kind 9 and those of kinds 10 and 12 without bit 0 (see :data:`WALK_KINDS`)."""
+    else every mode of kinds 9 and 13 and those of kinds 10 and 12 without bit 0 (see :data:`WALK_KINDS`)."""
     return tuple((k, m) for k in kinds for m in (MODES if mode is None else (mode,))
-                 if mode is not None or k == GroupKind.SHELL_WALK or not m & MODE_PARALLELOGRAM)
+                 if mode is not None or k in (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_LATER)
+                 or not m & MODE_PARALLELOGRAM)
 
 
 def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
