@@ -333,22 +333,22 @@ def _brotli_size(part: bytes) -> int:
     return size
 
 
-#: The shell walk kinds: kind 9 (spec §9.13), kind 10 (§9.14) and kind 12 (§9.16), which differ only in
-#: predictions. The encoder writes kinds 10 and 12 without mode bit 0 only: the bit decides their
-#: corners without parallelograms or turning chains alone, a few per mesh, and over the corpus at 1e-6,
-#: 1e-4 and Draco-14's error no kind 10 group was smallest with it; its near copies of the bit-0-clear
-#: bodies only crowded the ranking's best two (on quadknot.obj they pushed out the smallest coding, 7 %
-#: smaller).
+#: The shell walk kinds: kind 9 (spec §9.13), kind 10 (§9.14), kind 12 (§9.16) and kind 13 (§9.17), which
+#: differ only in predictions. The encoder writes kinds 10, 12 and 13 without mode bit 0 only: the bit
+#: decides their corners without parallelograms or turning chains alone (kind 13: without
+#: parallelograms, where the later gate corner differs from i0), a few per mesh, and over the corpus at
+#: 1e-6, 1e-4 and Draco-14's error no kind 10 group was smallest with it; its near copies of the
+#: bit-0-clear bodies only crowded the ranking's best two (on quadknot.obj they pushed out the smallest
+#: coding, 7 % smaller).
 WALK_KINDS = (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_MULTI, GroupKind.SHELL_WALK_REFLECT,
               GroupKind.SHELL_WALK_LATER)
 
 
 def codings(kinds: tuple[GroupKind, ...], mode: int | None = None) -> tuple[tuple[GroupKind, int], ...]:
     """The (kind, mode) pairs the encoder tries for a walk of one of ``kinds``: ``mode`` alone if given,
-    else every mode of kinds 9 and 13 and those of kinds 10 and 12 without bit 0 (see :data:`WALK_KINDS`)."""
+    else every mode of kind 9 and those of kinds 10, 12 and 13 without bit 0 (see :data:`WALK_KINDS`)."""
     return tuple((k, m) for k in kinds for m in (MODES if mode is None else (mode,))
-                 if mode is not None or k in (GroupKind.SHELL_WALK, GroupKind.SHELL_WALK_LATER)
-                 or not m & MODE_PARALLELOGRAM)
+                 if mode is not None or k == GroupKind.SHELL_WALK or not m & MODE_PARALLELOGRAM)
 
 
 def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
