@@ -40,7 +40,7 @@ test: $(STAMP) browser
 	$(BIN)/python -m pytest -n auto --dist worksteal
 	$(BIN)/python -m conformance --level geometry
 	if command -v node >/dev/null; then \
-	  (cd js && npm ci --silent --no-audit --no-fund) && node --test js/test/ && \
+	  (cd js && npm ci --silent --no-audit --no-fund) && node --test js/test/*.test.mjs && \
 	  $(BIN)/python -m conformance --impl "node js/cli.mjs" --level geometry; fi
 
 # the tests marked slow: every corpus file's recorded error bound against an independent measure,

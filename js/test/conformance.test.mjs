@@ -3,25 +3,17 @@
 // And the browser entry (fflate) reads every valid file as the Node entry does.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import fs from 'node:fs';
-import path from 'node:path';
-import { fileURLToPath } from 'node:url';
 import { readPln, PlnError } from '../src/node.mjs';
 import { readPln as readPlnBrowser } from '../src/browser.mjs';
 import { conformanceJson } from '../src/report.mjs';
+import { manifest, suiteFile, caseJson } from './files.mjs';
 
-const SUITE = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../conformance');
-
-const cases = fs.readFileSync(path.join(SUITE, 'manifest.tsv'), 'utf8').split('\n').slice(1).filter(Boolean)
-  .map((line) => {
-    const [file, expected, level] = line.split('\t');
-    return { file, expected, level };
-  });
+const cases = manifest().map(([file, expected, level]) => ({ file, expected, level }));
 
 /** @param {string} file */
 function outcome(file) {
   try {
-    return JSON.parse(JSON.stringify(conformanceJson(readPln(fs.readFileSync(path.join(SUITE, file)), { decode: true }))));
+    return JSON.parse(JSON.stringify(conformanceJson(readPln(suiteFile(file), { decode: true }))));
   } catch (err) {
     if (err instanceof PlnError) return { error: err.code };
     throw err;
@@ -72,7 +64,7 @@ function compareValid(want, got) {
 
 for (const c of cases) {
   test(c.file, () => {
-    const want = JSON.parse(fs.readFileSync(path.join(SUITE, c.file.replace(/\.pln$/, '.json')), 'utf8'));
+    const want = caseJson(c.file);
     const got = outcome(c.file);
     if ('error' in want) {
       assert.ok([want.error, ...want.also].includes(got.error), `got ${got.error ?? 'a valid file'}, expected ${want.error}`);
@@ -85,7 +77,7 @@ for (const c of cases) {
 
 test('the browser entry (fflate) reads the valid files as the Node entry does', () => {
   for (const c of cases.filter((k) => k.expected === 'ok')) {
-    const bytes = fs.readFileSync(path.join(SUITE, c.file));
+    const bytes = suiteFile(c.file);
     const a = conformanceJson(readPln(bytes));
     const b = conformanceJson(readPlnBrowser(bytes));
     assert.deepEqual(b, a, c.file);

@@ -5,88 +5,19 @@
 // every check of §9.15 in its order, and kind 11 against the versions of §9.3.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import fs from 'node:fs';
-import path from 'node:path';
-import zlib from 'node:zlib';
-import { fileURLToPath } from 'node:url';
 import * as THREE from 'three';
-import { readPln as readNode, PlnError } from '../src/node.mjs';
+import { readPln as readNode } from '../src/node.mjs';
 import { readPln as readBrowser } from '../src/browser.mjs';
 import { conformanceJson } from '../src/report.mjs';
-import { crc32 } from '../src/crc32.mjs';
-import { Cursor } from '../src/varint.mjs';
 import { PLNLoader, KIND_NAMES } from '../three/PLNLoader.mjs';
-
-const VALID = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../conformance/valid');
-const SIGNATURE = [0x89, 0x50, 0x4c, 0x4e, 0x0d, 0x0a, 0x1a, 0x0a];
-
-/** @param {number | bigint} v @returns {number[]} minimal LEB128 */
-function varint(v) {
-  let b = BigInt(v);
-  const out = [];
-  while (b >= 0x80n) { out.push(Number(b % 128n) | 0x80); b /= 128n; }
-  out.push(Number(b));
-  return out;
-}
-const f32 = (/** @type {number} */ v) => [...new Uint8Array(Float32Array.of(v).buffer)];
-const f64 = (/** @type {number} */ v) => [...new Uint8Array(Float64Array.of(v).buffer)];
-const u32 = (/** @type {number} */ v) => [...new Uint8Array(Uint32Array.of(v).buffer)];
-
-/** @param {{type: string, payload: ArrayLike<number>}[]} chunks @returns {Uint8Array} */
-function assemble(chunks) {
-  const parts = [Uint8Array.from(SIGNATURE)];
-  for (const { type, payload } of chunks) {
-    const c = new Uint8Array(12 + payload.length);
-    const v = new DataView(c.buffer);
-    for (let i = 0; i < 4; i++) c[i] = type.charCodeAt(i);
-    v.setUint32(4, payload.length, true);
-    c.set(Array.from(payload), 8);
-    v.setUint32(8 + payload.length, crc32(c, 8, 8 + payload.length, crc32(c, 0, 4)), true);
-    parts.push(c);
-  }
-  const out = new Uint8Array(parts.reduce((n, p) => n + p.length, 0));
-  let at = 0;
-  for (const p of parts) { out.set(p, at); at += p.length; }
-  return out;
-}
-
-/** §8, version 4: a transform's twelve entries, each as an f64 (code 3). @param {number[]} m 12 or 16 entries, row by row */
-function transformBytes(m) {
-  return [0xff, 0xff, 0xff, ...m.slice(0, 12).flatMap(f64)];
-}
-
-/** §9.2's common body: ref_count, the references as differences, the role bits. @param {number[]} refs @param {number[]} [bounding] */
-function common(refs, bounding = []) {
-  const roles = new Array(Math.ceil(refs.length / 8)).fill(0);
-  for (const i of bounding) roles[i >> 3] |= 1 << (i & 7);
-  return [...varint(refs.length), ...refs.flatMap((r, i) => varint(i === 0 ? r : r - refs[i - 1])), ...roles];
-}
+import { golden, varint, common, file4, groupBody, expectBoth as expect } from './files.mjs';
 
 /**
- * A file: float32 (coding 0) or float64 (coding 1) planes (ν, φ, h), objects (each a root, with a transform or none), groups (each
- * its object, kind and body, stored with method 0, 1 or 2), cOLR chunks.
- * @param {{planes: ArrayLike<number>, objects?: (number[] | null)[], groups: {object?: number, kind: number, body: number[], method?: number}[],
- *   colours?: {group: number, rgba: number[]}[], version?: [number, number], coding?: 0 | 1}} f
+ * A file of version 4.2 unless `version` says otherwise (files.mjs's file4): planes, objects,
+ * groups (each its object, kind and body), cOLR chunks.
+ * @param {Omit<import('./files.mjs').File4, 'version'> & {version?: [number, number]}} f
  */
-function build({ planes, objects = [null], groups, colours = [], version = [4, 2], coding = 1 }) {
-  const header = [version[0], version[1], 0, 0, coding, 0, 0, 0, 1, ...f32(NaN), ...f32(NaN)];
-  const plns = Array.from(planes).flatMap(coding === 0 ? f32 : f64);
-  const chunks = [
-    { type: 'PHDR', payload: header },
-    { type: 'PLNS', payload: [...varint(0), ...varint(planes.length / 3), 0, ...varint(plns.length), ...plns] },
-  ];
-  objects.forEach((m, k) => {
-    chunks.push({ type: 'OBJT', payload: [...varint(k), 0, m ? 1 : 0, 0, ...(m ? transformBytes(m) : [])] });
-  });
-  groups.forEach(({ object = 0, kind, body, method = 0 }, index) => {
-    const raw = Uint8Array.from(body);
-    const stored = method === 1 ? zlib.deflateSync(raw) : method === 2 ? zlib.brotliCompressSync(raw) : raw;
-    chunks.push({ type: 'GRUP', payload: [...varint(index), ...varint(object), kind, method, ...varint(raw.length), ...stored] });
-  });
-  for (const { group, rgba } of colours) chunks.push({ type: 'cOLR', payload: [...u32(group), ...u32(rgba.length / 4), ...rgba] });
-  chunks.push({ type: 'PEND', payload: [] });
-  return assemble(chunks);
-}
+const build = ({ version = [4, 2], ...f }) => file4({ ...f, version });
 
 /** The triplet (ν, φ, h) of the plane with unit normal n at distance h. @param {number[]} n @param {number} h */
 function triplet(n, h) {
@@ -114,43 +45,12 @@ const translate = (/** @type {number} */ x, /** @type {number} */ y, /** @type {
  * @param {string} name
  */
 function goldenGroup(name) {
-  const bytes = new Uint8Array(fs.readFileSync(path.join(VALID, name)));
+  const bytes = golden(name);
   const file = readNode(bytes);
-  let body = null;
-  let kind = -1;
-  for (let pos = 8; pos < bytes.length && !body;) {
-    const length = new DataView(bytes.buffer).getUint32(pos + 4, true);
-    if (String.fromCharCode(...bytes.subarray(pos, pos + 4)) === 'GRUP') {
-      const c = new Cursor(bytes.subarray(pos + 8, pos + 8 + length));
-      c.varint(); c.varint();
-      kind = c.u8();
-      const method = c.u8();
-      c.varint();
-      const stored = c.take(c.left);
-      body = [...(method === 1 ? zlib.inflateSync(stored) : method === 2 ? zlib.brotliDecompressSync(stored) : stored)];
-    }
-    pos += 12 + length;
-  }
+  const { kind, body } = groupBody(bytes, 0, file);
   const g = file.container.groups[0];
   assert.equal(file.header.coding, 0, name); // float32 planes: build(…, coding: 0) writes them alike
-  return { planes: file.planes, coding: /** @type {0} */ (0), kind, body: /** @type {number[]} */ (body), refs: [...g.refs], json: conformanceJson(file) };
-}
-
-/** @param {Uint8Array} bytes @param {typeof readNode} read */
-function outcome(bytes, read = readNode) {
-  try {
-    read(bytes);
-    return 'ok';
-  } catch (err) {
-    if (err instanceof PlnError) return err.code;
-    throw err;
-  }
-}
-
-/** Both entries give `code`. @param {Uint8Array} bytes @param {string} code @param {string} [what] */
-function expect(bytes, code, what = '') {
-  assert.equal(outcome(bytes, readNode), code, `${what} (node)`);
-  assert.equal(outcome(bytes, readBrowser), code, `${what} (browser)`);
+  return { planes: file.planes, coding: /** @type {0} */ (0), kind, body: [...body], refs: [...g.refs], json: conformanceJson(file) };
 }
 
 /** The world positions of a decoded group's vertices. @param {number[]} M 12 entries @param {Float64Array} p */

@@ -9,33 +9,16 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import path from 'node:path';
-import { execFileSync } from 'node:child_process';
-import { fileURLToPath } from 'node:url';
 import { readPln } from '../src/node.mjs';
-import { PYTHON, available, allFiles, encoded } from '../bench/corpus.mjs';
+import { available, allFiles, encoded } from '../bench/corpus.mjs';
+import { planefmtDecoding as reference } from './files.mjs';
 
-const HERE = path.dirname(fileURLToPath(import.meta.url));
 const SUBSET = [
   'cad/angle_block.STL', 'convex/test_sphere.stl', 'convex/tet.ply', 'gltf_scene/simple_pole.glb',
   'gltf_scene/boolean.glb', 'nonconvex_watertight/round.stl', 'open/soup.stl', 'smooth_dense/npm_bunny.ply',
   'usd/bolt.usda',
 ];
 const REL = 1e-9;
-
-/** planefmt's decoding: world-frame vertices and triangles. @param {string} file */
-function reference(file) {
-  const out = execFileSync(PYTHON, [path.join(HERE, 'planefmt_decode.py'), file], { maxBuffer: 1 << 30 });
-  const nl = out.indexOf(10);
-  const head = JSON.parse(out.subarray(0, nl).toString());
-  const body = out.subarray(nl + 1);
-  const buf = new ArrayBuffer(body.length);
-  new Uint8Array(buf).set(body);
-  return {
-    positions: new Float64Array(buf, 0, 3 * head.vertices),
-    indices: new Uint32Array(buf, 24 * head.vertices, 3 * head.triangles),
-  };
-}
 
 /** The largest distance from a point of a to the nearest point of b. */
 function oneSided(/** @type {Float64Array} */ a, /** @type {Float64Array} */ b, /** @type {number} */ cell) {

@@ -3,12 +3,10 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import path from 'node:path';
-import { fileURLToPath } from 'node:url';
 import { readPln, PlnError } from '../src/node.mjs';
 import { crc32 } from '../src/crc32.mjs';
+import { VALID, golden } from './files.mjs';
 
-const VALID = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../conformance/valid');
 const COPIES = 150;
 
 /** A small deterministic generator (mulberry32), so that a failure repeats. @param {number} seed */
@@ -49,7 +47,7 @@ function damage(/** @type {Uint8Array} */ bytes, /** @type {() => number} */ rnd
 
 for (const name of fs.readdirSync(VALID).filter((f) => f.endsWith('.pln'))) {
   test(`${COPIES} damaged copies of ${name}`, () => {
-    const bytes = new Uint8Array(fs.readFileSync(path.join(VALID, name)));
+    const bytes = golden(name);
     const rnd = random(name.length * 7919 + bytes.length);
     for (let i = 0; i < COPIES; i++) {
       const b = i % 10 === 9 ? bytes.subarray(0, Math.floor(rnd() * bytes.length)) : damage(bytes, rnd);

@@ -14,96 +14,26 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import path from 'node:path';
-import zlib from 'node:zlib';
-import { execFileSync } from 'node:child_process';
-import { fileURLToPath } from 'node:url';
-import { readPln as readNode, PlnError } from '../src/node.mjs';
+import { readPln as readNode } from '../src/node.mjs';
 import { readPln as readBrowser } from '../src/browser.mjs';
 import { conformanceJson } from '../src/report.mjs';
-import { crc32 } from '../src/crc32.mjs';
 import { Cursor } from '../src/varint.mjs';
 import { KIND_NAMES, PLNLoader } from '../three/PLNLoader.mjs';
-import { PYTHON, available, encoded } from '../bench/corpus.mjs';
+import { available, encoded } from '../bench/corpus.mjs';
+import {
+  golden, manifest, suiteFile, caseJson, varint, varints, zigzag, unzigzag, f32, bigVarint, triplet, file5, groupBody, outcome, expectListed,
+  shellOf, planefmtDecoding,
+} from './files.mjs';
 
-const HERE = path.dirname(fileURLToPath(import.meta.url));
-const SUITE = path.resolve(HERE, '../../conformance');
-const golden = (/** @type {string} */ name) => new Uint8Array(fs.readFileSync(path.join(SUITE, 'valid', name)));
-const SIGNATURE = [0x89, 0x50, 0x4c, 0x4e, 0x0d, 0x0a, 0x1a, 0x0a];
-
-/** @param {number | bigint} v @returns {number[]} minimal LEB128 */
-function varint(v) {
-  let b = BigInt(v);
-  const out = [];
-  while (b >= 0x80n) { out.push(Number(b % 128n) | 0x80); b /= 128n; }
-  out.push(Number(b));
-  return out;
-}
-/** @param {(number | bigint)[]} values */
-const varints = (values) => values.flatMap(varint);
-/** @param {bigint} d */
-const zigzag = (d) => (d >= 0n ? 2n * d : -2n * d - 1n);
-/** @param {bigint} z */
-const unzigzag = (z) => (z % 2n === 0n ? z / 2n : -(z + 1n) / 2n);
-const f32 = (/** @type {number} */ v) => [...new Uint8Array(Float32Array.of(v).buffer)];
-const f64 = (/** @type {number} */ v) => [...new Uint8Array(Float64Array.of(v).buffer)];
 const Z = 2n ** 52n;
 
-/** The triplet (ν, φ, h) of the plane with normal n through point p. @param {number[]} n @param {number[]} p */
-function triplet(n, p) {
-  const l = Math.hypot(...n);
-  const w = n.map((c) => c / l);
-  const nu = Math.acos(Math.max(-1, Math.min(1, w[2])));
-  let phi = Math.atan2(w[1], w[0]);
-  if (phi < 0) phi += 2 * Math.PI;
-  if (phi >= 2 * Math.PI || nu === 0 || nu === Math.PI) phi = 0;
-  return [nu, phi, w[0] * p[0] + w[1] * p[1] + w[2] * p[2]];
-}
-
 /**
- * A version 5 file (§4.1: PHDR's length a u32, every later one a varint): coding 1 (f64 triplets),
- * the given planes in one PLNS, one object, groups with the kind, kind data and m references (the
- * planes 0 … m − 1, all face planes; m = 0 by default, §9.2).
+ * A version 5.2 file unless `minor` says otherwise (files.mjs's file5): the given planes, one
+ * object, groups with the kind, kind data and m references (m = 0 by default).
  * @param {{kind: number, data: number[], m?: number}[]} groups @param {number} [minor]
  * @param {number[][]} [planes]
  */
-function file(groups, minor = 2, planes = []) {
-  const nan = f32(NaN);
-  const plns = planes.flatMap(([nu, phi, h]) => [...f64(nu), ...f64(phi), ...f64(h)]);
-  const chunks = [
-    { type: 'PHDR', payload: [5, minor, 0, 1, 0, 0, 0, 1, ...nan, ...nan] },
-    ...(planes.length ? [{ type: 'PLNS', payload: [0, ...varint(planes.length), 0, ...varint(plns.length), ...plns] }] : []),
-    { type: 'OBJT', payload: [0, 0, 0, 0] },
-    ...groups.map(({ kind, data, m = 0 }, i) => {
-      const common = m === 0 ? [0] : [...varint(m), 0, ...new Array(m - 1).fill(1), ...new Array(Math.ceil(m / 8)).fill(0)];
-      return { type: 'GRUP', payload: [...varint(i), 0, kind, 0, ...varint(common.length + data.length), ...common, ...data] };
-    }),
-    { type: 'PEND', payload: [] },
-  ];
-  /** @type {Uint8Array[]} */
-  const parts = [Uint8Array.from(SIGNATURE)];
-  chunks.forEach(({ type, payload }, i) => {
-    const tagged = Uint8Array.from([...type].map((ch) => ch.charCodeAt(0)).concat(payload));
-    const crc = crc32(tagged, 0, tagged.length);
-    const length = i === 0 ? [...new Uint8Array(Uint32Array.of(payload.length).buffer)] : varint(payload.length);
-    parts.push(tagged.subarray(0, 4), Uint8Array.from(length), tagged.subarray(4), new Uint8Array(Uint32Array.of(crc).buffer));
-  });
-  const out = new Uint8Array(parts.reduce((n, p) => n + p.length, 0));
-  let at = 0;
-  for (const p of parts) { out.set(p, at); at += p.length; }
-  return out;
-}
-
-/** @param {Uint8Array} bytes @param {typeof readNode} read */
-function outcome(bytes, read = readNode) {
-  try {
-    read(bytes);
-    return 'ok';
-  } catch (err) {
-    if (err instanceof PlnError) return err.code;
-    throw err;
-  }
-}
+const file = (groups, minor = 2, planes = []) => file5(groups, minor, planes);
 
 // ---------------------------------------------------------------------------------------------
 // The reference: §9.13's walk and §9.17's prediction, from the text
@@ -272,14 +202,6 @@ function body({ V, T, symbols, escapes }, mode, zz, { tables = null, grid = [0.5
   const faceCodes = faces ? faces.map((f) => (f < 0 ? 1 : f + 2)) : new Array(T).fill(1);
   return [...varints([V, T, escapes.length]), ...varints(symbols), ...varints(escapes), ...varints(faceCodes), ...flags,
     ...(E > 0 ? [mode, ...grid.flatMap(f32), ...tableBytes, ...varints(zz)] : [])];
-}
-
-/** The decoded group's report: its shell's integer coordinates (or table values) and triangles. @param {Uint8Array} bytes */
-function shellOf(bytes, group = 0) {
-  const json = conformanceJson(readNode(bytes));
-  assert.deepEqual(conformanceJson(readBrowser(bytes)), json, 'browser.mjs reads it alike');
-  const { grid, facets } = json.groups[group].shell;
-  return { grid: /** @type {number[][]} */ (grid), tris: facets.map((/** @type {number[]} */ t) => t.slice(1)), json };
 }
 
 /**
@@ -547,16 +469,8 @@ function goldenWalk(name) {
   const bytes = golden(name);
   const f = readNode(bytes);
   const index = f.container.groups.findIndex((g) => [9, 10, 12, 13].includes(g.kind));
-  const chunk = f.chunks.filter((c) => c.type === 'GRUP')[index];
-  const payload = bytes.subarray(chunk.offset + chunk.size - 4 - chunk.length, chunk.offset + chunk.size - 4);
-  const c = new Cursor(payload);
-  c.varint(); c.varint();
-  const kind = c.u8();
-  const method = c.u8();
-  c.varint();
-  const stored = payload.subarray(c.pos);
-  const raw = method === 0 ? stored : method === 1 ? zlib.inflateSync(stored) : zlib.brotliDecompressSync(stored);
-  const b = new Cursor(new Uint8Array(raw));
+  const { kind, body: raw } = groupBody(bytes, index, f);
+  const b = new Cursor(raw);
   const m = b.varint();
   for (let i = 0; i < m; i++) b.varint();
   b.take(Math.ceil(m / 8));
@@ -579,14 +493,7 @@ function goldenWalk(name) {
       tables.push(values);
     }
   }
-  const zz = Array.from({ length: 3 * V }, () => {
-    let v = 0n;
-    for (let shift = 0n; ; shift += 7n) {
-      const byte = b.u8();
-      v += BigInt(byte & 0x7f) << shift;
-      if (byte < 0x80) return v;
-    }
-  });
+  const zz = Array.from({ length: 3 * V }, () => bigVarint(b));
   assert.equal(b.left, 0);
   const shell = conformanceJson(f).groups[index].shell;
   return { walk: { V, T, symbols, escapes }, kind, mode, tables: mode & 2 ? tables : null, zz, grid: /** @type {number[][]} */ (shell.grid), tris: shell.facets.map((/** @type {number[]} */ t) => t.slice(1)) };
@@ -881,15 +788,13 @@ test('§9.17: linear time on a fan of 200,000 corners each stepping from the one
 });
 
 test('the 5.2 conformance cases through both entries', () => {
-  const cases = fs.readFileSync(path.join(SUITE, 'manifest.tsv'), 'utf8').split('\n').slice(1).filter(Boolean)
-    .map((line) => line.split('\t')).filter(([name]) => /_v5_2\.pln$|\/xv52_/.test(name));
+  const cases = manifest().filter(([name]) => /_v5_2\.pln$|\/xv52_/.test(name));
   assert.ok(cases.length >= 5, `${cases.length} cases`);
   for (const [name, expected] of cases) {
-    const bytes = new Uint8Array(fs.readFileSync(path.join(SUITE, name)));
-    const want = expected === 'ok' ? ['ok'] : expected.split('|');
-    for (const read of [readNode, readBrowser]) assert.ok(want.includes(outcome(bytes, read)), `${name}: ${outcome(bytes, read)}, expected ${expected}`);
+    const bytes = suiteFile(name);
+    expectListed(bytes, expected, name);
     if (expected === 'ok') {
-      const json = JSON.parse(fs.readFileSync(path.join(SUITE, name.replace(/\.pln$/, '.json')), 'utf8'));
+      const json = caseJson(name);
       assert.deepEqual(conformanceJson(readNode(bytes)).groups, json.groups, name);
     }
   }
@@ -905,16 +810,10 @@ test('planefmt\'s kind 13 groups of the corpus decode here to its decoding, corn
     if (k13 === 0) continue;
     groups += k13;
     const mine = f.mesh();
-    const out = execFileSync(PYTHON, [path.join(HERE, 'planefmt_decode.py'), name], { maxBuffer: 1 << 30 });
-    const nl = out.indexOf(10);
-    const head = JSON.parse(out.subarray(0, nl).toString());
-    const raw = out.subarray(nl + 1);
-    const buf = new ArrayBuffer(raw.length);
-    new Uint8Array(buf).set(raw);
-    const positions = new Float64Array(buf, 0, 3 * head.vertices);
+    const { positions, indices } = planefmtDecoding(name);
     // a shell's corners and triangles are as stored (§9.10): the same vertices in the same order
     assert.equal(mine.positions64.length, positions.length, rel);
-    assert.deepEqual([...mine.indices], [...new Uint32Array(buf, 24 * head.vertices, 3 * head.triangles)], rel);
+    assert.deepEqual([...mine.indices], [...indices], rel);
     positions.forEach((v, i) => assert.ok(Math.abs(v - mine.positions64[i]) <= 1e-12 * Math.max(1, Math.abs(v)), `${rel} coordinate ${i}`));
   }
   assert.ok(groups > 0, 'planefmt wrote no kind 13 group for the CAD parts §9.17 names');

@@ -5,12 +5,11 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
 import * as THREE from 'three';
 import { PLNLoader, KIND_NAMES } from '../three/PLNLoader.mjs';
 import { readPln } from '../src/node.mjs';
+import { VALID } from './files.mjs';
 
-const VALID = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../conformance/valid');
 const files = fs.readdirSync(VALID).filter((f) => f.endsWith('.pln')).sort();
 
 test('golden files are there', () => assert.ok(files.length >= 30, `${files.length} files in ${VALID}`));

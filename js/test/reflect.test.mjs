@@ -12,81 +12,29 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
-import path from 'node:path';
-import zlib from 'node:zlib';
-import { execFileSync } from 'node:child_process';
-import { fileURLToPath } from 'node:url';
-import { readPln as readNode, PlnError } from '../src/node.mjs';
+import { readPln as readNode } from '../src/node.mjs';
 import { readPln as readBrowser } from '../src/browser.mjs';
 import { conformanceJson } from '../src/report.mjs';
-import { crc32 } from '../src/crc32.mjs';
 import { Cursor } from '../src/varint.mjs';
 import { turn } from '../src/shelltree.mjs';
 import { KIND_NAMES, PLNLoader } from '../three/PLNLoader.mjs';
-import { PYTHON, available, encoded } from '../bench/corpus.mjs';
+import { available, encoded } from '../bench/corpus.mjs';
+import {
+  golden, manifest, suiteFile, varint, varints, zigzag, unzigzag, f32, bigVarint, file5, groupBody, outcome, expectListed, shellOf,
+  planefmtDecoding,
+} from './files.mjs';
 
-const HERE = path.dirname(fileURLToPath(import.meta.url));
-const SUITE = path.resolve(HERE, '../../conformance');
-const golden = (/** @type {string} */ name) => new Uint8Array(fs.readFileSync(path.join(SUITE, 'valid', name)));
-const SIGNATURE = [0x89, 0x50, 0x4c, 0x4e, 0x0d, 0x0a, 0x1a, 0x0a];
-
-/** @param {number | bigint} v @returns {number[]} minimal LEB128 */
-function varint(v) {
-  let b = BigInt(v);
-  const out = [];
-  while (b >= 0x80n) { out.push(Number(b % 128n) | 0x80); b /= 128n; }
-  out.push(Number(b));
-  return out;
-}
-/** @param {(number | bigint)[]} values */
-const varints = (values) => values.flatMap(varint);
-/** @param {bigint} d */
-const zigzag = (d) => (d >= 0n ? 2n * d : -2n * d - 1n);
-/** @param {bigint} z */
-const unzigzag = (z) => (z % 2n === 0n ? z / 2n : -(z + 1n) / 2n);
-const f32 = (/** @type {number} */ v) => [...new Uint8Array(Float32Array.of(v).buffer)];
 /** ⌊x / n⌋ for n > 0, rounding toward −∞ @param {bigint} x @param {bigint} n */
 const floorDiv = (x, n) => (x % n !== 0n && x < 0n ? x / n - 1n : x / n);
 const Z = 2n ** 52n;
 const L = 2n ** 18n;
 
 /**
- * A version 5 file (§4.1: PHDR's length a u32, every later one a varint): coding 1, no planes, one
- * object, groups of m = 0 (§9.2) with the given kind and kind data.
+ * A version 5.1 file unless `minor` says otherwise: no planes, one object, groups of m = 0 (§9.2)
+ * with the given kind and kind data (files.mjs's file5).
  * @param {{kind: number, data: number[]}[]} groups @param {number} [minor]
  */
-function file(groups, minor = 1) {
-  const nan = f32(NaN);
-  const chunks = [
-    { type: 'PHDR', payload: [5, minor, 0, 1, 0, 0, 0, 1, ...nan, ...nan] },
-    { type: 'OBJT', payload: [0, 0, 0, 0] },
-    ...groups.map(({ kind, data }, i) => ({ type: 'GRUP', payload: [...varint(i), 0, kind, 0, ...varint(data.length + 1), 0, ...data] })),
-    { type: 'PEND', payload: [] },
-  ];
-  /** @type {Uint8Array[]} */
-  const parts = [Uint8Array.from(SIGNATURE)];
-  chunks.forEach(({ type, payload }, i) => {
-    const tagged = Uint8Array.from([...type].map((ch) => ch.charCodeAt(0)).concat(payload));
-    const crc = crc32(tagged, 0, tagged.length);
-    const length = i === 0 ? [...new Uint8Array(Uint32Array.of(payload.length).buffer)] : varint(payload.length);
-    parts.push(tagged.subarray(0, 4), Uint8Array.from(length), tagged.subarray(4), new Uint8Array(Uint32Array.of(crc).buffer));
-  });
-  const out = new Uint8Array(parts.reduce((n, p) => n + p.length, 0));
-  let at = 0;
-  for (const p of parts) { out.set(p, at); at += p.length; }
-  return out;
-}
-
-/** @param {Uint8Array} bytes @param {typeof readNode} read */
-function outcome(bytes, read = readNode) {
-  try {
-    read(bytes);
-    return 'ok';
-  } catch (err) {
-    if (err instanceof PlnError) return err.code;
-    throw err;
-  }
-}
+const file = (groups, minor = 1) => file5(groups, minor);
 
 // ---------------------------------------------------------------------------------------------
 // The reference: §9.13's walk and §9.16's prediction, from the text, every corner explicit
@@ -258,14 +206,6 @@ function body({ V, T, symbols, escapes }, mode, zz, tables = null, grid = [0.5, 
     mode, ...grid.flatMap(f32), ...tableBytes, ...varints(zz)];
 }
 
-/** The decoded group's report: its shell's integer coordinates (or table values) and triangles. @param {Uint8Array} bytes */
-function shellOf(bytes, group = 0) {
-  const json = conformanceJson(readNode(bytes));
-  assert.deepEqual(conformanceJson(readBrowser(bytes)), json, 'browser.mjs reads it alike');
-  const { grid, facets } = json.groups[group].shell;
-  return { grid: /** @type {number[][]} */ (grid), tris: facets.map((/** @type {number[]} */ t) => t.slice(1)), json };
-}
-
 /**
  * A fan of n corners round corner 1: the root (0 1 2), then each triangle attached across edge 1
  * (from corner 1 to its new corner) of the one before: (2 1 3), (3 1 4) … So corner k ≥ 3 steps
@@ -435,16 +375,8 @@ function goldenWalk(name) {
   const bytes = golden(name);
   const f = readNode(bytes);
   const index = f.container.groups.findIndex((g) => [9, 10, 12].includes(g.kind));
-  const chunk = f.chunks.filter((c) => c.type === 'GRUP')[index];
-  const payload = bytes.subarray(chunk.offset + chunk.size - 4 - chunk.length, chunk.offset + chunk.size - 4);
-  const c = new Cursor(payload);
-  c.varint(); c.varint();
-  const kind = c.u8();
-  const method = c.u8();
-  c.varint();
-  const stored = payload.subarray(c.pos);
-  const raw = method === 0 ? stored : method === 1 ? zlib.inflateSync(stored) : zlib.brotliDecompressSync(stored);
-  const b = new Cursor(new Uint8Array(raw));
+  const { kind, body: raw } = groupBody(bytes, index, f);
+  const b = new Cursor(raw);
   const m = b.varint();
   for (let i = 0; i < m; i++) b.varint();
   b.take(Math.ceil(m / 8));
@@ -464,14 +396,7 @@ function goldenWalk(name) {
       read(sizes[i]);
     }
   }
-  const zz = Array.from({ length: 3 * V }, () => {
-    let v = 0n;
-    for (let shift = 0n; ; shift += 7n) {
-      const byte = b.u8();
-      v += BigInt(byte & 0x7f) << shift;
-      if (byte < 0x80) return v;
-    }
-  });
+  const zz = Array.from({ length: 3 * V }, () => bigVarint(b));
   assert.equal(b.left, 0);
   const shell = conformanceJson(f).groups[index].shell;
   return { walk: { V, T, symbols, escapes }, kind, mode, sizes, zz, grid: /** @type {number[][]} */ (shell.grid), tris: shell.facets.map((/** @type {number[]} */ t) => t.slice(1)) };
@@ -716,14 +641,9 @@ test('§9.16: linear time on a fan of 200,000 turning corners', (t) => {
 });
 
 test('the 5.1 conformance cases through both entries', () => {
-  const cases = fs.readFileSync(path.join(SUITE, 'manifest.tsv'), 'utf8').split('\n').slice(1).filter(Boolean)
-    .map((line) => line.split('\t')).filter(([name]) => /_v5_1\.pln$|\/xv51_/.test(name));
+  const cases = manifest().filter(([name]) => /_v5_1\.pln$|\/xv51_/.test(name));
   assert.ok(cases.length >= 7, `${cases.length} cases`);
-  for (const [name, expected] of cases) {
-    const bytes = new Uint8Array(fs.readFileSync(path.join(SUITE, name)));
-    const want = expected === 'ok' ? ['ok'] : expected.split('|');
-    for (const read of [readNode, readBrowser]) assert.ok(want.includes(outcome(bytes, read)), `${name}: ${outcome(bytes, read)}, expected ${expected}`);
-  }
+  for (const [name, expected] of cases) expectListed(suiteFile(name), expected, name);
 });
 
 test('planefmt\'s kind 12 groups of the corpus decode here to its decoding, corner by corner', { skip: !available && 'no .venv or corpus' }, (t) => {
@@ -737,16 +657,10 @@ test('planefmt\'s kind 12 groups of the corpus decode here to its decoding, corn
     if (k12 === 0) continue;
     groups += k12;
     const mine = f.mesh();
-    const out = execFileSync(PYTHON, [path.join(HERE, 'planefmt_decode.py'), name], { maxBuffer: 1 << 30 });
-    const nl = out.indexOf(10);
-    const head = JSON.parse(out.subarray(0, nl).toString());
-    const raw = out.subarray(nl + 1);
-    const buf = new ArrayBuffer(raw.length);
-    new Uint8Array(buf).set(raw);
-    const positions = new Float64Array(buf, 0, 3 * head.vertices);
+    const { positions, indices } = planefmtDecoding(name);
     // a shell's corners and triangles are as stored (§9.10): the same vertices in the same order
     assert.equal(mine.positions64.length, positions.length, rel);
-    assert.deepEqual([...mine.indices], [...new Uint32Array(buf, 24 * head.vertices, 3 * head.triangles)], rel);
+    assert.deepEqual([...mine.indices], [...indices], rel);
     positions.forEach((v, i) => assert.ok(Math.abs(v - mine.positions64[i]) <= 1e-12 * Math.max(1, Math.abs(v)), `${rel} coordinate ${i}`));
   }
   assert.ok(groups > 0, 'planefmt wrote no kind 12 group for the three files §9.16 names');

@@ -7,16 +7,12 @@ import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import { fileURLToPath } from 'node:url';
-import { readPln as readNode, PlnError, nodeBrotli } from '../src/node.mjs';
+import { readPln as readNode, nodeBrotli } from '../src/node.mjs';
 import { readPln as readBrowser, wasmBrotli } from '../src/browser.mjs';
 import { readPln as readBare } from '../src/index.mjs';
 import { conformanceJson } from '../src/report.mjs';
-import { crc32 } from '../src/crc32.mjs';
 import { Cursor } from '../src/varint.mjs';
-
-const VALID = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../conformance/valid');
-const SIGNATURE = [0x89, 0x50, 0x4c, 0x4e, 0x0d, 0x0a, 0x1a, 0x0a];
+import { VALID, golden, manifest, suiteFile, caseJson, varint, f32, f64, u32, assemble4 as assemble, outcome, expectBoth } from './files.mjs';
 
 /** @typedef {{type: string, payload: Uint8Array}} Chunk */
 
@@ -30,33 +26,6 @@ function chunksOf(bytes) {
   }
   return out;
 }
-
-/** @param {Chunk[]} chunks @returns {Uint8Array} */
-function assemble(chunks) {
-  const parts = [Uint8Array.from(SIGNATURE)];
-  for (const { type, payload } of chunks) {
-    const c = new Uint8Array(12 + payload.length);
-    const v = new DataView(c.buffer);
-    for (let i = 0; i < 4; i++) c[i] = type.charCodeAt(i);
-    v.setUint32(4, payload.length, true);
-    c.set(payload, 8);
-    v.setUint32(8 + payload.length, crc32(c, 8, 8 + payload.length, crc32(c, 0, 4)), true);
-    parts.push(c);
-  }
-  return Uint8Array.from(parts.flatMap((p) => [...p]));
-}
-
-/** @param {number} v @returns {number[]} minimal LEB128 */
-function varint(v) {
-  const out = [];
-  while (v >= 0x80) { out.push((v % 128) | 0x80); v = Math.floor(v / 128); }
-  out.push(v);
-  return out;
-}
-
-const f32 = (/** @type {number} */ v) => [...new Uint8Array(Float32Array.of(v).buffer)];
-const f64 = (/** @type {number} */ v) => [...new Uint8Array(Float64Array.of(v).buffer)];
-const u32 = (/** @type {number} */ v) => [...new Uint8Array(Uint32Array.of(v).buffer)];
 
 /** §8, version 4: the shortest code of each of the 12 entries, then their values. @param {number[]} m 16 entries */
 function codedTransform(m) {
@@ -144,24 +113,8 @@ function upgrade(bytes) {
 
 const readers = /** @type {const} */ ([['node', readNode], ['browser', readBrowser]]);
 
-/** The error code of reading `bytes`, or 'ok'. @param {Uint8Array} bytes @param {typeof readNode} read */
-function outcome(bytes, read = readNode, options = {}) {
-  try {
-    read(bytes, options);
-    return 'ok';
-  } catch (err) {
-    if (err instanceof PlnError) return err.code;
-    throw err;
-  }
-}
-
-/** @param {Uint8Array} bytes @param {string} code */
-function expectBoth(bytes, code) {
-  for (const [name, read] of readers) assert.equal(outcome(bytes, read), code, `${name} entry`);
-}
-
 const v3files = fs.readdirSync(VALID).filter((f) => f.endsWith('.pln')).sort().filter((f) => {
-  const v = chunksOf(new Uint8Array(fs.readFileSync(path.join(VALID, f))))[0].payload;
+  const v = chunksOf(golden(f))[0].payload;
   return v[0] === 3 && v[1] <= 4;
 });
 
@@ -169,7 +122,7 @@ test('3.x golden files to rewrite', () => assert.ok(v3files.length >= 15, `${v3f
 
 for (const name of v3files) {
   test(`${name} as 4.0 (Brotli, coded transforms, one colour) reads as the original`, () => {
-    const bytes = new Uint8Array(fs.readFileSync(path.join(VALID, name)));
+    const bytes = golden(name);
     const v4 = upgrade(bytes);
     const want = conformanceJson(readNode(bytes));
     want.header.version = [4, 0];
@@ -182,7 +135,7 @@ for (const name of v3files) {
 }
 
 /** cube_v3.pln: one object, one convex group (kind 0), as 4.0; the group's references. */
-const CUBE = new Uint8Array(fs.readFileSync(path.join(VALID, 'cube_v3.pln')));
+const CUBE = golden('cube_v3.pln');
 /** Its chunks, as 3.0, without the iNDX (so that chunks may change size) and with an empty PEND. */
 const cube3 = chunksOf(CUBE).filter((c) => c.type !== 'iNDX').map((c) => (c.type === 'PEND' ? { type: 'PEND', payload: new Uint8Array(0) } : c));
 const cube4 = chunksOf(upgrade(CUBE));
@@ -422,14 +375,9 @@ test('Appendix A: a version 3 cOLR of 12 bytes and count above 1 ends inside its
 });
 
 test('the 4.0 conformance cases through both entries (the browser entry included for invalid files)', () => {
-  const suite = path.resolve(VALID, '..');
-  const cases = fs.readFileSync(path.join(suite, 'manifest.tsv'), 'utf8').split('\n').slice(1).filter(Boolean)
-    .map((line) => line.split('\t')).filter(([file]) => /_v4_0\.pln$|\/xv4_|xhdr_major6/.test(file));
+  const cases = manifest().filter(([file]) => /_v4_0\.pln$|\/xv4_|xhdr_major6/.test(file));
   assert.ok(cases.length >= 12, `${cases.length} cases`);
-  for (const [file, expected] of cases) {
-    const bytes = new Uint8Array(fs.readFileSync(path.join(suite, file)));
-    expectBoth(bytes, expected === 'ok' ? 'ok' : JSON.parse(fs.readFileSync(path.join(suite, file.replace(/\.pln$/, '.json')), 'utf8')).error);
-  }
+  for (const [file, expected] of cases) expectBoth(suiteFile(file), expected === 'ok' ? 'ok' : caseJson(file).error);
   // scene_transforms_v4_0: −0.0 entries coded as f32 stay −0.0; the first cube's one colour expanded
   const scene = readBrowser(fs.readFileSync(path.join(VALID, 'scene_transforms_v4_0.pln')));
   const c = /** @type {number[]} */ (scene.objects[3].transform);

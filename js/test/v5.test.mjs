@@ -6,26 +6,10 @@
 // loader; every 5.0 conformance case through both entries (node.mjs and browser.mjs).
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import fs from 'node:fs';
-import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { readPln as readNode, PlnError } from '../src/node.mjs';
-import { readPln as readBrowser } from '../src/browser.mjs';
+import { readPln as readNode } from '../src/node.mjs';
 import { PLNLoader } from '../three/PLNLoader.mjs';
-import { crc32 } from '../src/crc32.mjs';
 import { Cursor } from '../src/varint.mjs';
-
-const SUITE = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../../conformance');
-const golden = (/** @type {string} */ name) => new Uint8Array(fs.readFileSync(path.join(SUITE, 'valid', name)));
-const SIGNATURE = [0x89, 0x50, 0x4c, 0x4e, 0x0d, 0x0a, 0x1a, 0x0a];
-
-/** @param {number} v @returns {number[]} minimal LEB128 */
-function varint(v) {
-  const out = [];
-  while (v >= 0x80) { out.push((v % 128) | 0x80); v = Math.floor(v / 128); }
-  out.push(v);
-  return out;
-}
+import { golden, manifest, suiteFile, varint, assemble4, assemble5 as assemble, outcome, expectBoth, expectListed } from './files.mjs';
 
 /** @typedef {{type: string, payload: Uint8Array, length?: number[]}} Chunk `length`: the length's bytes as stored, if not the minimal varint */
 
@@ -50,39 +34,6 @@ function chunksOf(bytes) {
     pos += head + length + 4;
   }
   return out;
-}
-
-/**
- * A version 5 file: PHDR with a u32 length, the chunks after it with varint lengths.
- * @param {Chunk[]} chunks @returns {Uint8Array}
- */
-function assemble(chunks) {
-  /** @type {number[]} */
-  const out = [...SIGNATURE];
-  chunks.forEach(({ type, payload, length }, i) => {
-    const tag = [...type].map((ch) => ch.charCodeAt(0));
-    const len = length ?? (i === 0 ? [...new Uint8Array(Uint32Array.of(payload.length).buffer)] : varint(payload.length));
-    const crc = crc32(Uint8Array.from([...tag, ...payload]), 0, 4 + payload.length);
-    out.push(...tag, ...len, ...payload, ...new Uint8Array(Uint32Array.of(crc).buffer));
-  });
-  return Uint8Array.from(out);
-}
-
-/** @param {Uint8Array} bytes @param {typeof readNode} read */
-function outcome(bytes, read = readNode) {
-  try {
-    read(bytes);
-    return 'ok';
-  } catch (err) {
-    if (err instanceof PlnError) return err.code;
-    throw err;
-  }
-}
-
-/** The same outcome through node.mjs and browser.mjs. @param {Uint8Array} bytes @param {string} want */
-function expectBoth(bytes, want) {
-  assert.equal(outcome(bytes), want, 'node.mjs');
-  assert.equal(outcome(bytes, readBrowser), want, 'browser.mjs');
 }
 
 /** The PHDR payload of `chunks` with its fixed part's bytes changed. @param {Chunk[]} chunks @param {Record<number, number>} at */
@@ -257,17 +208,11 @@ test('§9.2: m = 0 in kinds 0-5 is BAD_GROUP_STRUCTURE; a kind of a newer minor 
   assert.equal(skipped.meshes[0], null);
   // the golden shell walk's body in a 4.2 file: m = 0 is BAD_GROUP_STRUCTURE in every kind of major 4 (A.5)
   const { body } = bodyOf(/** @type {Chunk} */ (chunks[at]).payload);
-  const v4 = Uint8Array.from([...SIGNATURE]);
-  const u32Chunk = (/** @type {string} */ type, /** @type {Uint8Array} */ p) => {
-    const tag = [...type].map((ch) => ch.charCodeAt(0));
-    const crc = crc32(Uint8Array.from([...tag, ...p]), 0, 4 + p.length);
-    return [...tag, ...new Uint8Array(Uint32Array.of(p.length).buffer), ...p, ...new Uint8Array(Uint32Array.of(crc).buffer)];
-  };
   // a 4.2 header: version, u16 flags 0, coding 0, widths, units, tolerance and error bound NaN
   const nan = [0, 0, 0xc0, 0x7f];
   const hdr4 = Uint8Array.from([4, 2, 0, 0, 0, 0, 0, 0, 1, ...nan, ...nan]);
-  const file4 = Uint8Array.from([...v4, ...u32Chunk('PHDR', hdr4), ...u32Chunk('OBJT', chunks[1].payload),
-    ...u32Chunk('GRUP', grup(0, 0, 9, body)), ...u32Chunk('PEND', new Uint8Array(0))]);
+  const file4 = assemble4([{ type: 'PHDR', payload: hdr4 }, { type: 'OBJT', payload: chunks[1].payload },
+    { type: 'GRUP', payload: grup(0, 0, 9, body) }, { type: 'PEND', payload: new Uint8Array(0) }]);
   expectBoth(file4, 'BAD_GROUP_STRUCTURE');
   expectBoth(withGroup(9, body), 'ok');
 });
@@ -284,12 +229,7 @@ test('§9.10: a version 5 grid is 16 bytes of f32; the same shell with an f64 gr
 });
 
 test('the 5.0 conformance cases through both entries', () => {
-  const cases = fs.readFileSync(path.join(SUITE, 'manifest.tsv'), 'utf8').split('\n').slice(1).filter(Boolean)
-    .map((line) => line.split('\t')).filter(([file]) => /_v5_0\.pln$|\/xv50_|xhdr_major6/.test(file));
+  const cases = manifest().filter(([file]) => /_v5_0\.pln$|\/xv50_|xhdr_major6/.test(file));
   assert.ok(cases.length >= 14, `${cases.length} cases`);
-  for (const [file, expected] of cases) {
-    const bytes = new Uint8Array(fs.readFileSync(path.join(SUITE, file)));
-    const want = expected === 'ok' ? ['ok'] : expected.split('|');
-    for (const read of [readNode, readBrowser]) assert.ok(want.includes(outcome(bytes, read)), `${file}: ${outcome(bytes, read)}, expected ${expected}`);
-  }
+  for (const [file, expected] of cases) expectListed(suiteFile(file), expected, file);
 });

@@ -9,93 +9,24 @@
 // near and past 2^52 against a reference decoding in BigInt.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import zlib from 'node:zlib';
-import { readPln as readNode, PlnError } from '../src/node.mjs';
+import { readPln as readNode } from '../src/node.mjs';
 import { readPln as readBrowser } from '../src/browser.mjs';
 import { conformanceJson } from '../src/report.mjs';
-import { crc32 } from '../src/crc32.mjs';
 import { OpenEdges } from '../src/shellwalk.mjs';
+import { varint, varints, zigzag as zigzagBig, unzigzag as unzigzagBig, f64, common, file4, triplet, outcome } from './files.mjs';
 
-const SIGNATURE = [0x89, 0x50, 0x4c, 0x4e, 0x0d, 0x0a, 0x1a, 0x0a];
-
-/** @param {number | bigint} v @returns {number[]} minimal LEB128 (a number exact up to 2^53; a bigint beyond) */
-function varint(v) {
-  let b = BigInt(v);
-  const out = [];
-  while (b >= 0x80n) { out.push(Number(b % 128n) | 0x80); b /= 128n; }
-  out.push(Number(b));
-  return out;
-}
 /** @param {number} d */
 const zigzag = (d) => (d >= 0 ? 2 * d : -2 * d - 1);
-const f32 = (/** @type {number} */ v) => [...new Uint8Array(Float32Array.of(v).buffer)];
-const f64 = (/** @type {number} */ v) => [...new Uint8Array(Float64Array.of(v).buffer)];
-/** @param {(number | bigint)[]} values */
-const varints = (values) => values.flatMap(varint);
-
-/** @param {{type: string, payload: number[]}[]} chunks @returns {Uint8Array} */
-function assemble(chunks) {
-  const parts = [Uint8Array.from(SIGNATURE)];
-  for (const { type, payload } of chunks) {
-    const c = new Uint8Array(12 + payload.length);
-    const v = new DataView(c.buffer);
-    for (let i = 0; i < 4; i++) c[i] = type.charCodeAt(i);
-    v.setUint32(4, payload.length, true);
-    c.set(payload, 8);
-    v.setUint32(8 + payload.length, crc32(c, 8, 8 + payload.length, crc32(c, 0, 4)), true);
-    parts.push(c);
-  }
-  const out = new Uint8Array(parts.reduce((n, p) => n + p.length, 0));
-  let at = 0;
-  for (const p of parts) { out.set(p, at); at += p.length; }
-  return out;
-}
 
 /**
- * A file of version major.minor (3 or 4): float64 planes (ν, φ, h), one object, groups of the
- * given kinds and kind data, all referencing every plane (roles: `bounding` local indices).
+ * A file of version major.minor (3 or 4; 4.1 by default): float64 planes (ν, φ, h), one object,
+ * groups of the given kinds and kind data, all referencing every plane (roles: `bounding` local
+ * indices), stored with method 0, 1 or 2 (files.mjs's file4).
  * @param {{planes: number[][], groups: {kind: number, data: number[], bounding?: number[], method?: number}[], version?: [number, number]}} f
  */
 function file({ planes, groups, version = [4, 1] }) {
-  const header = [version[0], version[1], 0, 0, 1, 0, 0, 0, 1, ...f32(NaN), ...f32(NaN)];
-  const plns = planes.flatMap(([nu, phi, h]) => [...f64(nu), ...f64(phi), ...f64(h)]);
-  const m = planes.length;
-  const chunks = [
-    { type: 'PHDR', payload: header },
-    { type: 'PLNS', payload: [...varint(0), ...varint(m), 0, ...varint(plns.length), ...plns] },
-    { type: 'OBJT', payload: [0, 0, 0, 0] },
-  ];
-  groups.forEach(({ kind, data, bounding = [], method = 0 }, index) => {
-    const roles = new Array(Math.ceil(m / 8)).fill(0);
-    for (const i of bounding) roles[i >> 3] |= 1 << (i & 7);
-    const body = [...varint(m), 0, ...new Array(m - 1).fill(1), ...roles, ...data];
-    const stored = method === 1 ? [...zlib.deflateSync(Uint8Array.from(body))] : method === 2 ? [...zlib.brotliCompressSync(Uint8Array.from(body))] : body;
-    chunks.push({ type: 'GRUP', payload: [...varint(index), 0, kind, method, ...varint(body.length), ...stored] });
-  });
-  chunks.push({ type: 'PEND', payload: [] });
-  return assemble(chunks);
-}
-
-/** The triplet (ν, φ, h) of the plane with normal n through point p. @param {number[]} n @param {number[]} p */
-function triplet(n, p) {
-  const l = Math.hypot(...n);
-  const w = n.map((c) => c / l);
-  const nu = Math.acos(Math.max(-1, Math.min(1, w[2])));
-  let phi = Math.atan2(w[1], w[0]);
-  if (phi < 0) phi += 2 * Math.PI;
-  if (phi >= 2 * Math.PI || nu === 0 || nu === Math.PI) phi = 0;
-  return [nu, phi, w[0] * p[0] + w[1] * p[1] + w[2] * p[2]];
-}
-
-/** @param {Uint8Array} bytes @param {typeof readNode} read */
-function outcome(bytes, read = readNode) {
-  try {
-    read(bytes);
-    return 'ok';
-  } catch (err) {
-    if (err instanceof PlnError) return err.code;
-    throw err;
-  }
+  const refs = planes.map((_, i) => i);
+  return file4({ planes: planes.flat(), version, groups: groups.map(({ kind, data, bounding = [], method = 0 }) => ({ kind, method, body: [...common(refs, bounding), ...data] })) });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -337,10 +268,6 @@ function encode(mesh, { mode = 0, reverse = false, rotate = 0, grid = [0.5, -1, 
 // BigInt throughout (a plain Map of directed edges; nothing of the reader's sorted runs or its
 // binary64 fast path)
 
-/** @param {bigint} d */
-const zigzagBig = (d) => (d >= 0n ? 2n * d : -2n * d - 1n);
-/** @param {bigint} z */
-const unzigzagBig = (z) => (z % 2n === 0n ? z / 2n : -(z + 1n) / 2n);
 /** ⌊x / n⌋, rounding toward −∞ @param {bigint} x @param {bigint} n */
 const floorDiv = (x, n) => (x % n !== 0n && x < 0n ? x / n - 1n : x / n);
 const LIMIT = 2n ** 52n;
