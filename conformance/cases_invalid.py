@@ -1937,11 +1937,12 @@ def _():
 REFLECT = int(GroupKind.SHELL_WALK_REFLECT)
 
 
-def reflect_file(shell, fields: dict[str, bytes], version: tuple[int, int] = (5, 1)) -> bytes:
-    """``shell`` as a shell walk with reflections (kind 12) of kind data ``fields`` (its grid in f32) on
-    the cube's six planes, whose faces it names, in a version 5.1 file (or ``version``), uncompressed."""
+def reflect_file(shell, fields: dict[str, bytes], version: tuple[int, int] = (5, 1), kind: int = REFLECT) -> bytes:
+    """``shell`` as a shell walk with reflections (kind 12, or ``kind``) of kind data ``fields`` (its grid in
+    f32) on the cube's six planes, whose faces it names, in a version 5.1 file (or ``version``),
+    uncompressed."""
     body = CUBE_REFS + b"".join({**fields, "grid": shellfields.grid_bytes(shell, 5)}.values())
-    group = schema.GroupHead3.build(dict(index=0, object=0, kind=REFLECT, compression=0, raw_size=len(body), body=body))
+    group = schema.GroupHead3.build(dict(index=0, object=0, kind=kind, compression=0, raw_size=len(body), body=body))
     return v5_file(v5_layout(groups=[group], version=version))
 
 
@@ -1989,11 +1990,9 @@ LATER = int(GroupKind.SHELL_WALK_LATER)
 
 
 def later_file(shell, fields: dict[str, bytes], version: tuple[int, int] = (5, 2)) -> bytes:
-    """``shell`` as a shell walk stepping from the later gate corner (kind 13) of kind data ``fields`` (its
-    grid in f32) on the cube's six planes, in a version 5.2 file (or ``version``), uncompressed."""
-    body = CUBE_REFS + b"".join({**fields, "grid": shellfields.grid_bytes(shell, 5)}.values())
-    group = schema.GroupHead3.build(dict(index=0, object=0, kind=LATER, compression=0, raw_size=len(body), body=body))
-    return v5_file(v5_layout(groups=[group], version=version))
+    """``shell`` as a shell walk stepping from the later gate corner (kind 13) of kind data ``fields`` in a
+    version 5.2 file (or ``version``), as :func:`reflect_file` lays it out."""
+    return reflect_file(shell, fields, version, LATER)
 
 
 @case("xv52_later_in_5_1", "UNKNOWN_GROUP_KIND", "a well-formed shell walk stepping from the later gate corner "
