@@ -12,7 +12,6 @@ import warnings
 import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, replace
-from functools import partial
 from typing import BinaryIO
 
 import numpy as np
@@ -100,9 +99,7 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     the surface stays where it is (within a bound by construction, counted
     in the error: :mod:`planefmt.geometry.redundant`). The decoded mesh then
     has fewer corners and triangles than the source (box.STL: 1,060 corners of
-    4,455), where that makes the smaller file: where it does not, the file
-    with every corner kept is written. ``keep_corners=True`` keeps every
-    corner and triangle.
+    4,455). ``keep_corners=True`` keeps every corner and triangle.
 
     Raises ``GeometryError``: ``DEGENERATE_GEOMETRY`` for malformed input,
     ``TOLERANCE_NOT_MET`` when no coding meets the tolerance and keeps the
@@ -110,9 +107,9 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     """
     forced = coding is not None or bits is not None
 
-    def prepare(_: int, splitters: tuple[Splitter, ...] = STRATEGIES, keep: bool = keep_corners) -> _Object:
+    def prepare(_: int, splitters: tuple[Splitter, ...] = STRATEGIES) -> _Object:
         return _prepare(vertices, faces, np.eye(4), tolerance, delta, tau, diagonal=None if forced else 0.0,
-                        splitters=splitters, scheme=scheme, keep_corners=keep)
+                        splitters=splitters, scheme=scheme, keep_corners=keep_corners)
 
     def size(objects: list[_Object], choice: _Choice, brotli: bool = True) -> int:
         buf = io.BytesIO()
@@ -121,7 +118,7 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
                scheme == "shell", False, brotli=brotli)
         return len(buf.getvalue())
 
-    (obj,), choice = _smaller_kept(prepare, 1, tolerance, coding, bits, watertight, size, scheme)
+    (obj,), choice = _encode_objects(prepare, 1, tolerance, coding, bits, watertight, size, scheme)
     return Encoded(triplets=obj.triplets, groups=obj.groups, coding=choice.coding,
                    quantization=choice.quantization, bbox=choice.bbox, tolerance=float(tolerance),
                    error_bound=choice.error_bound, lossy=choice.lossy, mesh=choice.meshes[0],
@@ -170,10 +167,10 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     if not meshes:
         raise GeometryError("the scene has no mesh to encode")
 
-    def prepare(k: int, splitters: tuple[Splitter, ...] = STRATEGIES, keep: bool = keep_corners) -> _Object:
+    def prepare(k: int, splitters: tuple[Splitter, ...] = STRATEGIES) -> _Object:
         node = scene.nodes[meshes[k]]
         return replace(_prepare(node.mesh.vertices, node.mesh.faces, worlds[meshes[k]], tolerance, delta, tau,
-                                node.mesh.face_colours, diagonal, splitters, scheme, keep), name=node.name)
+                                node.mesh.face_colours, diagonal, splitters, scheme, keep_corners), name=node.name)
 
     def size(objects: list[_Object], choice: _Choice, brotli: bool = False) -> int:
         buf = io.BytesIO()
@@ -181,22 +178,8 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
         _write(scene, buf, meshes, objects, choice, tolerance, compress, compact, major, verify=False, brotli=brotli)
         return len(buf.getvalue())
 
-    objects, choice = _smaller_kept(prepare, len(meshes), tolerance, coding, bits, watertight, size, scheme)
+    objects, choice = _encode_objects(prepare, len(meshes), tolerance, coding, bits, watertight, size, scheme)
     return _write(scene, target, meshes, objects, choice, tolerance, compress, compact, major)
-
-
-def _smaller_kept(prepare: Callable[..., _Object], count: int, tolerance: float, coding: Coding | None,
-                  bits: int | tuple[int, int, int] | None, watertight: bool,
-                  size: Callable[..., int], scheme: str) -> tuple[list[_Object], _Choice]:
-    """:func:`_encode_objects`, and where it dropped corners (planefmt.geometry.redundant) the same with
-    every corner kept, whichever file is smaller (Brotli included): the walk of a mesh with corners
-    dropped is another walk, which on a regular mesh that loses a few can predict worse (King_geom.usd
-    at Draco-14's error: 17,333 B with corners dropped against 15,470 kept)."""
-    objects, choice = _encode_objects(prepare, count, tolerance, coding, bits, watertight, size, scheme)
-    if not any(o.dropped for o in objects):
-        return objects, choice
-    kept = _encode_objects(partial(prepare, keep=True), count, tolerance, coding, bits, watertight, size, scheme)
-    return min((objects, choice), kept, key=lambda c: size(*c, brotli=True))
 
 
 def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: float, coding: Coding | None,

@@ -54,7 +54,6 @@ class _Object:
     simplified: bool
     fit: float  # model units
     mended: float  # model units: how far closing cracks or dropping corners moved the source (geometry.repair, .redundant)
-    dropped: int  # corners dropped (planefmt.geometry.redundant)
     closed: bool  # the source is a closed 2-manifold: its decoding must be one, of the same volume
     volume: float  # model units cubed, local coordinates
     euler: int
@@ -102,7 +101,7 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
         if face_colours is not None:
             face_colours = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[keep]
     closed = is_closed_manifold(faces, len(vertices))
-    mended, dropped = 0.0, 0
+    mended = 0.0
     if not closed and scheme == "paper":
         # An open mesh may be a solid with cracks: closed, it can be stored as one. What it must
         # keep is still an open mesh's (its area): a decoding as patches remains acceptable.
@@ -123,7 +122,7 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     if every and scheme == "shell":
         poly = split_planes(poly, np.unique(colours, axis=0, return_inverse=True)[1].reshape(-1))
     if scheme == "shell" and not keep_corners and tolerance > LOSSLESS_TOLERANCE and not (tau or delta):
-        poly, colours, mended, dropped = _dropped_corners(poly, colours, tolerance, every)
+        poly, colours, mended = _dropped_corners(poly, colours, tolerance, every)
     omega, h, face_plane = poly.omega, poly.h, poly.face_plane
     if tau:
         omega, h, face_plane = merge_planes(poly, tau)
@@ -168,17 +167,16 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     kept = np.where(face_plane >= 0, index[np.maximum(face_plane, 0)], -1)
     return _Object(vertices=poly.vertices, faces=poly.faces, triplets=to_triplets(omega[order], h[order]),
                    groups=tuple(groups), world=world, simplified=simplified, fit=poly.max_distance,
-                   mended=mended, dropped=dropped, closed=closed or _mended_solid(poly, groups),
+                   mended=mended, closed=closed or _mended_solid(poly, groups),
                    volume=signed_volume(poly.vertices, poly.faces), euler=euler_characteristic(poly.faces),
                    area=_area(poly.vertices, poly.faces), rim=_rim(poly.vertices, poly.faces),
                    plane_colours=plane_colours, face_plane=kept, face_colours=colours)
 
 
 def _dropped_corners(poly: Polygons, colours: np.ndarray | None, tolerance: float,
-                     every: bool) -> tuple[Polygons, np.ndarray | None, float, int]:
+                     every: bool) -> tuple[Polygons, np.ndarray | None, float]:
     """``poly`` without its flat and straight corners (:mod:`planefmt.geometry.redundant`), polygonized
-    again, its faces' ``colours``, the bound of how far the surface moved (model units) and how many
-    corners were dropped. A
+    again, its faces' ``colours`` and the bound of how far the surface moved (model units). A
     collapse may move it at most :data:`DROP_SHARE` of the tolerance, which the coding's budget then
     loses."""
     label = poly.face_plane
@@ -186,13 +184,13 @@ def _dropped_corners(poly: Polygons, colours: np.ndarray | None, tolerance: floa
     reduced = drop_redundant_corners(poly.vertices, poly.faces, label, poly.omega[on], poly.distance[on],
                                      DROP_SHARE * tolerance * poly.diagonal)
     if not reduced.dropped:
-        return poly, colours, 0.0, 0
+        return poly, colours, 0.0
     colours = None if colours is None else colours[reduced.origin]
     again = polygonize(reduced.vertices, reduced.faces, tolerance=min(COPLANAR_TOLERANCE, tolerance / 2),
                        max_drift=tolerance)
     if every:
         again = split_planes(again, np.unique(colours, axis=0, return_inverse=True)[1].reshape(-1))
-    return again, colours, reduced.offset, reduced.dropped
+    return again, colours, reduced.offset
 
 
 #: Kinds whose groups are closed surfaces when their source body is.
