@@ -5,6 +5,13 @@ polygons are triangulated by trimesh. Normals, UVs and materials are
 reported as dropped. Writing flattens the scene into one mesh in world
 coordinates; OBJ has no face colours. Coordinates are written with 17
 decimals, enough to round-trip float64 at model scales.
+
+OBJ declares no counts, so a cut file shows only where it ends inside a
+statement: a last line without a line break that is short of a statement
+(a face of fewer than three corners, a corner ending in ``/``, a vertex of
+fewer than three coordinates) is a ``TRUNCATED`` error (trimesh would drop
+that face without a word). A cut at a line break, or inside a number
+(``f 1 2 34`` cut to ``f 1 2 3``), leaves a valid shorter file: undetectable.
 """
 
 from __future__ import annotations
@@ -44,7 +51,7 @@ def sniff(head: bytes, size: int) -> bool:
 
 
 def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
-    """Read an OBJ file into ``(scene, dropped)``."""
+    """Read an OBJ file into ``(scene, dropped)``; one cut inside its last statement is ``TRUNCATED``."""
     file = os.fspath(path)
     try:
         with open(file, "rb") as handle:
@@ -52,11 +59,35 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
         # Final=False: the block may end inside a character. trimesh would guess another encoding
         # through an optional module and report that module missing, not that the file is no text.
         codecs.getincrementaldecoder("utf-8")().decode(head, final=False)
+        _check_last_line(file)
     except UnicodeDecodeError as exc:
         raise ConversionError(f"not OBJ text: byte {exc.start} is not UTF-8 text", file=file) from exc
     except OSError as exc:
         raise ConversionError(f"cannot open: {exc.strerror or exc}", file=file) from exc
     return read_scene(file, "obj", "OBJ")
+
+
+#: The fewest values of the statements a cut can visibly shorten.
+_FEWEST = {b"v": 3, b"vn": 3, b"vt": 1, b"f": 3, b"l": 2}
+
+
+def _check_last_line(file: str) -> None:
+    """Raise ``TRUNCATED`` where the file ends, without a line break, inside a statement."""
+    with open(file, "rb") as handle:
+        size = handle.seek(0, os.SEEK_END)
+        handle.seek(max(0, size - 4096))
+        tail = handle.read()
+    if not tail or tail.endswith((b"\n", b"\r")):
+        return
+    line = tail.splitlines()[-1]
+    words = line.split()
+    if not words or words[0] not in _FEWEST:
+        return
+    values = words[1:]
+    if len(values) < _FEWEST[words[0]] or (words[0] == b"f" and values[-1].endswith(b"/")):
+        shown = line.decode("utf-8", "replace").strip()
+        raise ConversionError(f"the file ends inside a statement: its last line, {shown!r}, has no line break and "
+                              "is cut short; the file is truncated", code="TRUNCATED", file=file)
 
 
 def write(scene: Scene, path: str | os.PathLike[str]) -> list[str]:

@@ -6,13 +6,25 @@ differ within a face, are reported as dropped. Writing flattens the scene
 into one world-space mesh; binary little-endian by default. trimesh writes
 coordinates as float32, welded after rounding, with no triangle left without
 area (:func:`.assemble.at_float32`).
+
+A file that ends before the rows its header declares is a ``TRUNCATED``
+error naming, per element, how many rows are complete (trimesh reads a cut
+ASCII file as a smaller mesh without a word). A binary row is complete when
+all its bytes are there, list lengths taken from the first row as trimesh
+does; an ASCII row when its last line holds every value its properties and
+list lengths call for. An ASCII file cut at the end of a line inside a
+number, or a binary file cut at a row boundary of the last element, reads as
+complete rows: only the row count tells, and it does.
 """
 
 from __future__ import annotations
 
 import os
+import re
 from functools import partial
+from typing import BinaryIO
 
+from planefmt.errors import ConversionError
 from planefmt.model import Scene
 
 from .trimesh_bridge import read_scene, require_trimesh, write_flat
@@ -32,9 +44,14 @@ _KNOWN = {
 
 
 def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
-    """Read a PLY file into ``(scene, dropped)``."""
-    scene, dropped = read_scene(path, "ply", "PLY")
-    return scene, sorted(dropped + _unused_properties(path))
+    """Read a PLY file into ``(scene, dropped)``; a cut file is a ``TRUNCATED`` error."""
+    file = os.fspath(path)
+    try:
+        _check_complete(file)
+    except OSError as exc:
+        raise ConversionError(f"cannot open: {exc.strerror or exc}", file=file) from exc
+    scene, dropped = read_scene(file, "ply", "PLY")
+    return scene, sorted(dropped + _unused_properties(file))
 
 
 def _unused_properties(path: str | os.PathLike[str]) -> list[str]:
@@ -59,6 +76,113 @@ def _unused_properties(path: str | os.PathLike[str]) -> list[str]:
         if extra:
             notes.append(f"PLY {element} properties ({', '.join(extra)})")
     return notes
+
+
+#: PLY's scalar types and their sizes in bytes.
+_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2, "int16": 2, "uint16": 2,
+          "int": 4, "uint": 4, "int32": 4, "uint32": 4, "float": 4, "float32": 4, "double": 8, "float64": 8}
+#: The most bytes a header or an ASCII row is looked for in.
+_HEADER_LIMIT = 1 << 16
+_ENCODINGS = ("ascii", "binary_little_endian", "binary_big_endian")
+_END_HEADER = re.compile(rb"^end_header[ \t]*(\r\n|\r|\n)", re.MULTILINE)
+
+
+def _check_complete(file: str) -> None:
+    """Raise ``TRUNCATED`` where the data ends before the rows the header declares (see the docstring)."""
+    with open(file, "rb") as handle:
+        head = handle.read(_HEADER_LIMIT)
+        end = _END_HEADER.search(head)
+        if end is None:
+            if len(head) < _HEADER_LIMIT:
+                raise ConversionError(f"the file ends after {len(head):,} bytes, inside the PLY header (no "
+                                      "end_header line)", code="TRUNCATED", file=file)
+            return  # no header this check can follow: trimesh says what is wrong
+        encoding, elements = None, []
+        for line in head[:end.start()].decode("ascii", "replace").splitlines():
+            words = line.split()
+            if len(words) >= 2 and words[0] == "format":
+                encoding = words[1]
+            elif len(words) >= 3 and words[0] == "element" and words[2].isdigit():
+                elements.append((words[1], int(words[2]), []))
+            elif len(words) >= 3 and words[0] == "property" and elements:
+                elements[-1][2].append(words[1:-1])
+        types = [kind[1:3] if kind[0] == "list" else kind[:1] for _, _, props in elements for kind in props]
+        if encoding not in _ENCODINGS or not all(len(t) == len(set(t) & _SIZES.keys()) > 0 for t in types):
+            return
+        handle.seek(end.end())
+        complete = (_ascii_rows(handle, elements) if encoding == "ascii"
+                    else _binary_rows(handle, elements, big_endian=encoding == "binary_big_endian"))
+    cut = [f"{name} {have:,} of {count:,}" for (name, count, _), have in zip(elements, complete) if have < count]
+    if cut:
+        raise ConversionError(f"PLY ends before the rows its header declares (complete rows: {', '.join(cut)}): "
+                              "the file is cut short", code="TRUNCATED", file=file)
+
+
+def _spread(rows: int, elements: list) -> list[int]:
+    """``rows`` complete rows in file order, as complete rows per element."""
+    complete = []
+    for _, count, _ in elements:
+        complete.append(min(rows, count))
+        rows -= complete[-1]
+    return complete
+
+
+def _ascii_rows(handle: BinaryIO, elements: list) -> list[int]:
+    """Complete rows per element of an ASCII body read from ``handle``: one row per line (blank lines at
+    the end not counted), the last line short of a row where it lacks a value its properties call for."""
+    newlines = returns = 0
+    tail = b""
+    for block in iter(partial(handle.read, 1 << 20), b""):
+        newlines += block.count(b"\n")
+        returns += block.count(b"\r")
+        tail = (tail + block)[-_HEADER_LIMIT:]
+    text = tail.rstrip()
+    blank = tail[len(text):]
+    lines = newlines - blank.count(b"\n") if newlines else returns - blank.count(b"\r")
+    lines += bool(text)
+    total = sum(count for _, count, _ in elements)
+    if lines > total or not lines:
+        return _spread(lines, elements)
+    last = text[max(text.rfind(b"\n"), text.rfind(b"\r")) + 1:].split()
+    row = lines - 1  # the last line's row in file order
+    for _, count, props in elements:
+        if row < count:
+            break
+        row -= count
+    needed = 0
+    for kind in props:
+        if kind[0] == "list" and needed < len(last):
+            length = last[needed]
+            needed += 1 + (int(length) if length.isdigit() else len(last))
+        else:
+            needed += 1
+    return _spread(lines - (len(last) < needed), elements)
+
+
+def _binary_rows(handle: BinaryIO, elements: list, big_endian: bool) -> list[int]:
+    """Complete rows per element of a binary body, each list's length taken from the element's first row
+    (as trimesh reads them). An element whose first row is cut before its list lengths has no complete row."""
+    start = handle.tell()
+    left = os.fstat(handle.fileno()).st_size - start
+    complete = []
+    for _, count, props in elements:
+        size = 0
+        for kind in props:
+            if kind[0] != "list":
+                size += _SIZES[kind[0]]
+                continue
+            length_size, item_size = _SIZES[kind[1]], _SIZES[kind[2]]
+            if left < size + length_size:
+                size = None
+                break
+            handle.seek(start + size)
+            length = int.from_bytes(handle.read(length_size), "big" if big_endian else "little")
+            size += length_size + length * item_size
+        rows = 0 if size is None else min(count, left // size) if size else count
+        complete.append(rows)
+        left -= rows * (size or 0)
+        start += rows * (size or 0)
+    return complete
 
 
 def write(scene: Scene, path: str | os.PathLike[str], *, ascii: bool = False) -> list[str]:

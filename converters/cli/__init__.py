@@ -46,7 +46,11 @@ def quiet_library_warnings() -> None:
 
 def _hint(exc: Exception, args: argparse.Namespace) -> str:
     """What to try next, for errors a user can do something about."""
-    if exc.code in ("TRUNCATED", "CRC_MISMATCH", "BAD_CHUNK_TYPE") and getattr(args, "salvage", True) is False:
+    from planefmt.errors import ConversionError
+
+    # --salvage reads damaged .pln files; a cut mesh file of another format is no .pln
+    if (exc.code in ("TRUNCATED", "CRC_MISMATCH", "BAD_CHUNK_TYPE") and getattr(args, "salvage", True) is False
+            and not isinstance(exc, ConversionError)):
         return f"; pln {args.command} --salvage reads what is intact"
     return ""
 
