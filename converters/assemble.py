@@ -17,10 +17,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from dataclasses import replace
-
 from planefmt.errors import ConversionError
-from planefmt.model import Mesh, Scene
+from planefmt.model import Mesh, Scene, Units
 
 #: A triangle whose height is at most this fraction of its mesh's bounding-box diagonal has no plane:
 #: collinear corners in float64 give heights about 1e-16 of the diagonal, and dropping the triangle moves
@@ -230,6 +228,36 @@ def reoriented(scene: Scene, up_axis: str) -> Scene:
                   replace(node, transform=turn if node.transform is None else turn @ node.transform)
                   for node in scene.nodes)
     return replace(scene, nodes=nodes, up_axis=up_axis)
+
+
+#: Metres per unit of each unit the model knows (USD's metersPerUnit).
+METERS_PER_UNIT = {
+    Units.METRE: 1.0, Units.CENTIMETRE: 0.01, Units.MILLIMETRE: 0.001,
+    Units.MICROMETRE: 1e-6, Units.KILOMETRE: 1000.0, Units.INCH: 0.0254,
+    Units.FOOT: 0.3048,
+}
+
+
+def in_metres(scene: Scene) -> Scene:
+    """``scene`` with its coordinates in metres: every mesh and every node's translation scaled by the
+    metres per unit of its units (a uniform scale s commutes with rotations, so scaling the translations
+    of all nodes and the vertices of all meshes scales the world by s). Meshes shared stay shared. A
+    scene in metres, or of unspecified units, is returned as it is."""
+    scale = METERS_PER_UNIT.get(scene.units, 1.0)
+    if scene.units == Units.UNSPECIFIED or scale == 1.0:
+        return scene
+    scaled: dict[int, Mesh] = {}
+    nodes = []
+    for node in scene.nodes:
+        mesh = node.mesh
+        if mesh is not None and id(mesh) not in scaled:
+            scaled[id(mesh)] = replace(mesh, vertices=mesh.vertices * scale)
+        transform = None
+        if node.transform is not None:
+            transform = np.array(node.transform, dtype=np.float64)
+            transform[:3, 3] *= scale
+        nodes.append(replace(node, mesh=None if mesh is None else scaled[id(mesh)], transform=transform))
+    return replace(scene, nodes=tuple(nodes), units=Units.METRE)
 
 
 def instancing_note(scene: Scene, instanced: frozenset[int] = frozenset()) -> str | None:

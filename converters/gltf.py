@@ -30,7 +30,7 @@ from urllib.parse import quote, unquote, urlsplit
 from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
-from .assemble import at_float32, reoriented
+from .assemble import METERS_PER_UNIT, at_float32, in_metres, reoriented
 from .atomic import atomic_paths, write_bytes
 from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
@@ -170,10 +170,10 @@ def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:
     exchange = require_trimesh("glTF").exchange.gltf
     notes = []
     if scene.units not in (Units.METRE, Units.UNSPECIFIED):
-        notes.append(f"units ({scene.units.name.lower()}; glTF is in metres, "
-                     "coordinates written unscaled)")
+        notes.append(f"units ({scene.units.name.lower()}; glTF is in metres: coordinates scaled by "
+                     f"{METERS_PER_UNIT[scene.units]:g})")
     try:
-        scene, rounding = at_float32(reoriented(scene, GLTF_UP_AXIS))
+        scene, rounding = at_float32(reoriented(in_metres(scene), GLTF_UP_AXIS))
         notes += rounding
         tm_scene, names = to_trimesh_scene(scene)
 

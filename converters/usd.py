@@ -48,17 +48,10 @@ import numpy as np
 from planefmt.errors import ConversionError
 from planefmt.model import UP_AXES, Mesh, Node, Scene, Units
 
-from .assemble import at_float32, build_mesh, instancing_note, reoriented
+from .assemble import METERS_PER_UNIT, at_float32, build_mesh, instancing_note, reoriented
 from .atomic import atomic_path
 from .failures import describe
 from .polygons import triangulate
-
-#: metersPerUnit of each unit the model knows.
-METERS_PER_UNIT = {
-    Units.METRE: 1.0, Units.CENTIMETRE: 0.01, Units.MILLIMETRE: 0.001,
-    Units.MICROMETRE: 1e-6, Units.KILOMETRE: 1000.0, Units.INCH: 0.0254,
-    Units.FOOT: 0.3048,
-}
 
 #: customData keys that mark prims the writer added for USD's sake.
 SCENE_ROOT_KEY = "planefmt:sceneRoot"

@@ -1,6 +1,6 @@
 """``pln convert``: between any two supported formats, .pln on either side.
 
-    pln convert IN OUT [--tolerance T] [--bits N] [--scheme shell|paper] [--allow-open] [--keep-corners]
+    pln convert IN OUT [--units cm] [--tolerance T] [--bits N] [--scheme shell|paper] [--allow-open] [--keep-corners]
         [--lossy --delta D --tau A] [-v] [--force]
     pln convert A B C -d OUTDIR --to glb [--jobs N]
     pln convert meshes/ -d OUTDIR [--resume] [--engine local|dask]   (see batch.py: ledger, limits)
@@ -30,6 +30,7 @@ from planefmt_converters import interrupts
 from planefmt_converters.cli.progress import Status, summary
 
 if TYPE_CHECKING:
+    from planefmt.model import Scene
     from planefmt_converters.registry import Format
 
 
@@ -41,6 +42,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--to", help="output format name (glb, gltf, obj, ply, stl, off, usda, usdc, usdz, pln; "
                                "batch: pln by default)")
     p.add_argument("--from", dest="from_", help="input format name instead of detecting it")
+    p.add_argument("--units", choices=sorted(UNIT_NAMES),
+                   help="the length unit of a source that does not say (OBJ, PLY, STL, OFF; a .pln or USD file "
+                        "without one): recorded in a .pln, scaled to metres in glTF, metersPerUnit in USD. A source "
+                        "that says other units is refused")
     p.add_argument("--jobs", type=_at_least_one, default=1,
                    help="batch: convert this many files at once (processes here, or LocalCluster workers)")
     p.add_argument("-v", "--verbose", action="store_true",
@@ -96,6 +101,11 @@ def _at_least_one(text: str) -> int:
     return value
 
 
+#: --units names: SI symbols and the inch and foot.
+UNIT_NAMES = {"m": "METRE", "cm": "CENTIMETRE", "mm": "MILLIMETRE", "um": "MICROMETRE", "km": "KILOMETRE",
+              "in": "INCH", "ft": "FOOT"}
+
+
 class _Usage(PlnError):
     """A usage mistake: reported like bad input (one line, exit 2)."""
 
@@ -122,7 +132,24 @@ def _pln_options(args: argparse.Namespace) -> dict:
         opts["coding"] = Coding[args.coding.upper()]
     if args.lossy:
         opts["delta"], opts["tau"] = args.delta, args.tau
+    if args.units:
+        opts["units"] = args.units
     return opts
+
+
+def _with_units(scene: Scene, units: str | None, src_name: str) -> Scene:
+    """``scene`` in the ``--units`` given, where its source says none; a source that says others is refused."""
+    from dataclasses import replace
+
+    from planefmt.model import Units
+
+    if units is None:
+        return scene
+    given = Units[UNIT_NAMES[units]]
+    if scene.units not in (Units.UNSPECIFIED, given):
+        raise _Usage(f"--units {units}: the file says its unit is the {scene.units.name.lower()}; drop --units "
+                     "for it", code="CONVERSION_FAILED", file=src_name)
+    return replace(scene, units=given)
 
 
 def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict,
@@ -162,13 +189,15 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
         dropped: list[str] = []
     else:
         scene, dropped = registry.read(src, from_)
+    scene = _with_units(scene, pln_opts.get("units"), src_name)
     facts["triangles"] = sum(len(node.mesh.faces) for node in scene.nodes if node.mesh is not None)
     fmt = _output_format(dst, to)
     # Conflicts beside the output were refused before any work, or --force allowed them.
     status.update("encoding" if fmt.name == "pln" else f"writing {dst_name}")
     try:
         with progress.reporting(status.update):
-            notes = registry.write(scene, dst, fmt.name, force=True, **(pln_opts if fmt.name == "pln" else {}))
+            options = {key: value for key, value in pln_opts.items() if key != "units"} if fmt.name == "pln" else {}
+            notes = registry.write(scene, dst, fmt.name, force=True, **options)
     except GeometryError as exc:
         exc.file = src  # what the input holds (or a tolerance it cannot meet), not the output
         raise
