@@ -18,7 +18,7 @@ from dataclasses import replace
 import numpy as np
 
 from planefmt.errors import ConversionError
-from planefmt.model import Mesh, Scene, Units
+from planefmt.model import Mesh, Node, Scene, Units
 
 #: A triangle whose height is at most this fraction of its mesh's bounding-box diagonal has no plane:
 #: collinear corners in float64 give heights about 1e-16 of the diagonal, and dropping the triangle moves
@@ -144,6 +144,28 @@ def at_float32(scene: Scene) -> tuple[Scene, list[str]]:
         notes.append(f"{dropped} triangle{'s' if dropped > 1 else ''} without area at float32 precision")
     nodes = tuple(replace(node, mesh=None if node.mesh is None else rounded[id(node.mesh)]) for node in scene.nodes)
     return replace(scene, nodes=nodes), notes
+
+
+def float32_shift(scene: Scene) -> float:
+    """The farthest any vertex of ``scene`` moves, in world space, when its meshes' coordinates are rounded
+    to float32, as a fraction of the diagonal of the scene's world bounding box (0 without extent).
+
+    Each triangle's points move by at most the largest move of its corners, so this bounds the two-sided
+    Hausdorff distance the rounding adds: what a float32 output adds to the error bound of its source.
+    """
+    moved, placed = 0.0, []
+    for node, world in zip(scene.nodes, world_transforms(scene)):
+        if node.mesh is None:
+            continue
+        v = node.mesh.vertices
+        shift = (v.astype(np.float32).astype(np.float64) - v) @ world[:3, :3].T
+        moved = max(moved, float(np.linalg.norm(shift, axis=1).max(initial=0.0)))
+        placed.append(v @ world[:3, :3].T + world[:3, 3])
+    if not placed:
+        return 0.0
+    points = np.concatenate(placed)
+    diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
+    return moved / diagonal if diagonal > 0 else 0.0
 
 
 def _flip_flat(vertices: np.ndarray, faces: np.ndarray,
@@ -288,6 +310,11 @@ def transform_mesh(mesh: Mesh, matrix: np.ndarray) -> Mesh:
     faces = mesh.faces[:, ::-1] if np.linalg.det(matrix[:3, :3]) < 0 else mesh.faces
     return Mesh(vertices=vertices, faces=np.ascontiguousarray(faces),
                 face_colours=mesh.face_colours)
+
+
+def flattened(scene: Scene) -> Scene:
+    """``scene`` as one node holding :func:`flatten`'s world-space mesh."""
+    return replace(scene, nodes=(Node(name="", mesh=flatten(scene)),))
 
 
 def flatten(scene: Scene) -> Mesh:

@@ -30,7 +30,7 @@ from urllib.parse import quote, unquote, urlsplit
 from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
-from .assemble import METERS_PER_UNIT, at_float32, in_metres, reoriented
+from .assemble import METERS_PER_UNIT, at_float32, float32_shift, in_metres, reoriented
 from .atomic import atomic_paths, write_bytes
 from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
@@ -163,6 +163,12 @@ def write_gltf(scene: Scene, path: str | os.PathLike[str]) -> list[str]:
         raise ConversionError(f"cannot write glTF: {exc.strerror or exc}",
                               file=str(target)) from exc
     return notes
+
+
+def rounding(scene: Scene) -> float:
+    """How far writing ``scene`` moves its surface, as a fraction of its diagonal: its coordinates in metres
+    rounded to float32 (turning it Y-up is a rotation of the root nodes, which moves no vertex farther)."""
+    return float32_shift(in_metres(scene))
 
 
 def _export(scene: Scene, file: str, *, binary: bool) -> tuple[Any, list[str]]:

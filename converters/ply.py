@@ -27,6 +27,7 @@ from typing import BinaryIO
 from planefmt.errors import ConversionError
 from planefmt.model import Scene
 
+from .assemble import flattened, float32_shift
 from .trimesh_bridge import read_scene, require_trimesh, write_flat
 
 
@@ -191,3 +192,8 @@ def write(scene: Scene, path: str | os.PathLike[str], *, ascii: bool = False) ->
                      encoding="ascii" if ascii else "binary",
                      vertex_normal=False, include_attributes=False)
     return write_flat(scene, path, what="PLY", export=export, colours=True, float32=True)
+
+
+def rounding(scene: Scene) -> float:
+    """How far writing ``scene`` moves its surface, as a fraction of its diagonal: world coordinates to float32."""
+    return float32_shift(flattened(scene))

@@ -6,6 +6,8 @@ function over the file's first bytes, a ``read`` and a ``write`` function::
     read(path) -> (Scene, dropped)            # dropped: list[str], what the model could not hold
     write(scene, path, **options) -> notes    # notes: list[str], what the format could not hold
     sniff(head: bytes, size: int) -> bool     # head: the first SNIFF_BYTES bytes; size: file size
+    rounding(scene) -> float                  # how far a write moves the surface (float32 coordinates),
+                                              # a fraction of the diagonal: added to the error bound
     sidecars(path) -> paths                   # the other files a write of path creates beside it
     references(path) -> paths                 # the other files the existing file at path uses
 
@@ -66,7 +68,8 @@ class Format:
 
     ``sniff``, ``read`` or ``write`` may be None when the format cannot be
     recognised by content, read, or written; ``sidecars`` and ``references``
-    are None for a format stored in one file.
+    are None for a format stored in one file; ``rounding`` is None for a format that stores coordinates as
+    they are.
     """
 
     name: str
@@ -77,20 +80,22 @@ class Format:
     description: str = ""
     sidecars: Callable[[str], tuple[str, ...]] | None = None
     references: Callable[[str], tuple[str, ...]] | None = None
+    rounding: Callable[[Scene], float] | None = None
 
 
 #: The built-in formats, in detection order.
 BUILTIN: tuple[Format, ...] = (
     Format("pln", (".pln",), pln.sniff, pln.read, pln.write, "planes (this library's format)"),
-    Format("glb", (".glb",), gltf.sniff_glb, gltf.read_glb, gltf.write_glb, "binary glTF 2.0"),
-    Format("usdc", (".usdc", ".usd"), usd.sniff_usdc, usd.read, usd.write, "USD crate (binary)"),
-    Format("usdz", (".usdz",), usd.sniff_usdz, usd.read, usd.write, "USD zip package"),
-    Format("usda", (".usda", ".usd"), usd.sniff_usda, usd.read, usd.write, "USD text"),
-    Format("ply", (".ply",), ply.sniff, ply.read, ply.write, "Stanford PLY"),
+    Format("glb", (".glb",), gltf.sniff_glb, gltf.read_glb, gltf.write_glb, "binary glTF 2.0",
+           rounding=gltf.rounding),
+    Format("usdc", (".usdc", ".usd"), usd.sniff_usdc, usd.read, usd.write, "USD crate (binary)", rounding=usd.rounding),
+    Format("usdz", (".usdz",), usd.sniff_usdz, usd.read, usd.write, "USD zip package", rounding=usd.rounding),
+    Format("usda", (".usda", ".usd"), usd.sniff_usda, usd.read, usd.write, "USD text", rounding=usd.rounding),
+    Format("ply", (".ply",), ply.sniff, ply.read, ply.write, "Stanford PLY", rounding=ply.rounding),
     Format("gltf", (".gltf",), gltf.sniff_gltf, gltf.read_gltf, gltf.write_gltf,
-           "glTF 2.0 JSON with a .bin buffer", gltf.sidecars, gltf.references),
+           "glTF 2.0 JSON with a .bin buffer", gltf.sidecars, gltf.references, gltf.rounding),
     Format("off", (".off",), off.sniff, off.read, off.write, "Object File Format"),
-    Format("stl", (".stl",), stl.sniff, stl.read, stl.write, "STL, binary or ASCII"),
+    Format("stl", (".stl",), stl.sniff, stl.read, stl.write, "STL, binary or ASCII", rounding=stl.rounding),
     Format("obj", (".obj",), obj.sniff, obj.read, obj.write, "Wavefront OBJ"),
 )
 

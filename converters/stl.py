@@ -22,6 +22,7 @@ import re
 from planefmt.errors import ConversionError
 from planefmt.model import Scene
 
+from .assemble import flattened, float32_shift
 from .trimesh_bridge import read_scene, require_trimesh, write_flat
 
 _BINARY_HEADER = 84  # 80-byte header + uint32 triangle count
@@ -98,3 +99,8 @@ def write(scene: Scene, path: str | os.PathLike[str], *, ascii: bool = False) ->
     exchange = require_trimesh("STL").exchange.stl
     export = exchange.export_stl_ascii if ascii else exchange.export_stl
     return write_flat(scene, path, what="STL", export=export, colours=False, float32=True)
+
+
+def rounding(scene: Scene) -> float:
+    """How far writing ``scene`` moves its surface, as a fraction of its diagonal: world coordinates to float32."""
+    return float32_shift(flattened(scene))

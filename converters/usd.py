@@ -48,7 +48,7 @@ import numpy as np
 from planefmt.errors import ConversionError
 from planefmt.model import UP_AXES, Mesh, Node, Scene, Units
 
-from .assemble import METERS_PER_UNIT, at_float32, build_mesh, instancing_note, reoriented
+from .assemble import METERS_PER_UNIT, at_float32, build_mesh, float32_shift, instancing_note, reoriented
 from .atomic import atomic_path
 from .failures import describe
 from .polygons import triangulate
@@ -479,3 +479,8 @@ def _write_mesh(pxr: SimpleNamespace, usd_mesh: Any, mesh: Mesh) -> None:
         if (mesh.face_colours[:, 3] != 255).any():
             usd_mesh.CreateDisplayOpacityPrimvar(UsdGeom.Tokens.uniform).Set(
                 Vt.FloatArray.FromNumpy(np.ascontiguousarray(rgba[:, 3])))
+
+
+def rounding(scene: Scene) -> float:
+    """How far writing ``scene`` moves its surface, as a fraction of its diagonal: points are float3."""
+    return float32_shift(scene)

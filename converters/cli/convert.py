@@ -201,6 +201,7 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
     except GeometryError as exc:
         exc.file = src  # what the input holds (or a tolerance it cannot meet), not the output
         raise
+    facts["rounding"] = fmt.rounding(scene) if fmt.rounding is not None else 0.0
     warnings = []
     if dropped:
         warnings.append(f"{src_name}: dropped {'; '.join(dropped)} (not carried into {Path(dst_name).name})")
@@ -313,13 +314,15 @@ def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int
         elif not os.path.isdir(os.path.dirname(dst) or "."):
             raise _Usage(f"the folder {os.path.dirname(dst)} does not exist", code="CONVERSION_FAILED", file=dst)
         status = Status(sys.stderr, enabled=sys.stderr.isatty())
+        facts: dict = {}
         try:
             warnings, lost = convert_one(src, dst, args.to, args.from_, opts, args.salvage,
-                                         src_name=src_name, dst_name=dst_name, status=status)
+                                         src_name=src_name, dst_name=dst_name, status=status, facts=facts)
         finally:
             status.close()  # before any message, so that it starts on a clean line
         if status.enabled or args.verbose:
-            print(_summary(src, dst, src_name or src, dst_name or dst, args, status.elapsed), file=sys.stderr)
+            print(_summary(src, dst, src_name or src, dst_name or dst, args, status.elapsed, facts.get("rounding", 0.0)),
+                  file=sys.stderr)
         for line in warnings:
             print(f"pln: warning: {line}", file=sys.stderr)
         for line in lost:
@@ -331,9 +334,11 @@ def _run_single(src: str, dst: str, args: argparse.Namespace, opts: dict) -> int
     return 1 if lost else 0
 
 
-def _summary(src: str, dst: str, src_name: str, dst_name: str, args: argparse.Namespace, seconds: float) -> str:
+def _summary(src: str, dst: str, src_name: str, dst_name: str, args: argparse.Namespace, seconds: float,
+             rounding: float = 0.0) -> str:
     """The line a conversion ends with; the error bound is the output's, else the one its .pln input
-    records (what it was decoded within)."""
+    records (what it was decoded within) plus ``rounding``, how far writing the output moved the surface
+    (float32 coordinates), both fractions of the diagonal."""
     import planefmt
     from planefmt_converters import registry
 
@@ -349,7 +354,7 @@ def _summary(src: str, dst: str, src_name: str, dst_name: str, args: argparse.Na
         except planefmt.PlnError:  # a damaged input, converted with --salvage: no bound to quote
             pass
     return summary(src_name, dst_name, os.path.getsize(src), bytes_out, error, seconds,
-                   recorded_in_input=fmt.name != "pln")
+                   recorded_in_input=fmt.name != "pln", rounding=rounding)
 
 
 @contextlib.contextmanager

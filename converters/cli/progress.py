@@ -8,6 +8,7 @@ so quick conversions and pipes or logs see nothing of it. The library reports it
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from typing import TextIO
@@ -76,13 +77,30 @@ class Status:
 
 
 def summary(src: str, dst: str, bytes_in: int, bytes_out: int, error: float | None, seconds: float,
-            recorded_in_input: bool = False) -> str:
-    """The one line a conversion ends with: what went in and out, the error bound, how long it took."""
+            recorded_in_input: bool = False, rounding: float = 0.0) -> str:
+    """The one line a conversion ends with: what went in and out, the error bound, how long it took.
+
+    ``rounding``: how far writing the output moved the surface (float32 coordinates), added to ``error``
+    (the input's recorded bound; none for an exact input): the bound holds for the file written.
+    """
     bound = ""
-    if error is not None:
-        bound = f", error at most {error:.3g} of the diagonal" + (" (recorded in the input)" if recorded_in_input
-                                                                  else "")
+    if error is not None and rounding:
+        bound = (f", error at most {_up(error + rounding)} of the diagonal ({_up(error)} recorded in the input, "
+                 f"{_up(rounding)} from rounding to float32)")
+    elif rounding:
+        bound = f", error at most {_up(rounding)} of the diagonal (from rounding to float32)"
+    elif error is not None:
+        bound = f", error at most {_up(error)} of the diagonal" + (" (recorded in the input)" if recorded_in_input
+                                                                   else "")
     return f"pln: {src} -> {dst}: {bytes_in:,} B in, {bytes_out:,} B out{bound}, {seconds:.1f} s"
+
+
+def _up(value: float) -> str:
+    """``value`` to three significant digits, rounded up: a bound printed shorter must still be a bound."""
+    if not value > 0 or not math.isfinite(value):
+        return f"{value:.3g}"
+    scale = 10.0 ** (math.floor(math.log10(value)) - 2)
+    return f"{math.ceil(value / scale * (1 - 1e-12)) * scale:.3g}"
 
 
 class RunBar:
