@@ -33,8 +33,8 @@ class Budget:
                 ("triangles", self.triangles, triangles, self.limits.max_triangles, "max_triangles")):
             if have + more > limit:
                 flag = option.replace("_", "-")
-                raise LimitError(f"part group {group}: {more:,} {what} more would make the file's output "
-                                 f"{have + more:,} {what}, above the reader's limit of {limit:,} (raise it with "
+                raise LimitError(f"part group {group}: its {more:,} {what} bring the file's output to "
+                                 f"{have + more:,}, above this reader's limit of {limit:,} {what} (raise it with "
                                  f"Limits({option}=...) or pln --{flag})")
         self.vertices += vertices
         self.triangles += triangles
