@@ -207,8 +207,11 @@ def pack(data: bytes, compress: bool, level: int = 9, brotli_allowed: bool = Fal
 
 
 #: Output of one decompression step (spec §6): a payload is decompressed in pieces of at most this many
-#: bytes into a buffer of its raw size, so that it is held once, not once in pieces and once joined.
+#: bytes into a buffer of its raw size, so that it is held once, not once in pieces and once joined; and
+#: its stored bytes are fed in pieces of :data:`UNPACK_INPUT`, so that what a decompressor copies of the
+#: input it has not consumed stays small.
 UNPACK_STEP = 1 << 20
+UNPACK_INPUT = 1 << 16
 
 
 def unpack(method: int, stored: bytes, raw_size: int, limits: Limits, major: int = 3) -> bytes | bytearray:
@@ -258,17 +261,18 @@ def _inflate(stored: bytes, raw_size: int) -> bytearray:
     last stored byte; at most raw size + 1 bytes are inflated."""
     d = zlib.decompressobj()
     out = _Output(raw_size, "deflate")
-    pending = stored
+    view, fed, pending = memoryview(stored), 0, b""
     try:
-        while True:
-            piece = d.decompress(pending, out.step())
+        while not d.eof:
+            if not pending:
+                if fed == len(view):
+                    break  # the stored bytes end inside the stream
+                pending, fed = view[fed:fed + UNPACK_INPUT], min(fed + UNPACK_INPUT, len(view))
+            out.add(d.decompress(pending, out.step()))
             pending = d.unconsumed_tail
-            out.add(piece)
-            if d.eof or not (piece or pending):
-                break
     except zlib.error as exc:
         raise FormatError(f"corrupt deflate stream ({exc})", code="BAD_COMPRESSION") from None
-    if out.made != raw_size or not d.eof or d.unconsumed_tail or d.unused_data:
+    if out.made != raw_size or not d.eof or d.unconsumed_tail or d.unused_data or fed < len(view):
         raise FormatError(f"deflate stream does not inflate to exactly {raw_size} bytes",
                           code="SIZE_MISMATCH")
     return out.raw
@@ -281,16 +285,19 @@ def _unbrotli(stored: bytes, raw_size: int) -> bytearray:
     refused before it does, whatever the ratio of its meta-blocks."""
     d = brotli.Decompressor()
     out = _Output(raw_size, "Brotli")
-    pending = stored
+    view, fed = memoryview(stored), 0
     try:
-        while True:
-            piece = d.process(pending, output_buffer_limit=out.step())
-            pending = b""
-            out.add(piece)
-            if d.is_finished() or d.can_accept_more_data():
-                break
+        while not d.is_finished():
+            piece = b""
+            if d.can_accept_more_data():  # else the decoder has output to give before more input
+                if fed == len(view):
+                    break  # the stored bytes end inside the stream
+                piece, fed = view[fed:fed + UNPACK_INPUT], min(fed + UNPACK_INPUT, len(view))
+            out.add(d.process(piece, output_buffer_limit=out.step()))
     except brotli.error as exc:
         raise FormatError(f"corrupt Brotli stream, or bytes after its end ({exc})", code="BAD_COMPRESSION") from None
+    if d.is_finished() and fed < len(view):
+        raise FormatError(f"{len(view) - fed} stored bytes after the Brotli stream", code="BAD_COMPRESSION")
     if not d.is_finished() or out.made != raw_size:
         raise FormatError(f"Brotli stream does not decompress to exactly {raw_size} bytes", code="SIZE_MISMATCH")
     return out.raw
