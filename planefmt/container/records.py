@@ -264,11 +264,13 @@ def _inflate(stored: bytes, raw_size: int) -> bytearray:
     view, fed, pending = memoryview(stored), 0, b""
     try:
         while not d.eof:
-            if not pending:
-                if fed == len(view):
-                    break  # the stored bytes end inside the stream
+            if not pending and fed < len(view):
                 pending, fed = view[fed:fed + UNPACK_INPUT], min(fed + UNPACK_INPUT, len(view))
-            out.add(d.decompress(pending, out.step()))
+            # Without input left, the inflater may still hold output (a match cut short by the step).
+            piece = d.decompress(pending, out.step())
+            out.add(piece)
+            if not (piece or pending):
+                break  # no input and no output: the stored bytes end inside the stream
             pending = d.unconsumed_tail
     except zlib.error as exc:
         raise FormatError(f"corrupt deflate stream ({exc})", code="BAD_COMPRESSION") from None
@@ -289,11 +291,14 @@ def _unbrotli(stored: bytes, raw_size: int) -> bytearray:
     try:
         while not d.is_finished():
             piece = b""
-            if d.can_accept_more_data():  # else the decoder has output to give before more input
-                if fed == len(view):
-                    break  # the stored bytes end inside the stream
+            # Input only when the decoder takes it; without input left it may still hold output (it
+            # can say it takes input while it does: measured with brotli 1.2.1).
+            if d.can_accept_more_data() and fed < len(view):
                 piece, fed = view[fed:fed + UNPACK_INPUT], min(fed + UNPACK_INPUT, len(view))
-            out.add(d.process(piece, output_buffer_limit=out.step()))
+            got = d.process(piece, output_buffer_limit=out.step())
+            out.add(got)
+            if not (got or piece):
+                break  # no input and no output: the stored bytes end inside the stream
     except brotli.error as exc:
         raise FormatError(f"corrupt Brotli stream, or bytes after its end ({exc})", code="BAD_COMPRESSION") from None
     if d.is_finished() and fed < len(view):
@@ -503,12 +508,20 @@ def _body(g: PartGroup) -> bytes:
     return schema.GroupBody.build(dict(ref_count=len(refs), refs=refs.tobytes(), roles=roles, extra=extra))
 
 
+#: The longest head of a version 3 to 5 group (spec §9.1): index, object, kind, compression, raw size.
+GROUP_HEAD3_MAX = 5 + 5 + 1 + 1 + 5
+
+
 def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: int, minor: int, limits: Limits,
                  major: int = 1, budget: Budget | None = None) -> tuple[PartGroup, list[tuple[str, str]]]:
     """A part group of a version ``major``.``minor`` file, checked against the objects and planes
     defined so far; a kind that declares its output's counts charges them to ``budget`` (spec §12.4)."""
     if major >= 3:
-        head = _parse(schema.GroupHead3, payload, "GRUP")
+        # Only the head goes through construct (three varint32s and two bytes): the stored body stays a
+        # view of the payload, which a large compressed body (spec §6) would otherwise hold twice more.
+        prefix = bytes(payload[:GROUP_HEAD3_MAX])
+        head = _parse(schema.GroupHead3, prefix, "GRUP")
+        stored = memoryview(payload)[len(prefix) - len(head.body):]
     elif len(payload) < schema.GROUP_HEAD:
         raise FormatError("GRUP payload is shorter than its 16-byte head", code="BAD_PAYLOAD")
     else:
@@ -525,7 +538,7 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
             raise FormatError(f"unknown part group kind {head.kind} in a version {major}.{minor} file",
                               code="UNKNOWN_GROUP_KIND")
         findings.append(("SKIPPED_GROUP_KIND", f"group {head.index} has kind {head.kind} of a newer minor version"))
-    body = unpack(head.compression, bytes(head.body), head.raw_size, limits, major)
+    body = unpack(head.compression, stored if major >= 3 else bytes(head.body), head.raw_size, limits, major)
     if major >= 2:
         group = _decode_compact(head, body, planes, limits, kinds, major,
                                 None if budget is None else budget.of(head.index))
