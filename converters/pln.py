@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from planefmt.container.chunks import Limits
 from planefmt.errors import GeometryError, PlnWarning, SkippedGroupsWarning
 from planefmt.model import GroupKind, Mesh, Scene
 
@@ -21,14 +22,15 @@ def sniff(head: bytes, size: int) -> bool:
     return len(head) >= 4 and head[1:4] == SIGNATURE_TAIL and head[0] in (0x89, 0x09)
 
 
-def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
+def read(path: str | os.PathLike[str], limits: Limits | None = None) -> tuple[Scene, list[str]]:
+    """The scene of a .pln file and what decoding skipped; ``limits`` the reader's (spec §12.4)."""
     # The codec (scipy) loads only when a .pln is decoded or encoded, not for `pln info`.
     from planefmt import codec
 
     # Decoding warns of what it skipped (groups of a newer minor version's kinds): that was dropped.
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", PlnWarning)
-        scene = codec.decode_scene(path)
+        scene = codec.decode_scene(path, limits=limits)
     return scene, [w.what if isinstance(w, SkippedGroupsWarning) else str(w) for w in _pln_warnings(caught)]
 
 

@@ -200,10 +200,10 @@ def _sniffs(sniff: Sniffer, head: bytes, size: int) -> bool:
         return False
 
 
-def read(path: str | os.PathLike[str], format: str | None = None) -> tuple[Scene, list[str]]:
+def read(path: str | os.PathLike[str], format: str | None = None, **options: Any) -> tuple[Scene, list[str]]:
     """Read the mesh file at ``path`` into ``(scene, dropped)``.
 
-    ``format`` names the format instead of detecting it. ``dropped`` lists
+    ``format`` names the format instead of detecting it; ``options`` go to its reader (.pln: ``limits``). ``dropped`` lists
     what the file held that the model cannot (UVs, normals, …): a caller
     shows it as one warning.
     """
@@ -212,7 +212,7 @@ def read(path: str | os.PathLike[str], format: str | None = None) -> tuple[Scene
     if fmt.read is None:
         raise ConversionError(f"format {fmt.name} cannot be read", code="UNKNOWN_FORMAT",
                               file=file)
-    return _guarded(fmt, "read", file, lambda: fmt.read(file))
+    return _guarded(fmt, "read", file, lambda: fmt.read(file, **options))
 
 
 def write(scene: Scene, path: str | os.PathLike[str], format: str | None = None, *,

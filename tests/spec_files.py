@@ -491,3 +491,50 @@ def trimesh_meshes(*names):
         xyz = {i: [int(round(c * 8)) for c in p] for i, p in enumerate(mesh.vertices.tolist())}
         meshes[name] = ([list(map(int, f)) for f in mesh.faces.tolist()], xyz)
     return meshes
+
+
+# --- files that cost more than their size (issue 49): the decode budget of §12.4 -----------------
+
+def pack(body: bytes, method: int) -> bytes:
+    """§6: the stored bytes of method 0 (stored), 1 (zlib) or 2 (Brotli)."""
+    if method == 2:
+        import brotli
+        return brotli.compress(body, quality=5)
+    return zlib.compress(body, 9) if method == 1 else body
+
+
+def fan_walk(t: int) -> bytes:
+    """§9.13 kind data of a walk of ``t`` ≥ 2 triangles fanned round corner 0: the root's child across
+    its edge 0, every other triangle's across its edge 1, each naming one new corner; every corner
+    explicit at 0, 0, 0 (V = t + 2), every triangle free. About five bytes a triangle, all alike."""
+    v = t + 2
+    flags = bytearray(b"\xff" * (v // 8)) + (bytes([(1 << (v % 8)) - 1]) if v % 8 else b"")
+    return (uv(v) + uv(t) + uv(3) + uv(1) + uv(4) * (t - 2) + uv(0) + uv(0) * 3 + uv(0) * t + bytes(flags)
+            + b"\x00" + struct.pack("<4f", 0.0, 0.0, 0.0, 1.0) + b"\x00" * (3 * v))
+
+
+def stored_file(groups, *, plns_blocks=(), coding=0, objects=1, h_range=None, bits=(0, 0, 0)) -> bytes:
+    """A version 5.0 file: the header (``h_range``, ``bits`` for codings 2 and 3), PLNS payloads as
+    given, ``objects`` objects, then ``groups`` (object, kind, body, method) in turn."""
+    p = bytes([5, 0, 0, coding, *bits, 1])
+    if h_range is not None:
+        p += struct.pack("<2d", *h_range)
+    out = SIGNATURE + u32_chunk(b"PHDR", p + struct.pack("<ff", math.nan, math.nan))
+    out += b"".join(varint_chunk(b"PLNS", block) for block in plns_blocks)
+    out += b"".join(varint_chunk(b"OBJT", objt(k, b"o%d" % k)) for k in range(objects))
+    for index, (obj, kind, body, method) in enumerate(groups):
+        stored = pack(body, method)
+        out += varint_chunk(b"GRUP", uv(index) + uv(obj) + bytes([kind, method]) + uv(len(body)) + stored)
+    return out + varint_chunk(b"PEND", b"")
+
+
+def walk_file(t: int, method: int = 1, copies: int = 0) -> bytes:
+    """One fan walk of ``t`` triangles (group 0, no references) and ``copies`` copies of it (§9.15)."""
+    walk = (0, 9, group_body([], [], fan_walk(t)), method)
+    return stored_file([walk] + [(0, 11, group_body([], [], uv(0)), 0)] * copies)
+
+
+def zero_planes_block(first: int, count: int, method: int = 1) -> bytes:
+    """§7.1: ``count`` float32 planes (0, 0, 0) from ``first`` on, compressed with ``method``."""
+    raw = bytes(12 * count)
+    return uv(first) + uv(count) + bytes([method]) + uv(len(raw)) + pack(raw, method)

@@ -25,8 +25,10 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from planefmt.container.chunks import Limits
 from planefmt.errors import GeometryError, PlnError
 from planefmt_converters import interrupts
+from planefmt_converters.cli import limits
 from planefmt_converters.cli.progress import Status, summary
 
 if TYPE_CHECKING:
@@ -90,6 +92,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--tau", type=float, help="lossy: merge neighbour planes whose normals differ < tau radians")
     from planefmt_converters.cli import batch
 
+    limits.add_arguments(p)
     batch.add_arguments(p)
     p.set_defaults(func=run)
 
@@ -134,6 +137,8 @@ def _pln_options(args: argparse.Namespace) -> dict:
         opts["delta"], opts["tau"] = args.delta, args.tau
     if args.units:
         opts["units"] = args.units
+    if limits.raised(args):
+        opts[READ_LIMITS] = limits.raised(args)
     return opts
 
 
@@ -150,6 +155,11 @@ def _with_units(scene: Scene, units: str | None, src_name: str) -> Scene:
         raise _Usage(f"--units {units}: the file says its unit is the {scene.units.name.lower()}; drop --units "
                      "for it", code="CONVERSION_FAILED", file=src_name)
     return replace(scene, units=given)
+
+
+#: The key of ``pln_opts`` that carries the --max options to the reading of a .pln input (a dict of
+#: :class:`planefmt.Limits` fields, JSON-safe for batch jobs); every other key is the writer's.
+READ_LIMITS = "read_limits"
 
 
 def convert_one(src: str, dst: str, to: str | None, from_: str | None, pln_opts: dict,
@@ -178,6 +188,8 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
 
     lost: list[str] = []
     status.update(f"reading {src_name}")
+    pln_opts = dict(pln_opts)
+    caps = Limits(**pln_opts.get(READ_LIMITS, {}))
     if salvage:
         fmt_in = registry.get(from_) if from_ else registry.detect(src)
         if fmt_in.name != "pln":
@@ -185,10 +197,11 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
                          code="UNKNOWN_FORMAT")
         from planefmt import codec
 
-        scene, lost = codec.salvage_scene(src)
+        scene, lost = codec.salvage_scene(src, limits=caps)
         dropped: list[str] = []
     else:
-        scene, dropped = registry.read(src, from_)
+        fmt_in = registry.get(from_) if from_ else registry.detect(src)
+        scene, dropped = registry.read(src, from_, **({"limits": caps} if fmt_in.name == "pln" else {}))
     scene = _with_units(scene, pln_opts.get("units"), src_name)
     facts["triangles"] = sum(len(node.mesh.faces) for node in scene.nodes if node.mesh is not None)
     fmt = _output_format(dst, to)
@@ -196,7 +209,8 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
     status.update("encoding" if fmt.name == "pln" else f"writing {dst_name}")
     try:
         with progress.reporting(status.update):
-            options = {key: value for key, value in pln_opts.items() if key != "units"} if fmt.name == "pln" else {}
+            options = ({key: value for key, value in pln_opts.items() if key not in ("units", READ_LIMITS)}
+                       if fmt.name == "pln" else {})
             notes = registry.write(scene, dst, fmt.name, force=True, **options)
     except GeometryError as exc:
         exc.file = src  # what the input holds (or a tolerance it cannot meet), not the output

@@ -14,7 +14,10 @@ from collections import Counter
 
 from planefmt import errors
 from planefmt.container import reader, salvage
+from planefmt.container.chunks import Limits
 from planefmt.model import GroupKind, Metadata, ObjectRecord, PartGroup, PlaneBlock
+
+from . import limits
 
 #: Kinds this version of planefmt names; a newer minor version's kind is shown by number.
 KINDS = frozenset(int(k) for k in GroupKind)
@@ -28,6 +31,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="the mesh the file was encoded from: report bytes per source triangle")
     p.add_argument("--salvage", action="store_true",
                    help="recover every intact part group of a damaged file and list what was lost")
+    limits.add_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -67,9 +71,9 @@ class _Summary:
                 self.objects[rec.object]["groups"] += 1
 
 
-def describe_salvaged(source: str) -> dict:
+def describe_salvaged(source: str, caps: Limits | None = None) -> dict:
     """Like :func:`describe` for a damaged file: what salvage recovered, and the losses."""
-    got = salvage.salvage(sys.stdin.buffer if source == "-" else source)
+    got = salvage.salvage(sys.stdin.buffer if source == "-" else source, limits=caps)
     summary = _Summary()
     for rec in got.records:
         summary.add(rec)
@@ -80,10 +84,11 @@ def describe_salvaged(source: str) -> dict:
     return info
 
 
-def describe(source: str) -> dict:
-    """Everything ``pln info`` shows, as plain JSON-ready data (memory bounded by one chunk)."""
+def describe(source: str, caps: Limits | None = None) -> dict:
+    """Everything ``pln info`` shows, as plain JSON-ready data (memory bounded by one chunk and ``caps``,
+    the reader's limits of spec §12.4)."""
     summary = _Summary()
-    with reader.open(source, retain_planes=False) as r:
+    with reader.open(source, retain_planes=False, limits=caps) as r:
         for rec in r:
             summary.add(rec)
         chunks = {name: {"count": r.chunk_counts[name], "bytes": r.chunk_stats[name]} for name in r.chunk_stats}
@@ -132,7 +137,8 @@ def source_triangles(path: str) -> int:
 
 
 def run(args: argparse.Namespace) -> int:
-    info = describe_salvaged(args.file) if args.salvage else describe(args.file)
+    caps = limits.limits_of(args)
+    info = describe_salvaged(args.file, caps) if args.salvage else describe(args.file, caps)
     if args.source:
         triangles = source_triangles(args.source)
         info["source"] = {"file": args.source, "triangles": triangles,

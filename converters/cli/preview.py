@@ -17,6 +17,8 @@ import numpy as np
 from planefmt.errors import PlnError
 from planefmt.model import UP_AXES
 
+from . import limits
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("preview", help="draw a .pln file to a PNG, one colour per part group",
@@ -30,6 +32,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--view", type=float, nargs=3, metavar=("X", "Y", "Z"),
                    help="direction from the model towards the eye, in model coordinates (default 1 -1.4 0.9 "
                         "with Z up, 1 0.9 1.4 with Y up: the same view of an upright model)")
+    limits.add_arguments(p)
     p.set_defaults(func=run)
 
 
@@ -47,7 +50,7 @@ def run(args: argparse.Namespace) -> int:
         raise PlnError("--view must be a non-zero direction", code="CONVERSION_FAILED")
     vertices, triangles, groups, skipped = [], [], [], []
     offset = 0
-    with reader.open(sys.stdin.buffer if args.file == "-" else args.file) as r:
+    with reader.open(sys.stdin.buffer if args.file == "-" else args.file, limits=limits.limits_of(args)) as r:
         error = codec.header_plane_error(r.header)
         worlds: list[np.ndarray] = []
         for g in r.part_groups():
@@ -58,6 +61,7 @@ def run(args: argparse.Namespace) -> int:
                 skipped.append(g.index)
                 continue
             d = codec.decode_group(g.planes, g, g.index, error)
+            r.budget.charge_decoded(g, len(d.vertices), len(d.triangles))
             vertices.append(transform_points(d.vertices, worlds[g.object]))
             triangles.append(d.triangles + offset)
             groups.append(np.full(len(d.triangles), g.index))

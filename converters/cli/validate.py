@@ -9,17 +9,20 @@ import sys
 from planefmt.codec import validate
 from planefmt.container.validate import has_errors
 
+from . import limits
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("validate", help="check a .pln file against the spec", description=__doc__)
     p.add_argument("file", help="a .pln file, or - for standard input")
     p.add_argument("--json", action="store_true", help="print one JSON object")
     p.add_argument("--no-geometry", action="store_true", help="check the container only, do not decode")
+    limits.add_arguments(p)
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    findings = validate(args.file, geometry=not args.no_geometry)
+    findings = validate(args.file, geometry=not args.no_geometry, limits=limits.limits_of(args))
     ok = not has_errors(findings)
     if args.json:
         json.dump({"file": args.file, "valid": ok, "findings": [f.as_dict() for f in findings]}, sys.stdout,

@@ -37,16 +37,24 @@ import { fail, PlnError } from './errors.mjs';
  * @property {number} planes       §7.1 step 3
  * @property {number} refs         §9.2 step 2
  * @property {number} objects      §8 step 1
+ * @property {number} triangles    the output of a whole decode, §12.4
+ * @property {number} vertices     the same
  */
 
-/** planefmt's defaults (§12.4). @type {Limits} */
+/**
+ * planefmt's defaults (§12.4): like Pillow's MAX_IMAGE_PIXELS they keep one decode within a few
+ * hundred MB; a caller raises them for larger meshes.
+ * @type {Limits}
+ */
 export const DEFAULT_LIMITS = Object.freeze({
   chunkLength: 256 * 1024 * 1024,
   rawSize: 256 * 1024 * 1024,
   ratio: 1100,
-  planes: 2 ** 28,
+  planes: 2 ** 22,
   refs: 2 ** 24,
   objects: 2 ** 24,
+  triangles: 2 ** 22,
+  vertices: 2 ** 22,
 });
 
 /** The stream of each compressed method, for messages. */

@@ -1,4 +1,5 @@
 /** Part groups GRUP: head (spec §9.1), common body (§9.2), kinds (§9.3) and their kind data. */
+import { DECLARED_KINDS, NO_CHARGE } from './budget.mjs';
 import { fail } from './errors.mjs';
 import { Cursor, readBits } from './varint.mjs';
 import { decompress } from './compression.mjs';
@@ -46,6 +47,8 @@ function kindOfVersion(kind, [major, minor]) {
  * @param {number} ctx.planes planes defined before this chunk
  * @param {import('./compression.mjs').Limits} ctx.limits
  * @param {import('./compression.mjs').Codecs} ctx.codecs
+ * @param {import('./budget.mjs').Budget} [ctx.budget] charged the counts a sealed or shell group declares,
+ *   and a copy of one its source's, as they are read (§12.4)
  * @returns {Group}
  */
 export function readGroup(payload, ctx) {
@@ -91,18 +94,21 @@ export function readGroup(payload, ctx) {
     const copy = readCopy(b, index, refs, roles, ctx.earlier);
     skipped = copy.skipped;
     data = { source: copy.source };
+    const src = ctx.earlier[copy.source];
+    if (!skipped && ctx.budget && DECLARED_KINDS.has(src.kind)) ctx.budget.charge(index, src.data.V, src.data.T);
   } else if (!skipped) {
+    const charge = ctx.budget ? ctx.budget.of(index) : NO_CHARGE;
     if (kind === 0 || kind === 3 || kind === 4) {
       if (b.left > 0) fail('BAD_PAYLOAD', `${b.left} bytes after the roles of a kind ${kind} group`);
     } else if (kind === 1) data = readCells(b, m, major, ctx.limits);
     else if (kind === 2) data = readTree(b, m, major);
-    else if (kind === 5) data = readSealed(b, roles);
+    else if (kind === 5) data = readSealed(b, roles, charge);
     else {
       // version 5's shell grids are f32 (16 bytes), earlier ones f64 (32 bytes): §9.10, A.5
       const f32Grid = major >= 5;
-      if (kind === 6) data = readShell(b, roles, f32Grid);
-      else if (kind === 9 || kind === 10 || kind === 12 || kind === 13) data = readShellWalk(b, roles, kind, f32Grid);
-      else data = readShellTree(b, roles, kind === 8, f32Grid);
+      if (kind === 6) data = readShell(b, roles, f32Grid, charge);
+      else if (kind === 9 || kind === 10 || kind === 12 || kind === 13) data = readShellWalk(b, roles, kind, f32Grid, charge);
+      else data = readShellTree(b, roles, kind === 8, f32Grid, charge);
     }
   }
   return { index, object, kind, refs, roles, skipped, data };

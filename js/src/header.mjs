@@ -75,7 +75,10 @@ export function parseHeader(payload) {
   }
   if (quantized) {
     if (bits.some((b) => b < 1 || b > 32)) fail('UNSUPPORTED_CODING', `widths ${bits}`);
-    if (!Number.isFinite(hMin) || !Number.isFinite(hMax) || hMin > hMax) fail('BAD_HEADER_VALUE', 'h range');
+    // a width that overflows binary64 would make every dequantized h infinite (§5, §7.3)
+    if (!Number.isFinite(hMin) || !Number.isFinite(hMax) || !Number.isFinite(hMax - hMin) || hMin > hMax) {
+      fail('BAD_HEADER_VALUE', 'h range');
+    }
   }
   if (units > 7) fail('BAD_HEADER_VALUE', `units ${units}`);
   if (up === 3) fail('BAD_HEADER_VALUE', 'up axis 3');

@@ -6,6 +6,7 @@
 import { readContainer } from './reader.mjs';
 import { decodeGroup } from './decode.mjs';
 import { PlnError } from './errors.mjs';
+import { DECLARED_KINDS } from './budget.mjs';
 
 export { PlnError };
 
@@ -64,6 +65,9 @@ function read(bytes, options) {
   for (const g of c.groups) {
     const mesh = decode ? decodeGroup(g, c.planes, c.header, surfaces) : null;
     surfaces.push(mesh);
+    // the reader charged the counts a sealed or shell group declares (and a copy of one): the rest here (§12.4)
+    const kind = g.kind === 11 && mesh ? c.groups[g.data.source].kind : g.kind;
+    if (mesh && !DECLARED_KINDS.has(kind)) c.budget.charge(g.index, mesh.positions64.length / 3, mesh.indices.length / 3);
     if (!mesh) {
       meshes.push(null);
       continue;

@@ -7,6 +7,7 @@ import { readObject } from './objects.mjs';
 import { readGroup, NEWEST_MINOR } from './groups.mjs';
 import { readColours, checkIndex, readMetadata } from './ancillary.mjs';
 import { DEFAULT_LIMITS } from './compression.mjs';
+import { Budget } from './budget.mjs';
 
 const KNOWN = new Set(['PHDR', 'OBJT', 'PLNS', 'GRUP', 'cOLR', 'iNDX', 'mETA', 'PEND']);
 
@@ -20,6 +21,7 @@ const KNOWN = new Set(['PHDR', 'OBJT', 'PLNS', 'GRUP', 'cOLR', 'iNDX', 'mETA', '
  * @property {{group: number, rgba: Uint8Array}[]} colours every cOLR in file order
  * @property {Record<string, string>} metadata every mETA chunk (a version 5 header's up axis is in header.up_axis)
  * @property {Set<string>} findings §12.3 codes
+ * @property {Budget} budget the output charged so far (§12.4): the declared counts; a decoder adds the rest
  */
 
 /**
@@ -30,6 +32,7 @@ const KNOWN = new Set(['PHDR', 'OBJT', 'PLNS', 'GRUP', 'cOLR', 'iNDX', 'mETA', '
  */
 export function readContainer(bytes, options = {}) {
   const limits = { ...DEFAULT_LIMITS, ...options.limits };
+  const budget = new Budget(limits);
   /** @type {import('./compression.mjs').Codecs} */
   const codecs = { inflate: options.inflate ?? null, brotli: options.brotli ?? null };
   checkSignature(bytes);
@@ -86,7 +89,7 @@ export function readContainer(bytes, options = {}) {
       } else if (type === 'GRUP') {
         listed.push({ offset, type, ordinal: groups.length });
         const g = readGroup(payload, {
-          version: h.version, groups: groups.length, earlier: groups, objects: objects.length, planes: table.count, limits, codecs,
+          version: h.version, groups: groups.length, earlier: groups, objects: objects.length, planes: table.count, limits, codecs, budget,
         });
         if (g.skipped) findings.add('SKIPPED_GROUP_KIND');
         groups.push(g);
@@ -116,7 +119,7 @@ export function readContainer(bytes, options = {}) {
   }
   return {
     header: /** @type {import('./header.mjs').Header} */ (header),
-    chunks, planes: table.view(), objects, groups, colours, metadata, findings,
+    chunks, planes: table.view(), objects, groups, colours, metadata, findings, budget,
   };
 }
 

@@ -1,19 +1,24 @@
 /** Sealed groups (kind 5, spec §9.9), read into the Shell structure of shells.mjs. */
 import { fail } from './errors.mjs';
+import { NO_CHARGE } from './budget.mjs';
 import { readVarints, checkNamed } from './shells.mjs';
 
 /**
  * @param {import('./varint.mjs').Cursor} b
  * @param {Uint8Array} roles
  * @returns {import('./shells.mjs').Shell}
+ * @param {import('./budget.mjs').Charge} [charge] takes the declared counts once checked, before
+ *   anything of their size is allocated (§12.4)
  */
-export function readSealed(b, roles) {
+export function readSealed(b, roles, charge = NO_CHARGE) {
   const m = roles.length;
   const V = b.varint();
   if (V < 3 || 3 * V > b.left) fail('BAD_GROUP_STRUCTURE', `vertex count ${V} for ${b.left} bytes`);
+  charge(V, 0);
   const named = readVarints(b, 3 * V);
   const T = b.varint();
   if (T < 1 || 4 * T > b.left) fail('BAD_GROUP_STRUCTURE', `triangle count ${T} for ${b.left} bytes`);
+  charge(0, T);
   const tris = readVarints(b, 4 * T);
   if (b.left > 0) fail('BAD_GROUP_STRUCTURE', `${b.left} bytes after the triangles`);
 

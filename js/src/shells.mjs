@@ -1,5 +1,6 @@
 /** Shell groups (kind 6, spec §9.10), and the Shell structure sealed groups and shell trees share. */
 import { fail } from './errors.mjs';
+import { NO_CHARGE } from './budget.mjs';
 import { unzigzag, readBits } from './varint.mjs';
 
 export const MAX_COORD = 2 ** 52;
@@ -67,8 +68,10 @@ export function checkNamed(cp, k, m) {
  * @param {Uint8Array} roles
  * @param {boolean} [f32Grid] version 5: the grid in f32
  * @returns {Shell}
+ * @param {import('./budget.mjs').Charge} [charge] takes the declared counts once checked, before
+ *   anything of their size is allocated (§12.4)
  */
-export function readShell(b, roles, f32Grid = false) {
+export function readShell(b, roles, f32Grid = false, charge = NO_CHARGE) {
   const m = roles.length;
   const V = b.varint();
   const T = b.varint();
@@ -77,6 +80,7 @@ export function readShell(b, roles, f32Grid = false) {
   if (V < 3 || V > 8 * left || T < 1 || 3 * T > left || U > T) {
     fail('BAD_GROUP_STRUCTURE', `counts V=${V} T=${T} U=${U} for ${left} bytes`);
   }
+  charge(V, T);
   const explicit = readBits(b, V);
   let E = 0;
   for (let k = 0; k < V; k++) E += explicit[k];

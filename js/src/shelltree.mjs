@@ -14,6 +14,7 @@
  * are here, with the other predictions.
  */
 import { fail } from './errors.mjs';
+import { NO_CHARGE } from './budget.mjs';
 import { unzigzag, readBits } from './varint.mjs';
 import { readVarints, readGrid, checkGrid, MAX_COORD } from './shells.mjs';
 
@@ -23,13 +24,16 @@ import { readVarints, readGrid, checkGrid, MAX_COORD } from './shells.mjs';
  * @param {boolean} [parallelogram] kind 8 (§9.12)
  * @param {boolean} [f32Grid] version 5: the grid in f32 (§9.10)
  * @returns {import('./shells.mjs').Shell}
+ * @param {import('./budget.mjs').Charge} [charge] takes the declared counts once checked, before
+ *   anything of their size is allocated (§12.4)
  */
-export function readShellTree(b, roles, parallelogram = false, f32Grid = false) {
+export function readShellTree(b, roles, parallelogram = false, f32Grid = false, charge = NO_CHARGE) {
   const m = roles.length;
   const V = b.varint();
   const T = b.varint();
   const left = b.left;
   if (V < 3 || V > 8 * left || T < 1 || 3 * T > left) fail('BAD_GROUP_STRUCTURE', `counts V=${V} T=${T} for ${left} bytes`);
+  charge(V, T);
   const links = readVarints(b, T);
   let roots = 0;
   for (let j = 0; j < T; j++) if (links[j] === 0) roots++;

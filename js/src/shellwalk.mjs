@@ -20,6 +20,7 @@
  * than the open edges a valid file of disjoint triangles can hold.
  */
 import { fail } from './errors.mjs';
+import { NO_CHARGE } from './budget.mjs';
 import { readBits } from './varint.mjs';
 import { readVarints } from './shells.mjs';
 import { shellTreeRest } from './shelltree.mjs';
@@ -206,8 +207,10 @@ export class OpenEdges {
  * @param {9 | 10 | 12 | 13} [kind]
  * @param {boolean} [f32Grid] version 5: the grid in f32 (§9.10)
  * @returns {import('./shells.mjs').Shell}
+ * @param {import('./budget.mjs').Charge} [charge] takes the declared counts once checked, before
+ *   anything of their size is allocated (§12.4)
  */
-export function readShellWalk(b, roles, kind = 9, f32Grid = false) {
+export function readShellWalk(b, roles, kind = 9, f32Grid = false, charge = NO_CHARGE) {
   const V = b.varint();
   const T = b.varint();
   const X = b.varint();
@@ -215,6 +218,7 @@ export function readShellWalk(b, roles, kind = 9, f32Grid = false) {
   if (V < 3 || V > 8 * left || T < 1 || 2 * T > left || X > left) {
     fail('BAD_GROUP_STRUCTURE', `counts V=${V} T=${T} X=${X} for ${left} bytes`);
   }
+  charge(V, T);
   const symbols = readVarints(b, T);
   const escapes = readVarints(b, X);
   const faceCodes = readVarints(b, T);

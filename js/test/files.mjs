@@ -276,3 +276,71 @@ export function planefmtDecoding(file) {
     indices: new Uint32Array(buf, 24 * head.vertices, 3 * head.triangles),
   };
 }
+
+// ---------------------------------------------------------------------------------------------
+// Files that cost more than their size: the decode budget of §12.4
+
+/**
+ * §9.13 kind data of a walk of `t` ≥ 2 triangles fanned round corner 0: the root's child across its
+ * edge 0, every other triangle's across its edge 1, each naming one new corner; every corner explicit
+ * at 0, 0, 0 (V = t + 2), every triangle free. About five bytes a triangle, all alike.
+ * @param {number} t @returns {Uint8Array}
+ */
+export function fanWalk(t) {
+  const v = t + 2;
+  const head = Uint8Array.from([...varint(v), ...varint(t), 3, 1]);
+  const out = new Uint8Array(head.length + (t - 2) + 1 + 3 + t + Math.ceil(v / 8) + 1 + 16 + 3 * v);
+  out.set(head);
+  let at = head.length;
+  out.fill(4, at, at + t - 2); // attached, a child across edge 1, a new corner
+  at += t - 2 + 1 + 3 + t; // the last symbol 0, the root's three escapes 0, the faces 0 (free)
+  out.fill(0xff, at, at + (v >> 3));
+  if (v % 8) out[at + (v >> 3)] = (1 << (v % 8)) - 1;
+  at += Math.ceil(v / 8) + 1; // the flags, the mode 0
+  out.set([0, 0, 0, 1].flatMap(f32), at); // the grid: origin 0, 0, 0, step 1
+  return out; // the residuals: 3V zeros
+}
+
+/** @param {Uint8Array} raw @param {number} method 0 stored, 1 zlib, 2 Brotli (§6) */
+export const packed = (raw, method) => (method === 1 ? zlib.deflateSync(raw, { level: 9 }) : method === 2 ? zlib.brotliCompressSync(raw) : raw);
+
+/**
+ * A version 5.0 file: its header (coding, widths, h range for codings 2 and 3), the PLNS payloads
+ * given, `objects` objects, then the groups, each its object, kind, raw body (the common body
+ * included) and method.
+ * @param {{groups: {object?: number, kind: number, body: Uint8Array, method?: number}[], blocks?: Uint8Array[],
+ *   coding?: number, bits?: number[], hRange?: number[], objects?: number}} f
+ */
+export function budgetFile({ groups, blocks = [], coding = 0, bits = [0, 0, 0], hRange = [], objects = 1 }) {
+  const head = [5, 0, 0, coding, ...bits, 1, ...hRange.flatMap(f64), ...f32(NaN), ...f32(NaN)];
+  return assemble5([
+    { type: 'PHDR', payload: head },
+    ...blocks.map((payload) => ({ type: 'PLNS', payload })),
+    ...Array.from({ length: objects }, (_, k) => ({ type: 'OBJT', payload: [...varint(k), 0, 0, 0] })),
+    ...groups.map(({ object = 0, kind, body, method = 0 }, i) => {
+      const stored = packed(body, method);
+      const payload = new Uint8Array(stored.length + 16);
+      const h = [...varint(i), ...varint(object), kind, method, ...varint(body.length)];
+      payload.set(h);
+      payload.set(stored, h.length);
+      return { type: 'GRUP', payload: payload.subarray(0, h.length + stored.length) };
+    }),
+    { type: 'PEND', payload: [] },
+  ]);
+}
+
+/** One fan walk of `t` triangles (group 0, no reference) and `copies` copies of it (§9.15). */
+export function walkFile(/** @type {number} */ t, method = 1, copies = 0) {
+  const walk = { kind: 9, body: Uint8Array.from([0, ...fanWalk(t)]), method };
+  return budgetFile({ groups: [walk, ...Array.from({ length: copies }, () => ({ kind: 11, body: Uint8Array.of(0, 0) }))] });
+}
+
+/** §7.1: `count` float32 planes (0, 0, 0) from `first` on, compressed with `method`. */
+export function zeroPlanes(/** @type {number} */ first, /** @type {number} */ count, method = 1) {
+  const stored = packed(new Uint8Array(12 * count), method);
+  const h = [...varint(first), ...varint(count), method, ...varint(12 * count)];
+  const out = new Uint8Array(h.length + stored.length);
+  out.set(h);
+  out.set(stored, h.length);
+  return out;
+}

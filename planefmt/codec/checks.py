@@ -13,7 +13,7 @@ from ..container import validate as container
 from ..container.chunks import Limits
 from ..container.reader import Reader
 from ..container.validate import Finding
-from ..errors import CODES, GeometryError
+from ..errors import CODES, GeometryError, LimitError
 from ..model import GroupKind, PartGroup
 from .decoding import DECODERS, decode_group, header_plane_error
 
@@ -23,7 +23,9 @@ def check_group(group: PartGroup, reader: Reader) -> list[Finding]:
 
     ``EMPTY_POLYTOPE`` / ``UNBOUNDED_POLYTOPE`` errors, one ``REDUNDANT_PLANE``
     warning per plane of a convex group that bounds no face. Kinds without a
-    decoder yet get one ``GEOMETRY_NOT_CHECKED`` note.
+    decoder yet get one ``GEOMETRY_NOT_CHECKED`` note. What a group decodes to is charged to the reader's
+    budget (spec §12.4: ``LimitError`` past it); a copy of a group checked already is charged its source's
+    output without decoding it again.
     """
     if group.planes is None:
         return []
@@ -34,11 +36,19 @@ def check_group(group: PartGroup, reader: Reader) -> list[Finding]:
         return [Finding("GEOMETRY_NOT_CHECKED", CODES["GEOMETRY_NOT_CHECKED"].severity,
                         f"part group {group.index}: kind {GroupKind(group.kind).name} is not decoded by this "
                         f"version of planefmt", **where)]
+    budget = reader.budget
     try:
-        decoded = decode_group(group.planes, group, group.index,
-                               header_plane_error(reader.header))
-    except GeometryError as exc:
-        return [Finding(exc.code, CODES[exc.code].severity, exc.reason, **where)]
+        if group.source is not None and group.source in budget.decoded:
+            budget.charge_decoded(group, *budget.decoded[group.source])
+            return []
+        try:
+            decoded = decode_group(group.planes, group, group.index,
+                                   header_plane_error(reader.header))
+        except GeometryError as exc:
+            return [Finding(exc.code, CODES[exc.code].severity, exc.reason, **where)]
+        budget.charge_decoded(group, len(decoded.vertices), len(decoded.triangles))
+    except LimitError as exc:
+        raise exc.located(file=reader.name, chunk="GRUP")
     return [Finding("REDUNDANT_PLANE", CODES["REDUNDANT_PLANE"].severity,
                     f"part group {group.index}: plane {int(group.refs[j])} (reference {int(j)}) bounds no face",
                     **where) for j in decoded.redundant]

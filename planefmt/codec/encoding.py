@@ -18,8 +18,9 @@ import numpy as np
 
 from .. import progress
 from ..container import quantize, records, shellfields, shellwalk
+from ..container.chunks import Limits
 from ..container.writer import BLOCK_PLANES, Writer
-from ..errors import GeometryError, PlnError
+from ..errors import GeometryError, PlnError, PlnWarning
 from ..geometry.planes import transform_points
 from ..groups.shells import reordered, reordered_tree
 from ..groups.solids import FLAT_STRATEGIES, STRATEGIES, Splitter
@@ -179,7 +180,23 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
         return len(buf.getvalue())
 
     objects, choice = _encode_objects(prepare, len(meshes), tolerance, coding, bits, watertight, size, scheme)
-    return _write(scene, target, meshes, objects, choice, tolerance, compress, compact, major)
+    header = _write(scene, target, meshes, objects, choice, tolerance, compress, compact, major)
+    _warn_past_default_limits(scene, meshes)
+    return header
+
+
+def _warn_past_default_limits(scene: Scene, meshes: list[int]) -> None:
+    """A :class:`PlnWarning` where the scene is larger than a reader decodes by default (spec §12.4): the
+    encoder's own checks decode without the limit, a reader of the file must be told to raise it."""
+    triangles = sum(len(scene.nodes[i].mesh.faces) for i in meshes)
+    vertices = sum(len(scene.nodes[i].mesh.vertices) for i in meshes)
+    defaults = Limits()
+    if triangles > defaults.max_triangles or vertices > defaults.max_vertices:
+        warnings.warn(PlnWarning(
+            f"the scene has {triangles:,} triangles over {vertices:,} vertices, more than the {defaults.max_triangles:,} "
+            f"triangles and {defaults.max_vertices:,} vertices a reader decodes by default: read the file with "
+            f"planefmt.Limits(max_triangles=..., max_vertices=...), pln --max-triangles N --max-vertices N, or the "
+            f"JavaScript reader's limits: {{triangles: N, vertices: N}}"), stacklevel=3)
 
 
 def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: float, coding: Coding | None,

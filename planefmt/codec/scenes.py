@@ -14,9 +14,11 @@ from typing import BinaryIO
 import numpy as np
 
 from ..container import quantize, records
+from ..container.budget import Budget
+from ..container.chunks import Limits
 from ..container.reader import Reader
 from ..container.salvage import salvage
-from ..errors import FormatError, GeometryError, PlnError, SkippedGroupsWarning
+from ..errors import FormatError, GeometryError, LimitError, PlnError, SkippedGroupsWarning
 from ..geometry.planes import transform_points
 from ..model import UP_AXIS, Colours, Header, Mesh, Metadata, Node, ObjectRecord, PartGroup, Scene, Units
 from .decoding import (DecodedGroup, EXACT, GroupLike, _concatenate, decode_group, decode_groups, header_plane_error,
@@ -25,12 +27,16 @@ from .encoding import Encoded
 from .preparing import _world_transforms
 
 
-#: Part groups a reader holds before decoding them together (:func:`decode_groups`).
+#: Part groups a reader holds before decoding them together (:func:`decode_groups`), and the references
+#: they may hold in all: what the groups of one batch produce before the budget (spec §12.4) is checked
+#: is bounded by their planes (a convex polytope of m planes has at most 2m - 4 corners).
 _DECODE_BATCH = 4096
+_DECODE_BATCH_REFS = 1 << 16
 
 
 def decode_mesh(source: Encoded | np.ndarray | str | os.PathLike | BinaryIO,
-                groups: Iterable[GroupLike] | None = None, *, header: Header | None = None) -> Mesh:
+                groups: Iterable[GroupLike] | None = None, *, header: Header | None = None,
+                limits: Limits | None = None) -> Mesh:
     """Triangles: of a .pln file (``decode_mesh("model.pln")``, a path or binary stream: every object in
     world coordinates, as one mesh), or of part groups (``decode_mesh(triplets, groups, header=...)`` or
     ``decode_mesh(encoded)``).
@@ -41,10 +47,11 @@ def decode_mesh(source: Encoded | np.ndarray | str | os.PathLike | BinaryIO,
     its planes go through the coding first, so the result is what a reader
     of its file decodes. Raises ``GeometryError`` (e.g. ``EMPTY_POLYTOPE``,
     ``UNBOUNDED_POLYTOPE``) naming the group, and for a file whatever
-    :func:`decode_scene` raises.
+    :func:`decode_scene` raises; ``limits`` as :func:`decode_scene`'s (a file only: groups in
+    memory are the caller's own).
     """
     if isinstance(source, (str, os.PathLike)) or hasattr(source, "read"):
-        return _world_mesh(decode_scene(source))
+        return _world_mesh(decode_scene(source, limits=limits))
     if isinstance(source, Encoded):
         table = quantize.roundtrip(source.triplets, source.coding, source.quantization)
         groups = source.groups
@@ -79,26 +86,39 @@ def _world_mesh(scene: Scene) -> Mesh:
                 np.concatenate([f + o for (_, f, _), o in zip(placed, offsets)]).astype(np.int64), colours)
 
 
-def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
+def decode_scene(source: str | os.PathLike | BinaryIO, *, limits: Limits | None = None) -> Scene:
     """Read a .pln file into a :class:`Scene`: one node per object, its groups decoded and joined.
 
-    Streams: part groups are decoded in batches of up to 4096 as they are read.
-    Groups of a kind from a newer minor version are skipped, as spec §13 asks
-    of a reader, with one :class:`PlnWarning` naming them.
+    Streams: part groups are decoded in batches of up to 4096 as they are read; a copy (spec §9.15)
+    reuses its source's decoding. Groups of a kind from a newer minor version are skipped, as spec
+    §13 asks of a reader, with one :class:`PlnWarning` naming them. ``limits`` (spec §12.4) bound
+    what the file may make the reader produce: with the defaults, 2**22 triangles and vertices in
+    all; more is ``LimitError`` (``LIMIT_EXCEEDED``) before the memory is spent.
     """
     parts: dict[int, list[tuple[int, DecodedGroup]]] = {}
     colours: dict[int, np.ndarray] = {}
     pending: list[PartGroup] = []
     skipped: list[PartGroup] = []
+    # Every group decoded so far, by index: the surfaces copies reuse (held by ``parts`` in any case).
+    decoded: dict[int, DecodedGroup] = {}
 
     def flush() -> None:
-        for rec, d in zip(pending, decode_groups([(g.planes, g, g.index) for g in pending], error)):
-            parts.setdefault(rec.object, []).append((rec.index, d))
+        fresh = [g for g in pending if g.source is None]
+        for g, d in zip(fresh, decode_groups([(g.planes, g, g.index) for g in fresh], error)):
+            decoded[g.index] = d
+        for g in pending:
+            d = decoded[g.index if g.source is None else g.source]
+            try:
+                r.budget.charge_decoded(g, len(d.vertices), len(d.triangles))
+            except PlnError as exc:
+                raise exc.located(file=r.name, chunk="GRUP")
+            parts.setdefault(g.object, []).append((g.index, d))
         pending.clear()
 
-    with Reader(source) as r:
+    with Reader(source, limits=limits) as r:
         error = header_plane_error(r.header)
         known = records.kinds_of(*r.header.version)
+        held = 0
         for rec in r:
             if isinstance(rec, PartGroup):
                 if int(rec.kind) not in known:
@@ -106,8 +126,10 @@ def decode_scene(source: str | os.PathLike | BinaryIO) -> Scene:
                     continue
                 # Decoded in batches of groups read (patches together), bounding what is held.
                 pending.append(rec)
-                if len(pending) >= _DECODE_BATCH:
+                held += len(rec.refs)
+                if len(pending) >= _DECODE_BATCH or held >= _DECODE_BATCH_REFS:
                     flush()
+                    held = 0
             elif isinstance(rec, Colours):
                 colours[rec.group] = rec.rgba
         flush()
@@ -122,15 +144,17 @@ def skipped_groups(groups: Sequence[GroupLike]) -> str:
     return f"part group{'s' if len(groups) > 1 else ''} {which} of a newer minor version than this reader knows"
 
 
-def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str]]:
+def salvage_scene(source: str | os.PathLike | BinaryIO, *, limits: Limits | None = None) -> tuple[Scene, list[str]]:
     """What :func:`decode_scene` gives for the intact part of a damaged file, and what was lost.
 
     Reads through :func:`planefmt.container.salvage.salvage`: every intact object and
     part group is kept, a group that no longer decodes (its planes were
-    damaged into an empty or unbounded set) joins the losses. Raises
-    ``FormatError`` (``MISSING_HEADER``) when no header survived.
+    damaged into an empty or unbounded set) joins the losses, and so does a group past ``limits``
+    (:func:`decode_scene`'s). Raises ``FormatError`` (``MISSING_HEADER``) when no header survived.
     """
-    got = salvage(source)
+    limits = limits or Limits()
+    budget = Budget(limits)
+    got = salvage(source, limits=limits, budget=budget)
     if got.header is None:
         raise FormatError("no intact PHDR chunk: nothing to salvage", code="MISSING_HEADER",
                           file=os.fspath(source) if isinstance(source, (str, os.PathLike))
@@ -143,10 +167,23 @@ def salvage_scene(source: str | os.PathLike | BinaryIO) -> tuple[Scene, list[str
     skipped = [g for g in got.part_groups if int(g.kind) not in known]
     if skipped:
         lost.append(f"{skipped_groups(skipped)} skipped")
+    decoded: dict[int, DecodedGroup] = {}
+    refs = {g.index: (g.refs, g.bounding) for g in got.part_groups}
     for g in (g for g in got.part_groups if int(g.kind) in known):
         try:
-            parts.setdefault(g.object, []).append((g.index, decode_group(g.planes, g, g.index, error)))
-        except GeometryError as exc:
+            if g.source is None:
+                d = decoded[g.index] = decode_group(g.planes, g, g.index, error)
+                budget.charge_decoded(g, len(d.vertices), len(d.triangles))
+            elif g.source in decoded and all(np.array_equal(a, b) for a, b in zip(refs[g.source], refs[g.index])):
+                # a copy (spec §9.15) of a group salvaged, with its references and roles: its surface
+                d = decoded[g.source]
+                budget.charge(g.index, vertices=len(d.vertices), triangles=len(d.triangles))
+            else:
+                raise GeometryError(f"part group {g.index}: a copy of group {g.source}, lost or with other "
+                                    "references",
+                                    code="BAD_GROUP_STRUCTURE")
+            parts.setdefault(g.object, []).append((g.index, d))
+        except (GeometryError, LimitError) as exc:
             lost.append(f"part group {g.index} lost: {exc.reason}")
     colours = {r.group: r.rgba for r in got.records if isinstance(r, Colours)}
     up = [got.header.up_axis] + [r.value for r in got.records if isinstance(r, Metadata) and r.key == UP_AXIS]

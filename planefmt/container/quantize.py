@@ -29,7 +29,9 @@ def check_quantization(q: Quantization) -> None:
     for name, bits in (("nu", q.bits_nu), ("phi", q.bits_phi), ("h", q.bits_h)):
         if not 1 <= bits <= MAX_BITS:
             raise PlnError(f"bits_{name} = {bits} is outside 1..{MAX_BITS}", code="UNSUPPORTED_CODING")
-    if not (math.isfinite(q.h_min) and math.isfinite(q.h_max)) or q.h_min > q.h_max:
+    # A width that overflows binary64 would make every dequantized h infinite (spec §5, §7.3).
+    if not (math.isfinite(q.h_min) and math.isfinite(q.h_max) and math.isfinite(q.h_max - q.h_min)) \
+            or q.h_min > q.h_max:
         raise PlnError(f"invalid h range [{q.h_min}, {q.h_max}]", code="BAD_HEADER_VALUE")
 
 

@@ -20,6 +20,7 @@ from typing import BinaryIO
 import numpy as np
 
 from . import records, schema
+from .budget import Budget, declared
 from .chunks import ChunkStream, Limits, RawChunk, chunk_bytes, is_ancillary
 from ..errors import FormatError, PlnError
 from ..model import UP_AXIS, GroupKind, ObjectRecord, PartGroup, Record, UnknownChunk
@@ -40,6 +41,9 @@ class Reader:
             if not isinstance(self.name, str):
                 self.name = "<stream>"
         self.limits = limits or Limits()
+        #: The output of the groups read so far (spec §12.4): a sealed or shell group is charged as its counts
+        #: are read, a copy of one its source's counts; a decoder charges the other kinds as it decodes them.
+        self.budget = Budget(self.limits)
         self.retain_planes = retain_planes
         self.findings: list[tuple[str, str]] = []
         self.objects: list[ObjectRecord] = []
@@ -184,7 +188,7 @@ class Reader:
             group, found = records.decode_group(
                 raw.payload, expected_index=self._group_count, objects=len(self.objects),
                 planes=self._plane_count, minor=self.header.version[1], limits=self.limits,
-                major=self.header.version[0])
+                major=self.header.version[0], budget=self.budget)
             self.findings.extend(found)
             self._listed.append((raw.offset, t, group.index))
             self._group_refs[group.index] = len(group.refs)
@@ -249,6 +253,9 @@ class Reader:
                               code="BAD_GROUP_STRUCTURE")
         if not isinstance(source.kind, GroupKind):
             self.findings.append(("SKIPPED_GROUP_KIND", f"group {copy.index} copies group {s}, of a kind skipped"))
+        counts = declared(source)
+        if counts is not None:
+            self.budget.charge(copy.index, vertices=counts[0], triangles=counts[1])
         return dataclasses.replace(source, index=copy.index, object=copy.object, source=s)
 
     @property
@@ -364,6 +371,7 @@ class Reader:
         sub = copy.copy(self)
         sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
         sub._payloads, sub._offsets, sub._sources = {}, {}, {}
+        sub.budget = Budget(self.limits)  # one group's output, not the file's
         sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
         stream = ChunkStream(self._fp, file=self.name, limits=self.limits, compact=self._compact)
         for i in np.flatnonzero(np.isin(types[: pos + 1], [schema.OBJT, schema.PLNS])).tolist() + [int(pos)]:

@@ -16,6 +16,7 @@ import construct as cs
 import numpy as np
 
 from . import quantize, schema, varint
+from .budget import Budget, Charge
 from .chunks import Limits
 from ..errors import FormatError, LimitError, PlnError, VersionError
 from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, TREE_KINDS, UP_AXES, UP_AXIS, Coding, Colours,
@@ -205,7 +206,15 @@ def pack(data: bytes, compress: bool, level: int = 9, brotli_allowed: bool = Fal
     return best
 
 
-def unpack(method: int, stored: bytes, raw_size: int, limits: Limits, major: int = 3) -> bytes:
+#: Output of one decompression step (spec §6): a payload is decompressed in pieces of at most this many
+#: bytes into a buffer of its raw size, so that it is held once, not once in pieces and once joined; and
+#: its stored bytes are fed in pieces of :data:`UNPACK_INPUT`, so that what a decompressor copies of the
+#: input it has not consumed stays small.
+UNPACK_STEP = 1 << 20
+UNPACK_INPUT = 1 << 16
+
+
+def unpack(method: int, stored: bytes, raw_size: int, limits: Limits, major: int = 3) -> bytes | bytearray:
     """The raw bytes of a stored payload, checked in the order of spec/pln.md §6, with the decompression-bomb
     caps of spec §12.4: the method (a defect of the file) before the reader's own limits. Brotli
     (method 2) exists from version 4 on."""
@@ -222,42 +231,81 @@ def unpack(method: int, stored: bytes, raw_size: int, limits: Limits, major: int
         raise LimitError(f"declared raw size {raw_size} is over {limits.max_compression_ratio}x "
                          f"the {len(stored)} stored bytes")
     if method == schema.COMPRESSION_BROTLI:
-        return _unbrotli(bytes(stored), raw_size)
+        return _unbrotli(stored, raw_size)
+    return _inflate(stored, raw_size)
+
+
+class _Output:
+    """A payload's raw bytes as they are decompressed, into one buffer of the declared raw size."""
+
+    def __init__(self, raw_size: int, stream: str) -> None:
+        self.raw = bytearray(raw_size)
+        self.made = 0
+        self.stream = stream
+
+    def step(self) -> int:
+        """The most output to ask of the next step: a piece, or one byte past raw size to see it passed."""
+        return min(UNPACK_STEP, len(self.raw) + 1 - self.made)
+
+    def add(self, piece: bytes) -> None:
+        end = self.made + len(piece)
+        if end > len(self.raw):
+            raise FormatError(f"{self.stream} stream decompresses to more than {len(self.raw)} bytes",
+                              code="SIZE_MISMATCH")
+        self.raw[self.made:end] = piece
+        self.made = end
+
+
+def _inflate(stored: bytes, raw_size: int) -> bytearray:
+    """A zlib stream (spec §6, method 1) that must inflate to exactly ``raw_size`` bytes and end with the
+    last stored byte; at most raw size + 1 bytes are inflated."""
     d = zlib.decompressobj()
+    out = _Output(raw_size, "deflate")
+    view, fed, pending = memoryview(stored), 0, b""
     try:
-        raw = d.decompress(stored, raw_size + 1)
+        while not d.eof:
+            if not pending and fed < len(view):
+                pending, fed = view[fed:fed + UNPACK_INPUT], min(fed + UNPACK_INPUT, len(view))
+            # Without input left, the inflater may still hold output (a match cut short by the step).
+            piece = d.decompress(pending, out.step())
+            out.add(piece)
+            if not (piece or pending):
+                break  # no input and no output: the stored bytes end inside the stream
+            pending = d.unconsumed_tail
     except zlib.error as exc:
         raise FormatError(f"corrupt deflate stream ({exc})", code="BAD_COMPRESSION") from None
-    if len(raw) != raw_size or not d.eof or d.unconsumed_tail or d.unused_data:
+    if out.made != raw_size or not d.eof or d.unconsumed_tail or d.unused_data or fed < len(view):
         raise FormatError(f"deflate stream does not inflate to exactly {raw_size} bytes",
                           code="SIZE_MISMATCH")
-    return raw
+    return out.raw
 
 
-def _unbrotli(stored: bytes, raw_size: int) -> bytes:
+def _unbrotli(stored: bytes, raw_size: int) -> bytearray:
     """A Brotli stream (spec §6, method 2) that must decompress to exactly ``raw_size`` bytes and end
-    with the last stored byte. The decoder's output buffer is capped at raw size + 1 (it stops within
-    a block of its own, about 32 KiB, past the cap): a stream that would decompress to more is refused
-    before it does, whatever the ratio of its meta-blocks."""
+    with the last stored byte. Each step's output is capped (the decoder stops within a block of its own,
+    about 32 KiB, past the cap), the last at raw size + 1: a stream that would decompress to more is
+    refused before it does, whatever the ratio of its meta-blocks."""
     d = brotli.Decompressor()
-    out: list[bytes] = []
-    made = 0
-    pending = stored
+    out = _Output(raw_size, "Brotli")
+    view, fed = memoryview(stored), 0
     try:
-        while True:
-            piece = d.process(pending, output_buffer_limit=raw_size + 1 - made)
-            pending = b""
-            made += len(piece)
-            if made > raw_size:
-                raise FormatError(f"Brotli stream decompresses to more than {raw_size} bytes", code="SIZE_MISMATCH")
-            out.append(piece)
-            if d.is_finished() or d.can_accept_more_data():
-                break
+        while not d.is_finished():
+            piece = b""
+            # Input only when the decoder takes it; without input left it may still hold output (it
+            # can say it takes input while it does: measured with brotli 1.2.1).
+            if d.can_accept_more_data() and fed < len(view):
+                piece, fed = view[fed:fed + UNPACK_INPUT], min(fed + UNPACK_INPUT, len(view))
+            got = d.process(piece, output_buffer_limit=out.step())
+            out.add(got)
+            if not (got or piece):
+                break  # no input and no output: the stored bytes end inside the stream
     except brotli.error as exc:
         raise FormatError(f"corrupt Brotli stream, or bytes after its end ({exc})", code="BAD_COMPRESSION") from None
-    if not d.is_finished() or made != raw_size:
+    if d.is_finished() and fed < len(view):
+        raise FormatError(f"{len(view) - fed} stored bytes after the Brotli stream", code="BAD_COMPRESSION")
+    if not d.is_finished() or out.made != raw_size:
         raise FormatError(f"Brotli stream does not decompress to exactly {raw_size} bytes", code="SIZE_MISMATCH")
-    return b"".join(out)
+    return out.raw
 
 
 # spec §7 Plane table -------------------------------------------------------------------------
@@ -460,12 +508,20 @@ def _body(g: PartGroup) -> bytes:
     return schema.GroupBody.build(dict(ref_count=len(refs), refs=refs.tobytes(), roles=roles, extra=extra))
 
 
-def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: int,
-                 minor: int, limits: Limits, major: int = 1) -> tuple[PartGroup, list[tuple[str, str]]]:
+#: The longest head of a version 3 to 5 group (spec §9.1): index, object, kind, compression, raw size.
+GROUP_HEAD3_MAX = 5 + 5 + 1 + 1 + 5
+
+
+def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: int, minor: int, limits: Limits,
+                 major: int = 1, budget: Budget | None = None) -> tuple[PartGroup, list[tuple[str, str]]]:
     """A part group of a version ``major``.``minor`` file, checked against the objects and planes
-    defined so far."""
+    defined so far; a kind that declares its output's counts charges them to ``budget`` (spec §12.4)."""
     if major >= 3:
-        head = _parse(schema.GroupHead3, payload, "GRUP")
+        # Only the head goes through construct (three varint32s and two bytes): the stored body stays a
+        # view of the payload, which a large compressed body (spec §6) would otherwise hold twice more.
+        prefix = bytes(payload[:GROUP_HEAD3_MAX])
+        head = _parse(schema.GroupHead3, prefix, "GRUP")
+        stored = memoryview(payload)[len(prefix) - len(head.body):]
     elif len(payload) < schema.GROUP_HEAD:
         raise FormatError("GRUP payload is shorter than its 16-byte head", code="BAD_PAYLOAD")
     else:
@@ -482,9 +538,10 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
             raise FormatError(f"unknown part group kind {head.kind} in a version {major}.{minor} file",
                               code="UNKNOWN_GROUP_KIND")
         findings.append(("SKIPPED_GROUP_KIND", f"group {head.index} has kind {head.kind} of a newer minor version"))
-    body = unpack(head.compression, bytes(head.body), head.raw_size, limits, major)
+    body = unpack(head.compression, stored if major >= 3 else bytes(head.body), head.raw_size, limits, major)
     if major >= 2:
-        group = _decode_compact(head, body, planes, limits, kinds, major)
+        group = _decode_compact(head, body, planes, limits, kinds, major,
+                                None if budget is None else budget.of(head.index))
         return group, findings
     if len(body) < 4:
         raise FormatError("group body is shorter than its reference count", code="BAD_PAYLOAD")
@@ -517,7 +574,8 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
     return group, findings
 
 
-def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: frozenset[int], major: int) -> PartGroup:
+def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: frozenset[int], major: int,
+                    charge: Charge | None = None) -> PartGroup:
     """A group body of versions 2 to 5 (spec §9.2)."""
     raw = np.frombuffer(body, dtype=np.uint8)
     (count,), pos = varint.decode(raw, 1, "group reference count")
@@ -542,17 +600,17 @@ def _decode_compact(head, body: bytes, planes: int, limits: Limits, kinds: froze
     if head.kind not in kinds:
         extra = rest.tobytes()
     elif head.kind == GroupKind.SHELL:
-        shell = _decode_shell(rest, bounding, major)
+        shell = _decode_shell(rest, bounding, major, charge)
     elif head.kind in WALK_KINDS:
-        shell = decode_shell_walk(rest, bounding, head.kind, major)
+        shell = decode_shell_walk(rest, bounding, head.kind, major, charge)
     elif head.kind in TREE_KINDS:
-        shell = _decode_shell_tree(rest, bounding, head.kind == GroupKind.SHELL_TREE_PARALLELOGRAM, major)
+        shell = _decode_shell_tree(rest, bounding, head.kind == GroupKind.SHELL_TREE_PARALLELOGRAM, major, charge)
     elif head.kind == GroupKind.CELLS:
         cells = _decode_compact_cells(rest, count, limits)
     elif head.kind == GroupKind.BSP:
         tree = _decode_compact_tree(rest, count)
     elif head.kind == GroupKind.SEALED:
-        vertex_planes, facets = _decode_sealed(rest, bounding)
+        vertex_planes, facets = _decode_sealed(rest, bounding, charge)
     elif head.kind == GroupKind.COPY:
         (source,), used = varint.decode(rest, 1, "copy source")
         if used != len(rest):
@@ -604,13 +662,16 @@ def _decode_compact_tree(raw: np.ndarray, count: int) -> np.ndarray:
     return tokens
 
 
-def _decode_sealed(raw: np.ndarray, bounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _decode_sealed(raw: np.ndarray, bounding: np.ndarray,
+                   charge: Charge | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Vertex triples (V, 3) and facets (T, 4: face reference, three vertices) of a SEALED body
-    (spec §9.9), checked."""
+    (spec §9.9), checked; ``charge`` takes V and T as each is read and checked (spec §12.4)."""
     (v,), pos = varint.decode(raw, 1, "sealed vertex count")
     if not 3 <= int(v) <= (len(raw) - pos) // schema.SEALED_VERTEX_FIELDS:
         raise FormatError(f"sealed group: {int(v)} vertices declared, fewer than 3 or more than the body holds",
                           code="BAD_GROUP_STRUCTURE")
+    if charge is not None:
+        charge(vertices=int(v))
     triples, used = varint.decode(raw[pos:], schema.SEALED_VERTEX_FIELDS * int(v), "sealed vertex planes")
     pos += used
     (t,), used = varint.decode(raw[pos:], 1, "sealed triangle count")
@@ -618,6 +679,8 @@ def _decode_sealed(raw: np.ndarray, bounding: np.ndarray) -> tuple[np.ndarray, n
     if not 1 <= int(t) <= (len(raw) - pos) // schema.SEALED_TRIANGLE_FIELDS:
         raise FormatError(f"sealed group: {int(t)} triangles declared, none or more than the body holds",
                           code="BAD_GROUP_STRUCTURE")
+    if charge is not None:
+        charge(triangles=int(t))
     facets, used = varint.decode(raw[pos:], schema.SEALED_TRIANGLE_FIELDS * int(t), "sealed triangles")
     if pos + used != len(raw):
         raise FormatError("sealed triangles do not fill the body", code="BAD_GROUP_STRUCTURE")

@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import FormatError, PlnError
 from ..model import Header, ObjectRecord, PartGroup, Record, UnknownChunk
 from . import records, schema
+from .budget import Budget
 from .chunks import Limits, RawChunk, check_signature, is_ancillary, type_name, valid_type
 from .crc import crc32
 
@@ -51,8 +52,9 @@ class Salvaged:
 
 
 def salvage(source: str | os.PathLike | BinaryIO, *, limits: Limits | None = None,
-            max_bytes: int = 1 << 31) -> Salvaged:
-    """Recover every intact record of ``source`` (a path or binary stream) and report the rest."""
+            max_bytes: int = 1 << 31, budget: Budget | None = None) -> Salvaged:
+    """Recover every intact record of ``source`` (a path or binary stream) and report the rest; a group
+    whose declared counts would pass ``budget`` (spec §12.4) is lost."""
     limits = limits or Limits()
     if isinstance(source, (str, os.PathLike)):
         with open(source, "rb") as f:
@@ -61,13 +63,14 @@ def salvage(source: str | os.PathLike | BinaryIO, *, limits: Limits | None = Non
         data = source.read(max_bytes + 1)
     if len(data) > max_bytes:
         raise PlnError(f"salvage reads at most {max_bytes} bytes", code="LIMIT_EXCEEDED")
-    return _Salvager(data, limits).run()
+    return _Salvager(data, limits, budget or Budget(limits)).run()
 
 
 class _Salvager:
-    def __init__(self, data: bytes, limits: Limits) -> None:
+    def __init__(self, data: bytes, limits: Limits, budget: Budget) -> None:
         self.data = data
         self.limits = limits
+        self.budget = budget
         self.out = Salvaged(header=None)
         self.table = np.empty((0, 3))
         self.lost_planes = np.zeros(0, dtype=bool)
@@ -238,7 +241,7 @@ class _Salvager:
         self.groups = index + 1
         group, _ = records.decode_group(chunk.payload, expected_index=index, objects=self.objects,
                                         planes=len(self.lost_planes), minor=self.out.header.version[1],
-                                        limits=self.limits, major=self.out.header.version[0])
+                                        limits=self.limits, major=self.out.header.version[0], budget=self.budget)
         if group.object not in self.object_ok:
             raise FormatError(f"part group {index} belongs to lost object {group.object}",
                               code="BAD_OBJECT_REFERENCE")

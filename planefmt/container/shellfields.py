@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import FormatError
 from ..model import FREE, MAX_GRID, GroupKind, Shell
 from . import schema, varint
+from .budget import Charge
 
 try:
     from ._chains import (average as _average, parallelograms as _parallelograms, reflect as _reflect,
@@ -113,14 +114,17 @@ def _shell_body(shell: Shell, major: int = 4) -> bytes:
     return b"".join(out)
 
 
-def _decode_shell(raw: np.ndarray, bounding: np.ndarray, major: int = 4) -> Shell:
-    """The corners and triangles of a SHELL body (spec §9.10), checked."""
+def _decode_shell(raw: np.ndarray, bounding: np.ndarray, major: int = 4, charge: Charge | None = None) -> Shell:
+    """The corners and triangles of a SHELL body (spec §9.10), checked; ``charge`` takes the declared
+    counts before anything of their size is allocated (spec §12.4)."""
     (v, t, u), pos = varint.decode(raw, 3, "shell counts")
     v, t, u = int(v), int(t), int(u)
     left = len(raw) - pos
     if not (3 <= v <= 8 * left and 1 <= t <= left // 3 and u <= t):
         raise FormatError(f"shell group: {v} corners, {t} triangles, {u} free: outside the ranges the body "
                           f"allows", code="BAD_GROUP_STRUCTURE")
+    if charge is not None:
+        charge(vertices=v, triangles=t)
     explicit, pos = varint.bit_field(raw, pos, v, "shell group: the body", "corner flags")
     e = int(explicit.sum())
     # Every field is read before any value is checked (spec/pln.md §9.10): a body that ends inside one
@@ -576,9 +580,10 @@ def _tree_fields(shell: Shell, major: int = 4):
     return out, coordinates
 
 
-def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: bool = False, major: int = 4) -> Shell:
+def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: bool = False, major: int = 4,
+                       charge: Charge | None = None) -> Shell:
     """The corners and triangles of a SHELL_TREE body (spec §9.11), or with ``parallelogram`` of a
-    SHELL_TREE_PARALLELOGRAM body (§9.12), checked."""
+    SHELL_TREE_PARALLELOGRAM body (§9.12), checked; ``charge`` as :func:`_decode_shell`'s."""
     def bad(reason: str) -> FormatError:
         return FormatError(f"shell tree: {reason}", code="BAD_GROUP_STRUCTURE")
     (v, t), pos = varint.decode(raw, 2, "shell tree counts")
@@ -586,6 +591,8 @@ def _decode_shell_tree(raw: np.ndarray, bounding: np.ndarray, parallelogram: boo
     left = len(raw) - pos
     if not (3 <= v <= 8 * left and 1 <= t <= left // 3):
         raise bad(f"{v} corners, {t} triangles: outside the ranges the body allows")
+    if charge is not None:
+        charge(vertices=v, triangles=t)
     links, used = varint.decode(raw[pos:], t, "shell tree links")
     pos += used
     codes, used = varint.decode(raw[pos:], t + 2 * int((links == 0).sum()), "shell tree corner codes")

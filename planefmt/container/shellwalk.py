@@ -21,6 +21,7 @@ import numpy as np
 from ..errors import FormatError, LimitError
 from ..model import GroupKind, Shell
 from . import schema, varint
+from .budget import Charge
 from .shellfields import (_predict, _shell_body, grid_bytes, _shell_tree_body, _tree_parents, _tree_predictors, code_stream,
                           parallelograms, predict_averaged, predict_reflected, same_tree, surface_fields, tree_rest)
 
@@ -220,15 +221,18 @@ def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray,
 
 
 def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, kind: GroupKind = GroupKind.SHELL_WALK,
-                      major: int = 4) -> Shell:
+                      major: int = 4, charge: Charge | None = None) -> Shell:
     """The corners and triangles of a ``kind`` body (a shell walk kind: SHELL_WALK, spec §9.13;
-    SHELL_WALK_MULTI, §9.14; SHELL_WALK_REFLECT, §9.16; SHELL_WALK_LATER, §9.17), checked."""
+    SHELL_WALK_MULTI, §9.14; SHELL_WALK_REFLECT, §9.16; SHELL_WALK_LATER, §9.17), checked; ``charge``
+    takes the declared counts before anything of their size is allocated (spec §12.4)."""
     (v, t, x), pos = varint.decode(raw, 3, "shell walk counts")
     v, t, x = int(v), int(t), int(x)
     left = len(raw) - pos
     if not (3 <= v <= 8 * left and 1 <= t <= left // 2 and x <= left):
         raise FormatError(f"shell walk: {v} corners, {t} triangles, {x} escapes: outside the ranges the body "
                           f"allows", code="BAD_GROUP_STRUCTURE")
+    if charge is not None:
+        charge(vertices=v, triangles=t)
     symbols, used = varint.decode(raw[pos:], t, "shell walk symbols")
     pos += used
     escapes, used = varint.decode(raw[pos:], x, "shell walk escapes")
