@@ -27,7 +27,7 @@ class Outcome:
     reader: str
     kind: str  # "result", "error" (the reader's own, with a code), "crash", "cap"
     detail: str  # result counts, error code, or what went wrong
-    seconds: float
+    seconds: float  # Python: decode_mesh's own; node: the process's (its start ~0.2 s)
     rss_mb: float  # peak RSS of the child above the interpreter's own at start
 
 
@@ -72,7 +72,7 @@ def _judge(reader: str, code: int, out: str, err: str, seconds: float, rss: floa
         report = None
     base = 0.0
     if isinstance(report, dict) and "baseline_mb" in report:
-        base = report["baseline_mb"]
+        base, seconds = report["baseline_mb"], report["seconds"]
     if code < 0 or code in (137, 152):  # a signal: SIGXCPU, SIGKILL, SIGSEGV ...
         return Outcome(reader, "cap" if code in (-24, -9) else "crash", f"signal {-code}: {err[-200:]}", seconds, rss - base)
     if isinstance(report, dict) and "error" in report and code in (1, 2) and "foreign" not in report:
@@ -94,11 +94,14 @@ def _js_counts(report: dict) -> str:
 
 def _python_side(path: str) -> int:
     """decode_mesh on ``path``; one JSON line: counts, or the PlnError's code, or a foreign exception."""
-    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     import planefmt
     from planefmt.codec import decode_mesh
+    base = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # the interpreter with planefmt loaded
+
+    t0 = time.perf_counter()
 
     def line(**fields) -> None:
+        fields["seconds"] = time.perf_counter() - t0  # the decode's, without the interpreter's start
         fields["baseline_mb"] = base
         fields["rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
         print(json.dumps(fields), flush=True)
