@@ -2015,3 +2015,72 @@ def _():
     r = _reflect_residuals(f)
     r[0, -1] += 2
     return later_file(TREE_BOX, {**f, "coordinates": varint.encode(varint.zigzag(r).reshape(-1))})
+
+
+# -- what a reader written from the text alone found undecided (issue 49) ---------------------------
+
+def _units_byte(version: tuple[int, int], units: int) -> bytes:
+    layout = cube(PHDR=header(version=version))
+    phdr = bytearray(layout[0][1])
+    phdr[8] = units  # A.1: units at offset 8 of the 108-byte header of versions 1.0 and 2.0
+    return file([(schema.PHDR, bytes(phdr))] + layout[1:])
+
+
+@case("xv1_units_up_axis", "BAD_HEADER_VALUE", "version 1.0 cube whose units byte is 0x21: metre with version 5's "
+      "up axis Z in bits 4-5, which versions 1.0 to 4.2 do not have: the unit alone, 33, above 7 (spec A.1, A.5)")
+def _():
+    return _units_byte((1, 0), 0x21)
+
+
+@case("xv2_units_up_axis", "BAD_HEADER_VALUE", "version 2.0 cube whose units byte is 0x11: metre with version 5's "
+      "up axis Y in bits 4-5, a unit of 17 before version 5 (spec A.1, A.2, A.5)")
+def _():
+    return _units_byte((2, 0), 0x11)
+
+
+@case("xv4_skipped_kind_no_refs", "BAD_GROUP_STRUCTURE", "version 4.3 (a newer minor version) with a group of "
+      "kind 14 without references after the cube's convex group: before version 5 m = 0 is an error in every "
+      "kind, one the reader skips too (spec A.5, §9.2)")
+def _():
+    skipped = schema.GroupHead3.build(dict(index=1, object=0, kind=14, compression=0, raw_size=1, body=b"\x00"))
+    convex = records.encode_group(PartGroup(0, 0, 0, np.arange(6, dtype=np.uint32), np.zeros(6, bool)), False, 4)
+    layout = cube(PHDR=header(version=(4, 3), coding=Coding.FLOAT64),
+                  OBJT=records.encode_object(ObjectRecord(0, "cube", None, None), 4),
+                  PLNS=records.encode_planes(0, CUBE, dataclasses.replace(V4_F64, version=(4, 3)), False),
+                  GRUP=convex)
+    return frame(finish(layout + [(schema.GRUP, skipped)], True, 4))
+
+
+def _few_planes_walk() -> dict[str, bytes]:
+    """TREE_MIXED's shell walk with its last two triangles free: named corner 5 is then on two face planes."""
+    f = walk_fields(TREE_MIXED, 0)
+    return {**f, "faces": f["faces"][:-2] + b"\x01\x00"}
+
+
+@case("xv41_few_planes_cut", "BAD_PAYLOAD", "version 4.1 shell walk of the mixed cube whose last two triangles "
+      "are free, leaving named corner 5 on two face planes, and whose body ends inside its coordinates: the named "
+      "corners are checked with the rest, once every field is read (spec §9.11, §9.13, §12.1)")
+def _():
+    f = _few_planes_walk()
+    return walk_file({**f, "coordinates": f["coordinates"][:-1]})
+
+
+@case("xv41_few_planes", "BAD_GROUP_STRUCTURE", "xv41_few_planes_cut with its coordinates whole: named corner 5 "
+      "on two face planes")
+def _():
+    return walk_file(_few_planes_walk())
+
+
+@case("xv41_mode_bits_cut", "BAD_PAYLOAD", "version 4.1 shell walk of the all-explicit cube whose coordinate mode "
+      "is 4 and whose body ends inside its coordinates: the mode's bits 2-7 are checked with the rest, once every "
+      "field is read (spec §9.13, §12.1)")
+def _():
+    f = walk_fields(TREE_BOX, 0, mode=b"\x04")
+    return walk_file({**f, "coordinates": f["coordinates"][:-1]})
+
+
+@case("xmeta_after_index", "CHUNK_ORDER", "mETA up_axis = Z between the iNDX and the PEND: a chunk after iNDX, "
+      "checked by its place before its payload (spec §4.3, §10.3, §12.1), not BAD_METADATA")
+def _():
+    layout = finish(cube())
+    return frame(layout[:-1] + [(schema.META, b"up_axis\x00Z"), layout[-1]])

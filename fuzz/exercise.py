@@ -8,7 +8,7 @@ import io
 import planefmt
 from planefmt.container.chunks import Limits
 from planefmt.container.salvage import salvage
-from planefmt.codec import validate
+from planefmt.codec import decode_mesh, validate
 
 #: Small caps: a fuzzer input is at most a few kB, so anything bigger is hostile.
 LIMITS = Limits(max_chunk_length=1 << 20, max_raw_size=1 << 22, max_planes=1 << 16,
@@ -33,3 +33,8 @@ def exercise(data: bytes) -> None:
     if groups:
         # validate reports every PlnError as a finding: anything it raises is a crash.
         validate(io.BytesIO(data), geometry=True, limits=LIMITS)
+        # the geometry of every kind, copies and transforms included, as a user's decode reaches it
+        try:
+            decode_mesh(io.BytesIO(data))
+        except planefmt.PlnError:
+            pass

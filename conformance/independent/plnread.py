@@ -1663,14 +1663,14 @@ class Reader:
             if face >= 0:
                 for k in corners:
                     around[k].add(face)
-        named = []
-        for k in range(v):
-            if k in is_explicit:
-                continue
-            planes = sorted(around[k])
-            if len(planes) < 3:  # before the picks are read (SPEC_NOTES 18, 32)
-                raise PlnError("BAD_GROUP_STRUCTURE", "named corner %d on face planes %r" % (k, planes))
-            named.append((k, planes))
+        named = [(k, sorted(around[k])) for k in range(v) if k not in is_explicit]
+
+        def few_planes():
+            # with the rest, once every field is read (pln.md §9.11, §9.13 since issue 49;
+            # SPEC_NOTES 18, 32 had it before the picks)
+            for k, planes in named:
+                if len(planes) < 3:
+                    raise PlnError("BAD_GROUP_STRUCTURE", "named corner %d on face planes %r" % (k, planes))
         # the picks are read here and checked with the rest, after the grid
         # and the coordinates are read (pln.md §9.11, §9.13: "reads the
         # picks, the grid and the coordinates, and checks the rest")
@@ -1678,6 +1678,8 @@ class Reader:
                  for k, planes in named if len(planes) > 3}
         origin = step = None
         grid = []
+        if not explicit:
+            few_planes()
         if explicit:
             e = len(explicit)
             mode = c.u8("mode") if walk else 0
@@ -1700,6 +1702,7 @@ class Reader:
                         values.append(values[-1] + c.varint("a gap of the %s table" % axis) + 1)
                     tables.append(values)
             residuals = [[unzigzag(c.varint("a coordinate residual")) for _ in range(e)] for _ in range(3)]
+            few_planes()
             if c.remaining():
                 raise PlnError("BAD_GROUP_STRUCTURE", "%d bytes after the coordinates" % c.remaining())
             if not all(math.isfinite(x) for x in origin) or not (math.isfinite(step) and step > 0):

@@ -675,18 +675,10 @@ def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, 
     vertex_planes = np.zeros((0, 3), dtype=np.int64)
     if len(named):
         refs, start, runs = incident_planes(tri, face, v)
-        if (runs[named] < 3).any():
-            raise bad("a named corner is on fewer than three face planes")
         wide = named[runs[named] > 3]
         picks, used = varint.decode(raw[pos:], 3 * len(wide), "shell tree corner planes")
         pos += used
         picks = picks.reshape(-1, 3)
-        if len(wide) and ((picks[:, 0] >= picks[:, 1]) | (picks[:, 1] >= picks[:, 2])
-                          | (picks[:, 2] >= runs[wide].astype(np.uint64))).any():
-            raise bad("a corner's planes are not three of its face planes in ascending order")
-        pick = np.tile(np.arange(3, dtype=np.int64), (len(named), 1))
-        pick[runs[named] > 3] = picks.astype(np.int64)
-        vertex_planes = refs[start[named, None] + pick]
     e = int(explicit.sum())
     origin, step, grid = np.zeros(3), 0.0, np.zeros((0, 3), dtype=np.int64)
     if e:
@@ -705,6 +697,18 @@ def tree_rest(raw: np.ndarray, pos: int, bounding: np.ndarray, tri: np.ndarray, 
         pos += used
         if mode & ~schema.SHELL_WALK_MODES:
             raise bad(f"coordinate mode {mode} has a bit above 1 set")
+    # §9.11, §9.13: the named corners' planes and picks are values of "the rest", checked once every
+    # field is read, so that a body cut short is BAD_PAYLOAD whatever they hold.
+    if len(named):
+        if (runs[named] < 3).any():
+            raise bad("a named corner is on fewer than three face planes")
+        if len(wide) and ((picks[:, 0] >= picks[:, 1]) | (picks[:, 1] >= picks[:, 2])
+                          | (picks[:, 2] >= runs[wide].astype(np.uint64))).any():
+            raise bad("a corner's planes are not three of its face planes in ascending order")
+        pick = np.tile(np.arange(3, dtype=np.int64), (len(named), 1))
+        pick[runs[named] > 3] = picks.astype(np.int64)
+        vertex_planes = refs[start[named, None] + pick]
+    if e:
         steps = varint.unzigzag(deltas).reshape(3, -1).T
         if np.abs(steps).max(initial=0) > MAX_GRID:
             raise bad("a grid residual is beyond 2^52")
