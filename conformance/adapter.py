@@ -116,7 +116,8 @@ def _geometry(groups: list[planefmt.PartGroup], objects: list[planefmt.ObjectRec
 
 def describe(path: str) -> dict:
     """The contract's JSON for a valid file; raises ``planefmt.PlnError`` for an invalid one."""
-    planes, groups, colours = [], [], []
+    planes, groups = [], []
+    colours: dict[int, dict] = {}  # by group, in the order of its first cOLR: the last applies (§10.1)
     with planefmt.open(path) as r:
         for record in r:
             if isinstance(record, planefmt.PlaneBlock):
@@ -124,7 +125,7 @@ def describe(path: str) -> dict:
             elif isinstance(record, planefmt.PartGroup):
                 groups.append(record)
             elif isinstance(record, planefmt.Colours):
-                colours.append({"group": record.group, "rgba": record.rgba.tolist()})
+                colours[record.group] = {"group": record.group, "rgba": record.rgba.tolist()}
         if r.index_offset is not None:
             # Random access must work too: every group through the index.
             for k in range(r.group_count):
@@ -136,7 +137,7 @@ def describe(path: str) -> dict:
                          "transform": None if o.transform is None else o.transform.ravel().tolist()}
                         for o in r.objects],
             "groups": [_group(g) for g in groups],
-            "colours": colours,
+            "colours": list(colours.values()),
             "metadata": {**r.metadata, **({UP_AXIS: r.header.up_axis} if r.header.up_axis else {})},
             "findings": sorted({code for code, _ in r.findings}),
             "geometry": _geometry(groups, r.objects, r.header.version),

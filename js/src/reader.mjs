@@ -18,7 +18,8 @@ const KNOWN = new Set(['PHDR', 'OBJT', 'PLNS', 'GRUP', 'cOLR', 'iNDX', 'mETA', '
  * @property {Float64Array} planes (ν, φ, h) triplets
  * @property {import('./objects.mjs').PlnObject[]} objects
  * @property {import('./groups.mjs').Group[]} groups in file order
- * @property {{group: number, rgba: Uint8Array}[]} colours every cOLR in file order
+ * @property {{group: number, rgba: Uint8Array}[]} colours the colours of each coloured group, in the order of its
+ *   first cOLR; a later cOLR of the same group replaces the earlier one (§10.1: the last applies)
  * @property {Record<string, string>} metadata every mETA chunk (a version 5 header's up axis is in header.up_axis)
  * @property {Set<string>} findings §12.3 codes
  * @property {Budget} budget the output charged so far (§12.4): the declared counts; a decoder adds the rest
@@ -47,6 +48,8 @@ export function readContainer(bytes, options = {}) {
   const groups = [];
   /** @type {Container['colours']} */
   const colours = [];
+  /** where each group's colours are in `colours` @type {Map<number, number>} */
+  const colourAt = new Map();
   /** @type {Record<string, string>} */
   const metadata = Object.create(null);
   const findings = new Set();
@@ -95,7 +98,11 @@ export function readContainer(bytes, options = {}) {
         groups.push(g);
         objects[g.object].groups.push(g);
       } else if (type === 'cOLR') {
-        colours.push(readColours(payload, groups, h.version[0]));
+        // replaced, not kept beside: every cOLR of one group expanded and listed would let a few
+        // 12-byte chunks of a large group cost memory without bound (fuzz/hostile.py x_colour_expansion)
+        const read = readColours(payload, groups, h.version[0]);
+        const at = colourAt.get(read.group);
+        if (at === undefined) { colourAt.set(read.group, colours.length); colours.push(read); } else colours[at] = read;
       } else if (type === 'mETA') {
         if (listed.length > 0) fail('BAD_METADATA', 'mETA after an OBJT, PLNS or GRUP');
         readMetadata(payload, metadata, h.version[0]);
