@@ -37,7 +37,7 @@ def read(path: str | os.PathLike[str], limits: Limits | None = None) -> tuple[Sc
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
           delta: float | None = None, tau: float | None = None, compress: bool = True,
           compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 5,
-          keep_corners: bool = False) -> list[str]:
+          keep_corners: bool = False, keep_triangles: bool = False) -> list[str]:
     """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane.
 
     Returns what the encoder gave up (its :class:`PlnWarning` lines): with
@@ -50,7 +50,7 @@ def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6
         warnings.simplefilter("always", PlnWarning)
         header = codec.encode_scene(scene, path, tolerance=tolerance, bits=bits, coding=coding, delta=delta,
                                     tau=tau, compress=compress, compact=compact, watertight=watertight, major=major,
-                                    scheme=scheme, keep_corners=keep_corners)
+                                    scheme=scheme, keep_corners=keep_corners, keep_triangles=keep_triangles)
     notes = [f"{dropped} zero-area triangle{'s' if dropped > 1 else ''} (no plane to store)"] if dropped else []
     instancing = instancing_note(scene)
     if instancing:

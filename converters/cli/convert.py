@@ -1,6 +1,6 @@
 """``pln convert``: between any two supported formats, .pln on either side.
 
-    pln convert IN OUT [--units cm] [--tolerance T] [--bits N] [--scheme shell|paper] [--allow-open] [--keep-corners]
+    pln convert IN OUT [--units cm] [--tolerance T] [--bits N] [--scheme shell|paper] [--allow-open] [--keep-corners] [--keep-triangles]
         [--lossy --delta D --tau A] [-v] [--force]
     pln convert A B C -d OUTDIR --to glb [--jobs N]
     pln convert meshes/ -d OUTDIR [--resume] [--engine local|dask]   (see batch.py: ledger, limits)
@@ -87,6 +87,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                    help="at a tolerance above 1e-6, keep the corners that carry no shape (inside one plane, or on a "
                         "straight crease between two) and every triangle, which are otherwise dropped: the "
                         "surface is the same either way")
+    g.add_argument("--keep-triangles", action="store_true",
+                   help="decode to the source's own triangles, one to one (every body a shell, every corner kept); "
+                        "by default a convex body is stored as its planes alone and its triangles are made from "
+                        "them, the same surface and topology")
     g.add_argument("--lossy", action="store_true", help="allow the paper's lossy options below")
     g.add_argument("--delta", type=float, help="lossy: drop planes of faces under delta x total area")
     g.add_argument("--tau", type=float, help="lossy: merge neighbour planes whose normals differ < tau radians")
@@ -128,7 +132,7 @@ def _pln_options(args: argparse.Namespace) -> dict:
 
     opts = {"tolerance": args.tolerance, "compress": args.compress, "compact": args.compact,
             "watertight": not args.allow_open, "scheme": args.scheme, "major": args.major,
-            "keep_corners": args.keep_corners}
+            "keep_corners": args.keep_corners, "keep_triangles": args.keep_triangles}
     if args.bits is not None:
         opts["bits"] = args.bits
     if args.coding:

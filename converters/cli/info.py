@@ -13,6 +13,7 @@ import sys
 from collections import Counter
 
 from planefmt import errors
+from planefmt.codec import SHELL_KINDS
 from planefmt.container import reader, salvage
 from planefmt.container.chunks import Limits
 from planefmt.model import GroupKind, Metadata, ObjectRecord, PartGroup, PlaneBlock
@@ -21,6 +22,9 @@ from . import limits
 
 #: Kinds this version of planefmt names; a newer minor version's kind is shown by number.
 KINDS = frozenset(int(k) for k in GroupKind)
+
+#: The names :class:`_Summary` gives shell kinds (spec §9.10 to §9.17), whose triangles are the source's.
+_SHELL_NAMES = frozenset(GroupKind(k).name.lower() for k in SHELL_KINDS)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -103,6 +107,8 @@ def _render_dict(name: str, h, summary: _Summary, chunks: dict, file_bytes: int 
         "file": name,
         "version": f"{h.version[0]}.{h.version[1]}",
         "lossy": h.lossy,
+        # Shells decode the source's triangles one to one; every other kind makes its triangles from planes.
+        "source_triangles": bool(summary.groups) and set(summary.kinds) <= _SHELL_NAMES,
         "coding": h.coding.name.lower(),
         "quantization": None if q is None else {
             "bits_nu": q.bits_nu, "bits_phi": q.bits_phi, "bits_h": q.bits_h,
@@ -153,6 +159,14 @@ def run(args: argparse.Namespace) -> int:
     return 1 if serious else 0
 
 
+def _promise(info: dict) -> str:
+    """What a lossless file keeps of its source (spec §5)."""
+    tol = "its tolerance" if info["tolerance"] is None else f"{info['tolerance']:.3g} of the diagonal"
+    triangles = "the source's triangles one to one" if info["source_triangles"] else \
+        "triangles made from the planes (not the source's)"
+    return f"(surface within {tol}; topology kept once welded by position; {triangles})"
+
+
 def render(info: dict) -> str:
     q = info["quantization"]
     coding = info["coding"] + ("" if q is None else f" (bits nu/phi/h {q['bits_nu']}/{q['bits_phi']}/{q['bits_h']}, "
@@ -163,6 +177,7 @@ def render(info: dict) -> str:
     lines = [
         f"file:        {info['file']}{size}",
         f"version:     {info['version']}   {'lossy' if info['lossy'] else 'lossless'}",
+        *([] if info["lossy"] else [f"             {_promise(info)}"]),
         f"coding:      {coding}",
         f"units:       {info['units']}",
         *([f"metadata:    {', '.join(f'{k}={v}' for k, v in info['metadata'].items())}"] if info["metadata"] else []),

@@ -479,6 +479,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     scale = [float(np.linalg.norm(o.world[:3, :3], 2)) for o in objects]
     diag_src = _diagonal(np.concatenate([transform_points(o.vertices, o.world) for o in objects]))
     convex_error = 0.0
+    convex = False  # convex groups kept, their coding chosen
     candidates: list[tuple[Coding, Quantization | None]] = []
     if any(g.kind == GroupKind.CONVEX for o in objects for g in o.groups):
         parts = [_convex_part(o) for o in objects if any(g.kind == GroupKind.CONVEX for g in o.groups)]
@@ -491,6 +492,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
         else:
             candidates = [(c.coding, c.quantization)]
             convex_error = c.error_bound * c.diagonal
+            convex = True
     if not candidates:
         table = np.concatenate([o.triplets for o in objects])
         radius = max(float(np.linalg.norm(o.vertices, axis=1).max()) for o in objects)
@@ -548,10 +550,12 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
             error = plane_error(cod, q, tolerance, diag_src)
             meshes = [_concatenate(_decode_object(rt[a:b], o, error))
                       for o, a, b in zip(built, offsets[:-1], offsets[1:])]
-            # Shells alone keep the source's topology by construction: only volume or area can move, and
-            # at a lossy tolerance an open shell's area as far as its corners moved.
+            # Shells alone keep the source's indexed topology by construction: corners may still land on one
+            # point, and volume or area move as far as the corners did, at every tolerance (a scene of tiny
+            # open meshes: a move within 1e-6 of the scene's diagonal changes a mesh's area by far more
+            # than 1e-6 of it).
             problems = [structure_problem(m, o, band * diag_src / sc, topology=not shells_only,
-                                          moved=mv if shells_only and band > 0 else None)
+                                          moved=mv if shells_only else None, joins=True)
                         for m, o, sc, mv in zip(meshes, built, scale, moved)
                         for shells_only in [all(g.kind in SHELL_KINDS for g in o.groups)]]
             problems = [p for p in problems if p is not None]
@@ -580,6 +584,9 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
             # table grows (not_convex.obj at 2e-5: 44 corners from 24 bits on, the best file at 24).
             break
         named_before = named
+    if best is None and convex:
+        # Convex groups whose corners no longer meet the bodies they touched: every body a shell.
+        return _choose_shells([_as_shells(o) for o in objects], tolerance, coding, bits, size)
     if best is None:
         raise GeometryError(f"no coding keeps the source's structure with corners within the tolerance "
                             f"{tolerance:g}: {why}", code="TOLERANCE_NOT_MET")

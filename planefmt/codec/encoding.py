@@ -12,6 +12,7 @@ import warnings
 import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import BinaryIO
 
 import numpy as np
@@ -71,7 +72,7 @@ class Encoded:
 def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1e-6,
                 coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
                 delta: float | None = None, tau: float | None = None, watertight: bool = True,
-                scheme: str = "shell", keep_corners: bool = False) -> Encoded:
+                scheme: str = "shell", keep_corners: bool = False, keep_triangles: bool = False) -> Encoded:
     """Encode a triangle mesh (model units, counter-clockwise from outside) as planes.
 
     ``tolerance``: the two-sided Hausdorff distance allowed between decoded
@@ -102,15 +103,23 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
     has fewer corners and triangles than the source (box.STL: 1,060 corners of
     4,455). ``keep_corners=True`` keeps every corner and triangle.
 
+    What every encode keeps (spec §5, "lossless" at the default tolerance): the surface within the
+    tolerance, and the source's topology as a reader that welds vertices by position sees it (closed
+    bodies closed, Euler characteristic, bodies that touch still touching, no two corners joined).
+    The triangles themselves are kept where the bodies are shells; a convex body of at most
+    :data:`planefmt.codec.strategies.CONVEX_MAX_PLANES` planes is its planes, its triangles made from them on decoding.
+    ``keep_triangles=True`` makes every body a shell and keeps every corner: the decoded triangles
+    are then the source's (those with three distinct corners) one to one.
+
     Raises ``GeometryError``: ``DEGENERATE_GEOMETRY`` for malformed input,
     ``TOLERANCE_NOT_MET`` when no coding meets the tolerance and keeps the
     source's structure.
     """
     forced = coding is not None or bits is not None
 
-    def prepare(_: int, splitters: tuple[Splitter, ...] = STRATEGIES) -> _Object:
+    def prepare(_: int, splitters: tuple[Splitter, ...] = STRATEGIES, tolerance: float = tolerance) -> _Object:
         return _prepare(vertices, faces, np.eye(4), tolerance, delta, tau, diagonal=None if forced else 0.0,
-                        splitters=splitters, scheme=scheme, keep_corners=keep_corners)
+                        splitters=splitters, scheme=scheme, keep_corners=keep_corners, keep_triangles=keep_triangles)
 
     def size(objects: list[_Object], choice: _Choice, brotli: bool = True) -> int:
         buf = io.BytesIO()
@@ -119,7 +128,10 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
                scheme == "shell", False, brotli=brotli)
         return len(buf.getvalue())
 
-    (obj,), choice = _encode_objects(prepare, 1, tolerance, coding, bits, watertight, size, scheme)
+    def encode(tol: float) -> tuple[list[_Object], _Choice]:
+        return _encode_objects(partial(prepare, tolerance=tol), 1, tol, coding, bits, watertight, size, scheme)
+
+    (obj,), choice = _or_tighter(encode, tolerance, forced)
     return Encoded(triplets=obj.triplets, groups=obj.groups, coding=choice.coding,
                    quantization=choice.quantization, bbox=choice.bbox, tolerance=float(tolerance),
                    error_bound=choice.error_bound, lossy=choice.lossy, mesh=choice.meshes[0],
@@ -130,7 +142,7 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
                  coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
                  delta: float | None = None, tau: float | None = None, compress: bool = True,
                  compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 5,
-                 keep_corners: bool = False) -> Header:
+                 keep_corners: bool = False, keep_triangles: bool = False) -> Header:
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
     One object per node, keeping name, parent and transform; each node's
@@ -168,10 +180,11 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     if not meshes:
         raise GeometryError("the scene has no mesh to encode")
 
-    def prepare(k: int, splitters: tuple[Splitter, ...] = STRATEGIES) -> _Object:
+    def prepare(k: int, splitters: tuple[Splitter, ...] = STRATEGIES, tolerance: float = tolerance) -> _Object:
         node = scene.nodes[meshes[k]]
         return replace(_prepare(node.mesh.vertices, node.mesh.faces, worlds[meshes[k]], tolerance, delta, tau,
-                                node.mesh.face_colours, diagonal, splitters, scheme, keep_corners), name=node.name)
+                                node.mesh.face_colours, diagonal, splitters, scheme, keep_corners, keep_triangles),
+                       name=node.name)
 
     def size(objects: list[_Object], choice: _Choice, brotli: bool = False) -> int:
         buf = io.BytesIO()
@@ -179,7 +192,11 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
         _write(scene, buf, meshes, objects, choice, tolerance, compress, compact, major, verify=False, brotli=brotli)
         return len(buf.getvalue())
 
-    objects, choice = _encode_objects(prepare, len(meshes), tolerance, coding, bits, watertight, size, scheme)
+    def encode(tol: float) -> tuple[list[_Object], _Choice]:
+        return _encode_objects(partial(prepare, tolerance=tol), len(meshes), tol, coding, bits, watertight, size,
+                               scheme)
+
+    objects, choice = _or_tighter(encode, tolerance, forced)
     header = _write(scene, target, meshes, objects, choice, tolerance, compress, compact, major)
     _warn_past_default_limits(scene, meshes)
     return header
@@ -197,6 +214,34 @@ def _warn_past_default_limits(scene: Scene, meshes: list[int]) -> None:
             f"triangles and {defaults.max_vertices:,} vertices a reader decodes by default: read the file with "
             f"planefmt.Limits(max_triangles=..., max_vertices=...), pln --max-triangles N --max-vertices N, or the "
             f"JavaScript reader's limits: {{triangles: N, vertices: N}}"), stacklevel=3)
+
+
+#: Where a lossy tolerance is not met, tighter ones are tried, each this factor under the last, down to
+#: the lossless tolerance.
+FALLBACK_STEP = math.sqrt(10.0)
+
+
+def _or_tighter(encode: Callable[[float], tuple[list[_Object], _Choice]], tolerance: float,
+                forced: bool) -> tuple[list[_Object], _Choice]:
+    """``encode(tolerance)``, or where that meets no coding, ``encode`` at the first tighter tolerance
+    (steps of :data:`FALLBACK_STEP` down to :data:`LOSSLESS_TOLERANCE`) that does: a looser tolerance
+    never fails where a tighter one works. Its measured bound, under ``tolerance``, is what is
+    recorded, and the requested tolerance as the one asked for."""
+    try:
+        return encode(tolerance)
+    except GeometryError as err:
+        if forced or tolerance <= LOSSLESS_TOLERANCE or err.code != "TOLERANCE_NOT_MET":
+            raise
+        failure = err
+    tighter = tolerance
+    while tighter > LOSSLESS_TOLERANCE:
+        tighter = max(tighter / FALLBACK_STEP, LOSSLESS_TOLERANCE)
+        try:
+            return encode(tighter)
+        except GeometryError as err:
+            if err.code != "TOLERANCE_NOT_MET":
+                raise
+    raise failure
 
 
 def _encode_objects(prepare: Callable[..., _Object], count: int, tolerance: float, coding: Coding | None,

@@ -19,13 +19,13 @@ from ..errors import GeometryError, PlnError, PlnWarning
 from ..geometry.planes import to_triplets, transform_points
 from ..geometry.polygonize import COPLANAR_TOLERANCE, Polygons, edge_adjacency, polygonize, split_planes, weld
 from ..geometry.redundant import drop_redundant_corners
-from ..geometry.repair import mend_cracks
+from ..geometry.repair import mend_cracks, merge_close_vertices
 from ..geometry.topology import euler_characteristic, is_closed_manifold, signed_volume
 from ..geometry.planetable import PlaneTable
 from ..groups.solids import STRATEGIES, Splitter
 from ..model import GroupKind, Mesh, Node
 from .lossy import drop_planes, merge_planes
-from .strategies import BODY_STRATEGIES, Body, GroupSpec, SCHEMES
+from .strategies import BODY_STRATEGIES, Body, GroupSpec, SCHEMES, encode_shell_body
 
 
 #: Closing the cracks of open meshes (:func:`planefmt.geometry.repair.mend_cracks`), as fractions of
@@ -70,7 +70,7 @@ class _Object:
 def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, tolerance: float,
              delta: float | None, tau: float | None, face_colours: np.ndarray | None = None,
              diagonal: float | None = None, splitters: tuple[Splitter, ...] = STRATEGIES,
-             scheme: str = "shell", keep_corners: bool = False) -> _Object:
+             scheme: str = "shell", keep_corners: bool = False, keep_triangles: bool = False) -> _Object:
     """One node's mesh polygonized and encoded body by body.
 
     ``diagonal``: the diagonal of the whole source in world units (0 for a
@@ -81,10 +81,16 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     ``scheme``: ``shell`` (convex groups and one shell group of the other
     bodies) or ``paper`` (convex groups, trees, sealed groups and patches).
     ``keep_corners``: at a lossy tolerance the shell scheme drops the corners that carry no shape
-    (:mod:`planefmt.geometry.redundant`) unless this is set.
+    (:mod:`planefmt.geometry.redundant`) unless this is set. ``keep_triangles``: every body a shell,
+    whose triangles are the source's one to one (a convex group's are made from its planes), and
+    every corner kept.
     """
     if scheme not in SCHEMES:
         raise PlnError(f"unknown scheme {scheme!r}: one of {', '.join(SCHEMES)}", code="UNSUPPORTED_CODING")
+    if keep_triangles and scheme != "shell":
+        raise PlnError("keep_triangles needs the shell scheme: the paper's re-makes every triangle from planes",
+                       code="UNSUPPORTED_CODING")
+    keep_corners = keep_corners or keep_triangles
     if not (math.isfinite(tolerance) and tolerance > 0):
         raise GeometryError(f"tolerance must be a positive fraction of the diagonal, not {tolerance}")
     for name, value in (("delta", delta), ("tau", tau)):
@@ -100,8 +106,16 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
         faces = faces[keep]
         if face_colours is not None:
             face_colours = np.asarray(face_colours, dtype=np.uint8).reshape(-1, 4)[keep]
+        # Points a rounding apart are one point written twice (the touching poles of two spheres made
+        # apart, 6e-17 from each other): no coding keeps them apart, and readers that weld within
+        # float noise (trimesh on load) join them, so the source is taken joined.
+        vertices, faces, kept, mended = merge_close_vertices(
+            vertices, faces, _MERGE * min(tolerance, LOSSLESS_TOLERANCE) * _diagonal(vertices))
+        if face_colours is not None:
+            face_colours = face_colours[kept]
+    else:
+        mended = 0.0
     closed = is_closed_manifold(faces, len(vertices))
-    mended = 0.0
     if not closed and scheme == "paper":
         # An open mesh may be a solid with cracks: closed, it can be stored as one. What it must
         # keep is still an open mesh's (its area): a decoding as patches remains acceptable.
@@ -122,7 +136,8 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     if every and scheme == "shell":
         poly = split_planes(poly, np.unique(colours, axis=0, return_inverse=True)[1].reshape(-1))
     if scheme == "shell" and not keep_corners and tolerance > LOSSLESS_TOLERANCE and not (tau or delta):
-        poly, colours, mended = _dropped_corners(poly, colours, tolerance, every)
+        poly, colours, dropped = _dropped_corners(poly, colours, tolerance, every)
+        mended += dropped
     omega, h, face_plane = poly.omega, poly.h, poly.face_plane
     if tau:
         omega, h, face_plane = merge_planes(poly, tau)
@@ -140,7 +155,7 @@ def _prepare(vertices: np.ndarray, faces: np.ndarray, world: np.ndarray, toleran
     table = PlaneTable(omega, h)
     for b, faces_b in enumerate(np.split(by_body, np.cumsum(np.bincount(body_of_face))[:-1])):
         body = Body(poly, faces_b, face_plane[faces_b], omega, h, tolerance, table, simplified, splitters, every)
-        groups.extend(_encode_body(body, b, SCHEMES[scheme]))
+        groups.extend(_encode_body(body, b, KEEP_TRIANGLES if keep_triangles else SCHEMES[scheme]))
     groups = _one_shell(groups)
     omega, h = (np.array(a) for a in table.arrays())
     # Keep only the planes the groups use, numbered in first-use order.
@@ -193,6 +208,9 @@ def _dropped_corners(poly: Polygons, colours: np.ndarray | None, tolerance: floa
     return again, colours, reduced.offset
 
 
+#: The shell scheme's strategy where the source's triangles are kept: every body a shell.
+KEEP_TRIANGLES = [("shell", encode_shell_body)]
+
 #: Kinds whose groups are closed surfaces when their source body is.
 SOLID_KINDS = frozenset({GroupKind.CONVEX, GroupKind.CELLS, GroupKind.BSP, GroupKind.SEALED})
 
@@ -242,34 +260,67 @@ def structure_kept(mesh: Mesh, obj: _Object, distance: float = 0.0) -> bool:
 
 
 def structure_problem(mesh: Mesh, obj: _Object, distance: float = 0.0, topology: bool = True,
-                      moved: float | None = None) -> str | None:
+                      moved: float | None = None, joins: bool = False) -> str | None:
     """How a decoding fails :func:`structure_kept`, in words; None if it keeps the structure. Without
     ``topology``, closedness and the Euler characteristic are taken as kept (they are by construction).
 
+    Closedness and the Euler characteristic are those of the decoding welded by position, as most
+    readers take it (trimesh on load); without ``topology``, corners that land on one point are the
+    problem. ``joins``: an open source's Euler characteristic, so welded, is kept too (the shell
+    scheme, where bodies that touch must still touch: a convex group's corners are its planes', not
+    those of the shell or group it touched).
+
     ``moved`` (model units): the decoding's triangles are the source's one to one, each corner moved
-    by at most that (a shell at a lossy tolerance). An open surface's area may then change by what
+    by at most that (a shell). An open surface's area may then change by what
     such moves make, at most ``moved`` times half of each triangle's perimeter plus ``2 moved^2``
     per triangle (|d(a x b)| over the corners), beside the rim's allowance: bun_zipper.ply at 2.5e-4
     (draco-11's error) lost 2e-4 of its area to its corners' moves and, held to the rim's 3e-6,
     was encoded with a sixteenth of the budget (93.0 kB at 6e-5 measured, against 71.1 kB at 2.4e-4).
     """
+    welded, merged = _welded(mesh)
+    if not topology and merged:
+        # Shells decode one corner per source corner: corners that land on one point are joined by
+        # every reader that welds by position (trimesh on load), whatever the indices say.
+        return f"{merged} corners decode onto the position of another corner"
+    if joins and not obj.closed and euler_characteristic(welded) != obj.euler:
+        return (f"Euler characteristic {euler_characteristic(welded)} once welded by position, the source's "
+                f"{obj.euler} (bodies that touched come apart, or corners join)")
+    half_perimeters = 0.0
+    if moved is not None:
+        p = obj.vertices[obj.faces]
+        half_perimeters = float(np.linalg.norm(p - p[:, [1, 2, 0]], axis=2).sum()) / 2.0
     if obj.closed:
-        if topology and not is_closed_manifold(mesh.faces, len(mesh.vertices)):
-            sides = np.sort(np.column_stack([mesh.faces.reshape(-1), mesh.faces[:, [1, 2, 0]].reshape(-1)]), axis=1)
+        if topology and not is_closed_manifold(welded, int(welded.max(initial=-1)) + 1):
+            sides = np.sort(np.column_stack([welded.reshape(-1), welded[:, [1, 2, 0]].reshape(-1)]), axis=1)
             _, count = np.unique(sides, axis=0, return_counts=True)
-            return f"a closed source decodes open ({int((count != 2).sum())} edges not on exactly two triangles)"
-        if topology and euler_characteristic(mesh.faces) != obj.euler:
-            return f"Euler characteristic {euler_characteristic(mesh.faces)}, the source's {obj.euler}"
+            return (f"a closed source decodes open once welded by position ({int((count != 2).sum())} edges not "
+                    f"on exactly two triangles)")
+        if topology and euler_characteristic(welded) != obj.euler:
+            return f"Euler characteristic {euler_characteristic(welded)} once welded by position, the source's {obj.euler}"
         allowed = max(STRUCTURE_TOLERANCE * abs(obj.volume), 2.0 * obj.area * distance)
+        if moved is not None:
+            # Each triangle sweeps at most its area times the move, plus the move squared times its
+            # half perimeter and the move cubed, when its corners move by at most ``moved``.
+            allowed = max(allowed, 2.0 * (obj.area * moved + half_perimeters * moved * moved
+                                          + len(obj.faces) * moved ** 3))
         off = abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume)
         return None if off <= allowed else f"volume off by {off / abs(obj.volume):.2g} (relative)"
     off = abs(_area(mesh.vertices, mesh.faces) - obj.area)
     allowed = max(STRUCTURE_TOLERANCE * obj.area, obj.rim * distance)
     if moved is not None:
-        p = obj.vertices[obj.faces]
-        half_perimeters = float(np.linalg.norm(p - p[:, [1, 2, 0]], axis=2).sum()) / 2.0
         allowed = max(allowed, moved * half_perimeters + 2.0 * len(obj.faces) * moved * moved)
     return None if off <= allowed else f"area off by {off / obj.area:.2g} (relative)"
+
+
+def _welded(mesh: Mesh) -> tuple[np.ndarray, int]:
+    """``mesh``'s faces over its used vertices welded by position (numbered 0..), and how many used
+    vertices that merged into another."""
+    faces = np.asarray(mesh.faces, dtype=np.int64)
+    used = np.unique(faces)
+    positions, index = np.unique(np.asarray(mesh.vertices)[used], axis=0, return_inverse=True)
+    lookup = np.zeros(len(mesh.vertices), dtype=np.int64)
+    lookup[used] = index.reshape(-1)
+    return lookup[faces], len(used) - len(positions)
 
 
 def _bodies(poly: Polygons) -> np.ndarray:
