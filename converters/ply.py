@@ -35,6 +35,7 @@ from planefmt.errors import ConversionError
 from planefmt.model import Scene, Units
 
 from .assemble import flattened, float32_shift
+from .dropped import PLY_ELEMENT
 from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, scene_from_trimesh, write_flat
 
@@ -44,7 +45,7 @@ def sniff(head: bytes, size: int) -> bool:
     return head.startswith((b"ply\n", b"ply\r\n", b"ply\r"))
 
 
-#: Properties the reader keeps or trimesh already reports (normals, UVs, colours).
+#: Properties the reader keeps or trimesh already reports (normals, texture coordinates, colours).
 _KNOWN = {
     "vertex": {"x", "y", "z", "nx", "ny", "nz", "s", "t", "u", "v", "texture_u", "texture_v",
                "red", "green", "blue", "alpha"},
@@ -150,7 +151,7 @@ def _unused_properties(path: str | os.PathLike[str]) -> list[str]:
     notes = []
     for element, properties in elements.items():
         if element not in _KNOWN:
-            notes.append(f"PLY element {element}")
+            notes.append(f"{PLY_ELEMENT} {element}")
             continue
         extra = [name for name in properties if name not in _KNOWN[element]]
         if extra:
