@@ -3,8 +3,11 @@
 Reading keeps trimesh's scene graph: every node (with or without a mesh)
 with its name, parent and local matrix. trimesh splits a mesh of several
 primitives into one child node per primitive. glTF's unit is the metre.
-A material's plain base colour becomes the face colour; textures, UVs,
-normals and other material properties are reported as dropped. The scene
+A material's plain base colour becomes the face colour; the rest is
+reported as dropped, in :mod:`.dropped`'s words: texture coordinates, normals, tangents, other
+material properties, textures (a material using an image), skins, animations, morph targets, cameras
+and lights (read from the file's JSON: trimesh drops them without a trace). Draco-compressed
+primitives (``KHR_draco_mesh_compression``) are decoded by trimesh through DracoPy. The scene
 is Y-up, as glTF says every file is.
 
 Writing keeps node names (repeated names too), hierarchy, transforms and
@@ -32,6 +35,8 @@ from planefmt.model import Scene, Units
 
 from .assemble import METERS_PER_UNIT, at_float32, float32_shift, in_metres, reoriented
 from .atomic import atomic_paths, write_bytes
+from .dropped import (ANIMATIONS, CAMERAS, LIGHTS, MORPH_TARGETS, SKINS, TANGENTS, TEXTURE_COORDINATES, TEXTURES,
+                      VERTEX_NORMALS, listed)
 from .failures import describe
 from .trimesh_bridge import read_scene, require_trimesh, to_trimesh_scene
 
@@ -74,34 +79,104 @@ def references(path: str | os.PathLike[str]) -> tuple[str, ...]:
 
 def read_glb(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.glb`` file into ``(scene, dropped)``."""
-    return read_scene(path, "glb", "binary glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS,
-                      reversed_siblings=True, primitives=True, unnamed=_unnamed_nodes(path, binary=True))
+    return _read(path, binary=True)
 
 
 def read_gltf(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
     """Read a ``.gltf`` file (and the buffers and images it refers to) into ``(scene, dropped)``."""
-    return read_scene(path, "gltf", "glTF", units=Units.METRE, up_axis=GLTF_UP_AXIS, reversed_siblings=True,
-                      resolver=_uri_resolver(path), primitives=True, unnamed=_unnamed_nodes(path, binary=False))
+    return _read(path, binary=False)
 
 
-def _unnamed_nodes(path: str | os.PathLike[str], binary: bool) -> frozenset[str]:
-    """The names trimesh gives the nodes of ``path`` that have none: node ``i``'s index, ``"i"``,
-    where no earlier node took it (trimesh makes a taken name unique, which is left as it is).
-    Empty where the JSON cannot be read: trimesh's own read then says why."""
+def _read(path: str | os.PathLike[str], binary: bool) -> tuple[Scene, list[str]]:
+    tree = _json(path, binary)
+    _require_draco(tree, os.fspath(path))
+    scene, dropped = read_scene(path, "glb" if binary else "gltf", "binary glTF" if binary else "glTF",
+                                units=Units.METRE, up_axis=GLTF_UP_AXIS, reversed_siblings=True,
+                                resolver=None if binary else _uri_resolver(path), primitives=True,
+                                unnamed=_unnamed_nodes(tree))
+    counts = [note for note in dropped if note[:1].isdigit()]
+    return scene, listed([note for note in dropped if note not in counts] + _dropped_kinds(tree)) + counts
+
+
+def _json(path: str | os.PathLike[str], binary: bool) -> dict[str, Any]:
+    """The file's glTF JSON; empty where it cannot be read (trimesh's own read then says why)."""
     try:
         with open(path, "rb") as handle:
             if binary:
                 head = handle.read(20)
                 if len(head) < 20 or head[:4] != b"glTF" or head[16:20] != b"JSON":
-                    return frozenset()
+                    return {}
                 text = handle.read(int.from_bytes(head[12:16], "little"))
             else:
                 text = handle.read()
-        nodes = json.loads(text).get("nodes", [])
-    except (OSError, ValueError, AttributeError):
-        return frozenset()
+        tree = json.loads(text)
+    except (OSError, ValueError):
+        return {}
+    return tree if isinstance(tree, dict) else {}
+
+
+def _require_draco(tree: dict[str, Any], file: str) -> None:
+    """A file whose primitives are Draco-compressed needs DracoPy: without it trimesh reads zeros and
+    logs why, and the file would read as holding no mesh."""
+    used = tree.get("extensionsUsed")
+    if not isinstance(used, list) or "KHR_draco_mesh_compression" not in used:
+        return
+    try:
+        import DracoPy  # noqa: F401
+    except ImportError as exc:
+        raise ConversionError("the meshes of this file are Draco-compressed (KHR_draco_mesh_compression): reading "
+                              f"them needs DracoPy (pip install DracoPy): {exc}", file=file) from exc
+
+
+def _items(tree: dict[str, Any], key: str) -> list[dict[str, Any]]:
+    found = tree.get(key)
+    return [item for item in found if isinstance(item, dict)] if isinstance(found, list) else []
+
+
+def _dropped_kinds(tree: dict[str, Any]) -> list[str]:
+    """What of the glTF JSON the model has no room for, besides what trimesh's meshes show."""
+    kinds = []
+    primitives = [primitive for mesh in _items(tree, "meshes") for primitive in _items(mesh, "primitives")]
+    attributes = {name for primitive in primitives if isinstance(primitive.get("attributes"), dict)
+                  for name in primitive["attributes"]}
+    if any(name.startswith("TEXCOORD_") for name in attributes):
+        kinds.append(TEXTURE_COORDINATES)
+    if "NORMAL" in attributes:
+        kinds.append(VERTEX_NORMALS)
+    if "TANGENT" in attributes:
+        kinds.append(TANGENTS)
+    if any(primitive.get("targets") for primitive in primitives):
+        kinds.append(MORPH_TARGETS)
+    if _items(tree, "skins"):
+        kinds.append(SKINS)
+    if _items(tree, "animations"):
+        kinds.append(ANIMATIONS)
+    if _items(tree, "cameras"):
+        kinds.append(CAMERAS)
+    extensions = tree.get("extensions")
+    lights = extensions.get("KHR_lights_punctual") if isinstance(extensions, dict) else None
+    if isinstance(lights, dict) and _items(lights, "lights"):
+        kinds.append(LIGHTS)
+    if any(_uses_texture(material) for material in _items(tree, "materials")):
+        kinds.append(TEXTURES)
+    return kinds
+
+
+def _uses_texture(value: Any) -> bool:
+    """Whether a material (or a part of one: pbrMetallicRoughness, an extension) names a texture:
+    every textureInfo is an object under a key ending in ``Texture`` with an ``index``."""
+    if not isinstance(value, dict):
+        return False
+    return any((key.endswith("Texture") and isinstance(item, dict) and "index" in item) or _uses_texture(item)
+               for key, item in value.items())
+
+
+def _unnamed_nodes(tree: dict[str, Any]) -> frozenset[str]:
+    """The names trimesh gives the nodes of ``tree`` that have none: node ``i``'s index, ``"i"``,
+    where no earlier node took it (trimesh makes a taken name unique, which is left as it is)."""
     taken: set[str] = set()
     made: set[str] = set()
+    nodes = tree.get("nodes")
     for i, node in enumerate(nodes if isinstance(nodes, list) else []):
         name = node.get("name") if isinstance(node, dict) else None
         if isinstance(name, str):

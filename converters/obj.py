@@ -1,8 +1,10 @@
 """Wavefront OBJ through trimesh.
 
 Reading keeps each object trimesh separates (by material) as a node;
-polygons are triangulated by trimesh. Normals, UVs and materials are
-reported as dropped. Writing flattens the scene into one mesh in world
+polygons are triangulated by trimesh. Normals, texture coordinates and materials are
+reported as dropped, and textures where a material library names an image (``map_Kd`` and the other
+map statements), present or not. The material libraries and the images present are the files the
+OBJ is made of (:func:`references`). Writing flattens the scene into one mesh in world
 coordinates; OBJ has no face colours. Coordinates are written with 17
 decimals, enough to round-trip float64 at model scales.
 
@@ -17,12 +19,15 @@ that face without a word). A cut at a line break, or inside a number
 from __future__ import annotations
 
 import codecs
+import mmap
 import os
+import re
 from functools import partial
 
 from planefmt.errors import ConversionError
 from planefmt.model import Scene
 
+from .dropped import TEXTURES, listed
 from .trimesh_bridge import read_scene, require_trimesh, write_flat
 
 #: First words of OBJ statements (geometry, grouping, display, free-form).
@@ -64,7 +69,57 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
         raise ConversionError(f"not OBJ text: byte {exc.start} is not UTF-8 text", file=file) from exc
     except OSError as exc:
         raise ConversionError(f"cannot open: {exc.strerror or exc}", file=file) from exc
-    return read_scene(file, "obj", "OBJ")
+    scene, dropped = read_scene(file, "obj", "OBJ")
+    if _material_files(file)[1]:
+        counts = [note for note in dropped if note[:1].isdigit()]
+        dropped = listed([note for note in dropped if note not in counts] + [TEXTURES]) + counts
+    return scene, dropped
+
+
+_MTLLIB = re.compile(rb"^[ \t]*mtllib[ \t]+([^\r\n]*?)[ \t]*\r?$", re.MULTILINE)
+#: MTL statements naming an image: its file name is the last word, after any options.
+_MAP = re.compile(rb"^[ \t]*(?:map_\w+|bump|disp|decal|refl|norm)[ \t]+([^\r\n]*?)[ \t]*\r?$", re.MULTILINE)
+
+
+def _named(folder: str, text: bytes) -> str:
+    return os.path.join(folder, text.decode("utf-8", "replace"))
+
+
+def _material_files(path: str | os.PathLike[str]) -> tuple[list[str], list[str]]:
+    """The material libraries the OBJ at ``path`` names that exist, and the images they name (present
+    or not). A name with spaces is taken whole where that file exists, else word by word."""
+    file = os.fspath(path)
+    folder = os.path.dirname(file)
+    libraries: list[str] = []
+    try:
+        with open(file, "rb") as handle, mmap.mmap(handle.fileno(), 0, access=mmap.ACCESS_READ) as data:
+            for match in _MTLLIB.finditer(data):
+                whole = _named(folder, match.group(1))
+                names = [whole] if os.path.isfile(whole) else [_named(folder, word) for word in match.group(1).split()]
+                libraries += [name for name in names if os.path.isfile(name) and name not in libraries]
+    except (OSError, ValueError):  # unreadable, or empty (mmap of nothing)
+        return [], []
+    images: list[str] = []
+    for library in libraries:
+        try:
+            with open(library, "rb") as handle:
+                text = handle.read()
+        except OSError:
+            continue
+        for match in _MAP.finditer(text):
+            words = match.group(1).split()
+            if words:
+                image = _named(os.path.dirname(library), words[-1])
+                if image not in images:
+                    images.append(image)
+    return libraries, images
+
+
+def references(path: str | os.PathLike[str]) -> tuple[str, ...]:
+    """The files beside the OBJ at ``path`` that its reading opens: its material libraries and the
+    images they name that exist."""
+    libraries, images = _material_files(path)
+    return tuple(libraries + [image for image in images if os.path.isfile(image)])
 
 
 #: The fewest values of the statements a cut can visibly shorten.

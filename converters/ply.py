@@ -7,6 +7,11 @@ into one world-space mesh; binary little-endian by default. trimesh writes
 coordinates as float32, welded after rounding, with no triangle left without
 area (:func:`.assemble.at_float32`).
 
+Triangle strips (a ``tristrips`` element of ``vertex_indices`` lists, -1 ending a strip: the Cyberware
+scans of the Stanford repository) are read as triangles, alternate ones flipped to keep the strip's
+winding, the triangles strips use as joints (two equal corners) dropped; rows of the element are strips
+of their own.
+
 A file that ends before the rows its header declares is a ``TRUNCATED``
 error naming, per element, how many rows are complete (trimesh reads a cut
 ASCII file as a smaller mesh without a word). A binary row is complete when
@@ -24,11 +29,15 @@ import re
 from functools import partial
 from typing import BinaryIO
 
+import numpy as np
+
 from planefmt.errors import ConversionError
-from planefmt.model import Scene
+from planefmt.model import Scene, Units
 
 from .assemble import flattened, float32_shift
-from .trimesh_bridge import read_scene, require_trimesh, write_flat
+from .dropped import PLY_ELEMENT
+from .failures import describe
+from .trimesh_bridge import read_scene, require_trimesh, scene_from_trimesh, write_flat
 
 
 def sniff(head: bytes, size: int) -> bool:
@@ -36,11 +45,12 @@ def sniff(head: bytes, size: int) -> bool:
     return head.startswith((b"ply\n", b"ply\r\n", b"ply\r"))
 
 
-#: Properties the reader keeps or trimesh already reports (normals, UVs, colours).
+#: Properties the reader keeps or trimesh already reports (normals, texture coordinates, colours).
 _KNOWN = {
     "vertex": {"x", "y", "z", "nx", "ny", "nz", "s", "t", "u", "v", "texture_u", "texture_v",
                "red", "green", "blue", "alpha"},
     "face": {"vertex_indices", "vertex_index", "red", "green", "blue", "alpha"},
+    "tristrips": {"vertex_indices"},
 }
 
 
@@ -51,8 +61,78 @@ def read(path: str | os.PathLike[str]) -> tuple[Scene, list[str]]:
         _check_complete(file)
     except OSError as exc:
         raise ConversionError(f"cannot open: {exc.strerror or exc}", file=file) from exc
-    scene, dropped = read_scene(file, "ply", "PLY")
+    elements = _header_elements(file)
+    if elements.get("tristrips") and not elements.get("face"):
+        scene, dropped = _read_strips(file)
+    else:
+        scene, dropped = read_scene(file, "ply", "PLY")
     return scene, sorted(dropped + _unused_properties(file))
+
+
+def _header_elements(file: str) -> dict[str, int]:
+    """The header's elements and their declared row counts (0 where the count is not a number)."""
+    counts: dict[str, int] = {}
+    with open(file, "rb") as handle:
+        for raw in handle:
+            words = raw.decode("ascii", "replace").split()
+            if not words or words[0] == "end_header":
+                break
+            if words[0] == "element" and len(words) > 2:
+                counts[words[1]] = int(words[2]) if words[2].isdigit() else 0
+    return counts
+
+
+def _read_strips(file: str) -> tuple[Scene, list[str]]:
+    """A PLY of triangle strips: trimesh parses the elements (it makes no faces of strips), the strips
+    become triangles here."""
+    tm = require_trimesh("PLY")
+    try:
+        with open(file, "rb") as handle:
+            kwargs = tm.exchange.ply.load_ply(handle)
+        data = kwargs["metadata"]["_ply_raw"]["tristrips"]["data"]
+        rows = data["vertex_indices"]
+        # binary: one structured array of (length, items) rows; ASCII: one array per row
+        rows = list(rows["f1"]) if getattr(rows, "dtype", None) is not None and rows.dtype.names else list(rows)
+        faces = strip_triangles(rows, len(kwargs.get("vertices", ())))
+        kwargs.pop("metadata")
+        mesh = tm.Trimesh(faces=faces, process=False, **kwargs)
+    except ConversionError as exc:
+        raise exc.located(file=file)
+    except MemoryError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input
+        raise ConversionError(f"cannot read as PLY: {describe(exc)}", file=file) from exc
+    loaded = tm.Scene()
+    # named after the file, as trimesh names a file's only mesh: the node is then left unnamed
+    loaded.add_geometry(mesh, node_name=os.path.basename(file), geom_name=os.path.basename(file))
+    scene, dropped = scene_from_trimesh(loaded, Units.UNSPECIFIED, file)
+    if not any(node.mesh is not None for node in scene.nodes):
+        raise ConversionError("no triangle mesh found in this PLY file", file=file)
+    return scene, dropped
+
+
+def strip_triangles(strips: list[np.ndarray], vertices: int) -> np.ndarray:
+    """The triangles of triangle strips, ``(n, 3)``: each strip's triangle ``k`` is its corners
+    ``k, k+1, k+2``, with the first two swapped for odd ``k`` (a strip alternates its winding); -1
+    inside a strip ends it and starts another; triangles with two equal corners (a strip's joints)
+    are dropped. An index outside the ``vertices`` is a ``ConversionError``."""
+    if not strips:
+        return np.zeros((0, 3), dtype=np.int64)
+    parts = [np.asarray(strip, dtype=np.int64).reshape(-1) for strip in strips]
+    # each row is a strip of its own: a -1 between rows
+    flat = np.concatenate([np.append(part, -1) for part in parts])
+    bad = (flat < -1) | (flat >= vertices)
+    if bad.any():
+        raise ConversionError(f"tristrips: vertex index {flat[bad][0]} is outside the {vertices:,} vertices")
+    index = np.arange(len(flat))
+    # where the strip holding each position began: one past the last -1 before it
+    start = np.maximum.accumulate(np.where(flat < 0, index, -1)) + 1
+    corners = np.stack([flat[:-2], flat[1:-1], flat[2:]], axis=1)
+    odd = (index[:-2] - start[:-2]) % 2 == 1
+    corners[odd] = corners[odd][:, [1, 0, 2]]
+    keep = (corners >= 0).all(axis=1)
+    keep &= (corners[:, 0] != corners[:, 1]) & (corners[:, 1] != corners[:, 2]) & (corners[:, 0] != corners[:, 2])
+    return corners[keep]
 
 
 def _unused_properties(path: str | os.PathLike[str]) -> list[str]:
@@ -71,7 +151,7 @@ def _unused_properties(path: str | os.PathLike[str]) -> list[str]:
     notes = []
     for element, properties in elements.items():
         if element not in _KNOWN:
-            notes.append(f"PLY element {element}")
+            notes.append(f"{PLY_ELEMENT} {element}")
             continue
         extra = [name for name in properties if name not in _KNOWN[element]]
         if extra:

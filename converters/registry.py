@@ -96,7 +96,7 @@ BUILTIN: tuple[Format, ...] = (
            "glTF 2.0 JSON with a .bin buffer", gltf.sidecars, gltf.references, gltf.rounding),
     Format("off", (".off",), off.sniff, off.read, off.write, "Object File Format"),
     Format("stl", (".stl",), stl.sniff, stl.read, stl.write, "STL, binary or ASCII", rounding=stl.rounding),
-    Format("obj", (".obj",), obj.sniff, obj.read, obj.write, "Wavefront OBJ"),
+    Format("obj", (".obj",), obj.sniff, obj.read, obj.write, "Wavefront OBJ", references=obj.references),
 )
 
 _registered: list[Format] = []
@@ -203,8 +203,8 @@ def _sniffs(sniff: Sniffer, head: bytes, size: int) -> bool:
 def read(path: str | os.PathLike[str], format: str | None = None, **options: Any) -> tuple[Scene, list[str]]:
     """Read the mesh file at ``path`` into ``(scene, dropped)``.
 
-    ``format`` names the format instead of detecting it; ``options`` go to its reader (.pln: ``limits``). ``dropped`` lists
-    what the file held that the model cannot (UVs, normals, …): a caller
+    ``format`` names the format instead of detecting it; ``options`` go to its reader (.pln: ``limits``).
+    ``dropped`` lists what the file held that the model cannot, in :mod:`.dropped`'s words: a caller
     shows it as one warning.
     """
     file = os.fspath(path)
@@ -266,6 +266,19 @@ def unclaimed_sidecars(path: str | os.PathLike[str], fmt: Format) -> list[str]:
     if fmt.references is not None and os.path.exists(file):
         used = {file_identity(ref) for ref in fmt.references(file)}
     return [sidecar for sidecar in present if file_identity(sidecar) not in used]
+
+
+def input_files(path: str | os.PathLike[str], fmt: Format) -> list[str]:
+    """The files the input at ``path`` is made of: itself, then the existing files it refers to (a
+    ``.gltf``'s buffers and images, an OBJ's material libraries and textures), each file once."""
+    file = os.fspath(path)
+    files, seen = [file], {file_identity(file)}
+    for used in fmt.references(file) if fmt.references else ():
+        key = file_identity(used)
+        if key not in seen and os.path.isfile(used):
+            files.append(used)
+            seen.add(key)
+    return files
 
 
 def file_identity(path: str) -> tuple:

@@ -25,6 +25,8 @@ from planefmt.model import Mesh, Node, Scene, Units
 
 from .assemble import at_float32, build_mesh, flatten, instancing_note
 from .atomic import write_bytes
+from .dropped import (FACE_ATTRIBUTES, MATERIAL_COLOUR_KEPT, MATERIALS, NON_TRIANGLE_GEOMETRY, TEXTURE_COORDINATES,
+                      TEXTURES, VERTEX_ATTRIBUTES, VERTEX_COLOURS, VERTEX_NORMALS, listed)
 from .failures import describe
 
 if TYPE_CHECKING:
@@ -138,8 +140,7 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
                           mesh=mesh))
         index = len(nodes) - 1
         stack.extend((child, name, index) for child in pushed_order(name))
-    # "materials" beside "materials (base colour kept as face colour)" would say the same thing twice
-    notes = sorted(note for note in dropped if not any(other.startswith(f"{note} (") for other in dropped))
+    notes = listed(dropped)
     if degenerate:
         notes.append(f"{degenerate} degenerate faces")
     return Scene(nodes=tuple(nodes), units=units), notes
@@ -149,19 +150,19 @@ def mesh_from_trimesh(geometry: Any, *, what: str | None,
                       file: str | None) -> tuple[Mesh | None, set[str], int]:
     """Convert one trimesh geometry: ``(mesh or None, dropped notes, degenerate faces)``."""
     if not hasattr(geometry, "faces") or len(geometry.faces) == 0:
-        return None, {"non-triangle geometry (points, lines)"}, 0
+        return None, {NON_TRIANGLE_GEOMETRY}, 0
     faces = np.asarray(geometry.faces, dtype=np.int64)
     colours, notes = _face_colours(geometry, faces)
     if "vertex_normals" in geometry._cache:  # trimesh keeps normals read from a file there
-        notes.add("vertex normals")
+        notes.add(VERTEX_NORMALS)
     extra = sorted(key for key in getattr(geometry, "vertex_attributes", {}) if key != "color")
     if extra:
-        notes.add(f"vertex attributes ({', '.join(extra)})")
+        notes.add(f"{VERTEX_ATTRIBUTES} ({', '.join(extra)})")
     # STL's per-face uint16 "attribute" arrives as a face attribute, nearly always zero
     extra = sorted(key for key, value in getattr(geometry, "face_attributes", {}).items()
                    if np.any(np.asarray(value) != 0))
     if extra:
-        notes.add(f"face attributes ({', '.join(extra)})")
+        notes.add(f"{FACE_ATTRIBUTES} ({', '.join(extra)})")
     mesh, degenerate = build_mesh(geometry.vertices, faces, colours, what=what, file=file)
     return mesh, notes, degenerate
 
@@ -181,13 +182,13 @@ def _face_colours(geometry: Any, faces: np.ndarray) -> tuple[np.ndarray | None, 
         corner = np.asarray(visual.vertex_colors, dtype=np.uint8)[faces]
         if (corner == corner[:, :1]).all():
             return corner[:, 0], notes
-        notes.add("vertex colours")
+        notes.add(VERTEX_COLOURS)
         return None, notes
     uv = getattr(visual, "uv", None)
     if uv is not None and len(uv):
-        notes.add("UVs")
+        notes.add(TEXTURE_COORDINATES)
     if "color" in getattr(visual, "vertex_attributes", {}):
-        notes.add("vertex colours")
+        notes.add(VERTEX_COLOURS)
     material = getattr(visual, "material", None)
     if material is None:
         return None, notes
@@ -195,12 +196,12 @@ def _face_colours(geometry: Any, faces: np.ndarray) -> tuple[np.ndarray | None, 
         "image", "baseColorTexture", "normalTexture", "emissiveTexture",
         "metallicRoughnessTexture", "occlusionTexture")]
     if any(texture is not None for texture in textures):
-        notes.add("textures")
+        notes.add(TEXTURES)
     base = getattr(material, "baseColorFactor", None)
     if base is not None and getattr(material, "baseColorTexture", None) is None:
-        notes.add("materials (base colour kept as face colour)")
+        notes.add(MATERIAL_COLOUR_KEPT)
         return np.broadcast_to(np.asarray(base, dtype=np.uint8), (len(faces), 4)).copy(), notes
-    notes.add("materials")
+    notes.add(MATERIALS)
     return None, notes
 
 

@@ -9,8 +9,9 @@ counter-clockwise-outward convention. Attributes are read at their earliest
 time sample (their default when not animated). ``metersPerUnit`` becomes
 :class:`Units` where it matches one; ``upAxis`` becomes the scene's
 ``up_axis`` (coordinates are kept as authored). ``displayColor`` and
-``displayOpacity`` with constant or uniform interpolation become face colours; the rest (UVs, normals, other primvars,
-materials, subdivision schemes: the cage is kept) is reported as dropped.
+``displayOpacity`` with constant or uniform interpolation become face colours; the rest (texture coordinates, normals, other primvars,
+materials, textures, skins, blend shapes, animations, cameras, lights, subdivision schemes: the cage is
+kept) is reported as dropped, in :mod:`.dropped`'s words.
 Prims with purpose guide or proxy, and invisible prims, are skipped.
 
 Writing makes one prim per node: an ``Xform`` (or a ``Mesh`` for a childless
@@ -50,6 +51,9 @@ from planefmt.model import UP_AXES, Mesh, Node, Scene, Units
 
 from .assemble import METERS_PER_UNIT, at_float32, build_mesh, float32_shift, instancing_note, reoriented
 from .atomic import atomic_path
+from .dropped import (ANIMATIONS, ANIMATIONS_FIRST_SAMPLE, CAMERAS, LIGHTS, MATERIALS, MORPH_TARGETS,
+                      NON_MESH_GEOMETRY, PRIMVARS, SKINS, SUBDIVISION_SCHEME, TEXTURE_COORDINATES, TEXTURES,
+                      VERTEX_COLOURS, VERTEX_NORMALS, listed)
 from .failures import describe
 from .polygons import triangulate
 
@@ -133,7 +137,8 @@ class _StageReader:
         others = sorted({str(p.GetTypeName()) for p in prims
                          if p.IsA(UsdGeom.Gprim) and not p.IsA(UsdGeom.Mesh)})
         if others:
-            self.dropped.add(f"non-mesh geometry ({', '.join(others)})")
+            self.dropped.add(f"{NON_MESH_GEOMETRY} ({', '.join(others)})")
+        self.dropped.update(kind for prim in prims for kind in _prim_kinds(prim))
         needed = set()
         for path in meshes:
             while not path.IsAbsoluteRootPath() and path not in needed:
@@ -170,7 +175,7 @@ class _StageReader:
         # has one, unlike metersPerUnit, whose fallback (cm) is not the author's word.
         up = str(self.pxr.UsdGeom.GetStageUpAxis(self.stage))
         units = self._units()
-        notes = sorted(self.dropped)
+        notes = listed(self.dropped)
         if self.degenerate:
             notes.append(f"{self.degenerate} degenerate faces")
         return Scene(nodes=tuple(nodes), units=units, up_axis=up), notes
@@ -223,7 +228,7 @@ class _StageReader:
             return None
         xformable = self.pxr.UsdGeom.Xformable(prim)
         if xformable.TransformMightBeTimeVarying():
-            self.dropped.add("animation (first time sample used)")
+            self.dropped.add(ANIMATIONS_FIRST_SAMPLE)
         matrix, resets = self.xforms.GetLocalTransformation(prim)
         if resets and not parent_path.IsAbsoluteRootPath():
             # resetXformStack: the prim ignores its ancestors' transforms, so
@@ -241,7 +246,7 @@ class _StageReader:
         where = str(prim.GetPath())
         points_attr = usd_mesh.GetPointsAttr()
         if points_attr.GetNumTimeSamples() > 1:
-            self.dropped.add("animation (first time sample used)")
+            self.dropped.add(ANIMATIONS_FIRST_SAMPLE)
         points = _array(points_attr.Get(self.time), np.float64).reshape(-1, 3)
         counts = _array(usd_mesh.GetFaceVertexCountsAttr().Get(self.time), np.int64)
         indices = _array(usd_mesh.GetFaceVertexIndicesAttr().Get(self.time), np.int64)
@@ -294,7 +299,7 @@ class _StageReader:
             return np.repeat(values[:1], faces, axis=0)
         if interpolation == tokens.uniform and len(values) == faces:
             return values
-        self.dropped.add("vertex colours")
+        self.dropped.add(VERTEX_COLOURS)
         return None
 
     def _note_dropped(self, prim: Any, usd_mesh: Any) -> None:
@@ -302,9 +307,9 @@ class _StageReader:
         UsdGeom = self.pxr.UsdGeom
         scheme = usd_mesh.GetSubdivisionSchemeAttr().Get(self.time)
         if scheme != UsdGeom.Tokens.none:
-            self.dropped.add(f"subdivision scheme {scheme} (control cage kept)")
+            self.dropped.add(f"{SUBDIVISION_SCHEME} {scheme} (control cage kept)")
         if usd_mesh.GetNormalsAttr().HasAuthoredValue():
-            self.dropped.add("vertex normals")
+            self.dropped.add(VERTEX_NORMALS)
         others = []
         for primvar in UsdGeom.PrimvarsAPI(prim).GetPrimvarsWithValues():
             name = primvar.GetPrimvarName()
@@ -312,16 +317,36 @@ class _StageReader:
                 continue
             if primvar.GetTypeName().role == "TextureCoordinate" \
                     or str(primvar.GetTypeName()) in ("float2[]", "texCoord2f[]", "texCoord3f[]"):
-                self.dropped.add("UVs")
+                self.dropped.add(TEXTURE_COORDINATES)
             elif name == "normals":
-                self.dropped.add("vertex normals")
+                self.dropped.add(VERTEX_NORMALS)
+            elif name.startswith("skel:"):  # joint indices and weights, the bind transform
+                self.dropped.add(SKINS)
             else:
                 others.append(str(name))
         if others:
-            self.dropped.add(f"primvars ({', '.join(sorted(others))})")
+            self.dropped.add(f"{PRIMVARS} ({', '.join(sorted(others))})")
         binding = prim.GetRelationship("material:binding")
         if (binding and binding.GetTargets()) or UsdGeom.Subset.GetAllGeomSubsets(usd_mesh):
-            self.dropped.add("materials")
+            self.dropped.add(MATERIALS)
+
+
+#: Prim types (UsdSkel, UsdGeom) whose data the model has no room for, by the kind they carry.
+_TYPE_KINDS = {"SkelRoot": SKINS, "Skeleton": SKINS, "SkelAnimation": ANIMATIONS, "BlendShape": MORPH_TARGETS,
+               "Camera": CAMERAS}
+
+
+def _prim_kinds(prim: Any) -> list[str]:
+    """The dropped kinds a prim itself stands for: skins, animations, blend shapes, cameras, lights
+    (UsdLux types all end in ``Light``), textures (a shader reading an image through an asset input)."""
+    kind = str(prim.GetTypeName())
+    found = [_TYPE_KINDS[kind]] if kind in _TYPE_KINDS else []
+    if kind.endswith("Light") or any(str(name).endswith("LightAPI") for name in prim.GetAppliedSchemas()):
+        found.append(LIGHTS)
+    if kind == "Shader" and any(str(attr.GetTypeName()) == "asset" and attr.HasAuthoredValue()
+                                for attr in prim.GetAttributes() if attr.GetName().startswith("inputs:")):
+        found.append(TEXTURES)
+    return found
 
 
 def _array(value: Any, dtype: type) -> np.ndarray:

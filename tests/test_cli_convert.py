@@ -264,7 +264,7 @@ def test_dropped_notes_say_each_thing_once(tmp_path: Path) -> None:
     plain.visual = trimesh.visual.TextureVisuals(
         material=trimesh.visual.material.PBRMaterial(baseColorFactor=[255, 0, 0, 255]))
     _, notes = scene_from_trimesh(trimesh.Scene([textured, plain]), Units.METRE, None)
-    assert notes == ["UVs", "materials (base colour kept as face colour)", "textures"], notes
+    assert notes == ["materials (base colour kept as face colour)", "texture coordinates", "textures"], notes
 
 
 @pytest.mark.parametrize("stem", ["back 1", "modèle", "100%"])

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import logging
 import sys
 import warnings
 
@@ -44,6 +45,27 @@ def quiet_library_warnings() -> None:
     warnings.filterwarnings("ignore", category=RuntimeWarning)
 
 
+#: The root logger's handler :func:`route_library_logs` installed (replaced by each call).
+_log_handler: logging.Handler | None = None
+
+
+def route_library_logs(verbose: bool) -> None:
+    """Send the libraries' log records (trimesh's "failed to process extension ...") to stderr as
+    ``pln: library:`` lines with ``-v``, else nowhere: without a handler Python prints any warning of
+    theirs bare on the user's terminal, beside the one line that says what went wrong."""
+    global _log_handler
+    root = logging.getLogger()
+    if _log_handler is not None:
+        root.removeHandler(_log_handler)
+    if verbose:
+        _log_handler = logging.StreamHandler(sys.stderr)
+        _log_handler.setFormatter(logging.Formatter("pln: library: %(name)s: %(message)s"))
+        _log_handler.setLevel(logging.WARNING)
+    else:
+        _log_handler = logging.NullHandler()
+    root.addHandler(_log_handler)
+
+
 def _hint(exc: Exception, args: argparse.Namespace) -> str:
     """What to try next, for errors a user can do something about."""
     from planefmt.errors import ConversionError
@@ -72,6 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     except SystemExit as exc:
         return EXIT_OK if exc.code in (0, None) else EXIT_BAD_INPUT
     quiet_library_warnings()
+    route_library_logs(getattr(args, "verbose", False))
     try:
         return args.func(args)
     except PlnError as exc:

@@ -32,7 +32,7 @@ from .progress import RunBar
 def run(args: argparse.Namespace, opts: dict) -> int:
     from planefmt_converters import registry
 
-    from .convert import _refuse_conflicts
+    from .convert import _refuse_conflicts, refuse_protected
 
     on_dask = args.engine == "dask" or (args.engine is None and args.scheduler is not None)
     if args.scheduler and not on_dask:
@@ -69,6 +69,7 @@ def run(args: argparse.Namespace, opts: dict) -> int:
                          "salvage": args.salvage, "timeout": args.timeout, "max_memory_mb": args.max_memory,
                          "token": f"{run_id}-{i}"})
 
+    refuse_protected([job["output"] for job in jobs if not remote.is_url(job["output"])], args)
     # Before the ledger is opened: a cluster out of reach stops the run before it began. (Nothing left
     # to convert starts no cluster; the local engine starts its processes on the first job.)
     engine = engines.dask(jobs, args.scheduler, args.jobs) if on_dask and jobs else \

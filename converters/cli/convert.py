@@ -55,7 +55,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
                         "not a terminal")
     p.add_argument("--force", action="store_true",
                    help="replace a file the output writes beside itself (a .gltf's .bin) even when it "
-                        "belongs to another file")
+                        "belongs to another file, and an output file that is write-protected")
     p.add_argument("--salvage", action="store_true",
                    help="a damaged .pln input: convert every intact object and part group, list the losses "
                         "on stderr and exit 1")
@@ -250,6 +250,7 @@ def run(args: argparse.Namespace) -> int:
                 raise _Usage("give IN OUT, or several inputs with -d OUTDIR --to FORMAT", code="CONVERSION_FAILED")
             else:
                 _refuse_conflicts([(args.paths[0], args.paths[1])], args)
+                refuse_protected([args.paths[1]], args)
                 code = _run_single(args.paths[0], args.paths[1], args, opts)
         except PlnError:
             # The error may be what a swallowed KeyboardInterrupt turned into: report the signal.
@@ -295,6 +296,28 @@ def _refuse_conflicts(pairs: list[tuple[str, str]], args: argparse.Namespace) ->
         if unclaimed:
             raise PlnError(f"writing {dst} would replace this file, which {dst} does not use: move it, or "
                            "add --force to replace it", code="OUTPUT_CONFLICT", file=unclaimed[0])
+
+
+def refuse_protected(outputs: list[str], args: argparse.Namespace) -> None:
+    """Before any work: without ``--force``, no output (sidecars included) replaces a write-protected file,
+    as ``cp`` refuses to. The atomic rename would replace it, since it needs only the folder writable."""
+    import stat
+
+    if args.force:
+        return
+    for dst in outputs:
+        if dst == "-":
+            continue
+        fmt = _output_format(dst, args.to)
+        for out in (dst, *(fmt.sidecars(dst) if fmt.sidecars else ())):
+            try:
+                mode = os.stat(out).st_mode
+            except OSError:
+                continue
+            # a file no one may write is protected also from root, whom access() lets write anything
+            if stat.S_ISREG(mode) and (not mode & 0o222 or not os.access(out, os.W_OK)):
+                raise PlnError("this output file is write-protected: make it writable, or add --force to replace "
+                               "it", code="OUTPUT_CONFLICT", file=out)
 
 
 def _output_format(dst: str, to: str | None) -> Format:
@@ -363,7 +386,8 @@ def _summary(src: str, dst: str, src_name: str, dst_name: str, args: argparse.Na
     fmt = registry.get(args.to) if args.to else registry.for_extension(dst, writable=True)
     written = [dst, *(fmt.sidecars(dst) if fmt.sidecars else ())]
     bytes_out = sum(os.path.getsize(path) for path in written if os.path.exists(path))
-    pln_in = (args.from_ or registry.detect(src).name) == "pln"
+    fmt_in = registry.get(args.from_) if args.from_ else registry.detect(src)
+    pln_in = fmt_in.name == "pln"
     error = None
     if fmt.name == "pln" or pln_in:
         try:
@@ -371,7 +395,8 @@ def _summary(src: str, dst: str, src_name: str, dst_name: str, args: argparse.Na
                 error = f.header.error_bound
         except planefmt.PlnError:  # a damaged input, converted with --salvage: no bound to quote
             pass
-    return summary(src_name, dst_name, os.path.getsize(src), bytes_out, error, seconds,
+    bytes_in = sum(os.path.getsize(path) for path in registry.input_files(src, fmt_in))
+    return summary(src_name, dst_name, bytes_in, bytes_out, error, seconds,
                    recorded_in_input=fmt.name != "pln", rounding=rounding)
 
 

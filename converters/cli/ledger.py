@@ -9,7 +9,8 @@ that appends to such a ledger cuts that line off first. A line holds:
     code, message        the error code (planefmt.errors.CODES) and its one-line message, when failed
     size, mtime_ns       the source's identity when it was read: --resume trusts an "ok" only for these
     triangles            the source's triangles
-    bytes_in, bytes_out  the source's and the output's bytes (a .gltf's .bin included)
+    bytes_in, bytes_out  the bytes of every file the source is made of (a .gltf's buffers and images, an OBJ's
+                         materials and textures) and of every file written (a .gltf's .bin)
     error_bound          the error bound the .pln side records, a fraction of the bbox diagonal
     seconds, peak_mb     wall time and peak resident memory (MB) of the conversion
     settings             the options the output depends on (--to, --tolerance...): --resume skips only

@@ -137,6 +137,8 @@ def _convert(job: dict, scratch: str) -> dict:
     facts: dict = {}
     warnings, lost = convert_one(local_src, local_out, job["to"], job["from_"], job["opts"], job["salvage"],
                                  src_name=source, dst_name=output, facts=facts)
+    fmt_in = registry.get(job["from_"]) if job["from_"] else registry.detect(local_src)
+    bytes_in = sum(os.path.getsize(path) for path in registry.input_files(local_src, fmt_in))
     fmt = registry.writer_for(local_out, job["to"])
     written = [*(fmt.sidecars(local_out) if fmt.sidecars else ()), local_out]  # sidecars first: see atomic.py
     written = [path for path in written if os.path.exists(path)]
@@ -156,7 +158,7 @@ def _convert(job: dict, scratch: str) -> dict:
             os.replace(path, target)
     return {"source": source, "output": output, "status": "ok", "code": None, "message": None,
             "warnings": warnings + [f"lost {line}" for line in lost], "lost": bool(lost),
-            "size": size, "mtime_ns": mtime_ns, "triangles": facts.get("triangles"), "bytes_in": size,
+            "size": size, "mtime_ns": mtime_ns, "triangles": facts.get("triangles"), "bytes_in": bytes_in,
             "bytes_out": bytes_out, "error_bound": None if error_bound is None or math.isnan(error_bound)
             else error_bound}
 
