@@ -15,7 +15,7 @@ import pytest
 from planefmt.errors import ConversionError
 from planefmt.model import Mesh, Node, Scene, Units
 from planefmt_converters import registry
-from planefmt_converters.assemble import build_mesh, flatten, reoriented, world_transforms
+from planefmt_converters.assemble import build_mesh, flatten, in_metres, reoriented, world_transforms
 from planefmt_converters.atomic import atomic_paths
 from planefmt_converters.polygons import triangulate
 from planefmt_converters.validators import ValidatorUnavailable, validate_gltf, validate_usd
@@ -123,7 +123,9 @@ def test_round_trip_keeps_geometry(path: Path, suffix: str, out_dir: Path) -> No
     scene, _ = corpus_scene(path)
     target, notes = converted(out_dir, path, suffix)
     again, _ = registry.read(target)
-    # A format with an up axis of its own (glTF: Y) holds the scene turned into it.
+    # glTF is in metres: a source in other units comes back scaled. A format with an up axis of its
+    # own (glTF: Y) holds the scene turned into it.
+    scene = in_metres(scene) if suffix in GLTF_FORMATS else scene
     upright = scene if again.up_axis is None else reoriented(scene, again.up_axis)
     before, after = flatten(upright), flatten(again)
     assert len(after.faces) == len(before.faces)
@@ -145,7 +147,7 @@ def test_scene_formats_keep_nodes(path: Path, suffix: str, out_dir: Path) -> Non
     source, _ = corpus_scene(path)
     target, _ = converted(out_dir, path, suffix)
     again, _ = registry.read(target)
-    scene = reoriented(source, again.up_axis)
+    scene = reoriented(in_metres(source) if suffix in GLTF_FORMATS else source, again.up_axis)
     assert [n.name for n in again.nodes] == [n.name for n in scene.nodes]
     assert [n.parent for n in again.nodes] == [n.parent for n in scene.nodes]
     for node, back in zip(scene.nodes, again.nodes):
@@ -256,9 +258,12 @@ def _coloured_scene() -> Scene:
 
 @pytest.mark.parametrize("suffix", SCENE_FORMATS)
 def test_scene_structure_survives(suffix: str, tmp_path: Path) -> None:
-    scene = _coloured_scene()
-    registry.write(scene, tmp_path / f"s{suffix}")
+    written = _coloured_scene()
+    registry.write(written, tmp_path / f"s{suffix}")
     again, _ = registry.read(tmp_path / f"s{suffix}")
+    # glTF holds the millimetre scene in metres: scaled by 0.001, then rounded to float32
+    scene = in_metres(written) if suffix in GLTF_FORMATS else written
+    exact = suffix not in GLTF_FORMATS
     names = [n.name for n in scene.nodes]
     if suffix in GLTF_FORMATS:
         # the file keeps the repeated name, but trimesh's reader makes names unique
@@ -267,12 +272,13 @@ def test_scene_structure_survives(suffix: str, tmp_path: Path) -> None:
     assert [n.parent for n in again.nodes] == [n.parent for n in scene.nodes]
     for node, back in zip(scene.nodes, again.nodes):
         if node.mesh is not None:
-            assert np.array_equal(corners(back.mesh), corners(node.mesh))
+            expected = corners(node.mesh) if exact else corners(node.mesh).astype(np.float32)
+            assert np.array_equal(corners(back.mesh), expected)
             assert (back.mesh.face_colours is None) == (node.mesh.face_colours is None)
             if node.mesh.face_colours is not None:
                 assert np.array_equal(back.mesh.face_colours, node.mesh.face_colours)
     for a, b in zip(world_transforms(scene), world_transforms(again)):
-        assert np.array_equal(a, b)
+        assert np.array_equal(a, b) if exact else np.allclose(a, b, rtol=0, atol=1e-7 * np.abs(a).max())
     if suffix in USD_FORMATS:
         assert again.units == Units.MILLIMETRE
     else:
