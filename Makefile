@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 OUT    := out
 
-.PHONY: setup browser demo test test-slow mutate bench benchmarks roundtrip clean
+.PHONY: setup browser demo test test-slow fuzz mutate bench benchmarks roundtrip clean
 
 $(STAMP): pyproject.toml planefmt/container/_chains.c planefmt/geometry/_collapse.c js/package-lock.json
 	$(PYTHON) -m venv $(VENV)
@@ -47,6 +47,16 @@ test: $(STAMP) browser
 # at 1e-6 and 1e-4 (each encoding may take PLN_ENCODE_BUDGET seconds, default 600, before its case is skipped)
 test-slow: $(STAMP)
 	$(BIN)/python -m pytest -n auto --dist worksteal -m slow -rs
+
+# a long fuzzing run of the reader (fuzz/README.md); the suite runs a short one. Crash inputs go to
+# fuzz/artifacts/, and belong in fuzz/regressions/ once fixed. FUZZ_SEED=0: a seed from the clock.
+FUZZ_RUNS ?= 200000
+FUZZ_SEED ?= 0
+fuzz: $(STAMP)
+	mkdir -p fuzz/corpus fuzz/artifacts
+	$(BIN)/python fuzz/seeds.py fuzz/corpus
+	$(BIN)/python fuzz/fuzz_pln.py -runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED) -timeout=0 -rss_limit_mb=256 \
+	  -max_len=4096 -artifact_prefix=fuzz/artifacts/ fuzz/corpus
 
 # plants each bug of tools/mutate.py's fixed list in a scratch copy and runs the tests that guard it
 # (5-6 minutes on 2 busy cores); exit 1 if any bug survives

@@ -50,9 +50,7 @@ try:
 except ImportError:  # the bench extra: pip install planefmt[bench]
     DracoPy = None
 
-CORPUS = Path(__file__).resolve().parents[2] / "shared" / "corpus"
-if not CORPUS.is_dir():
-    CORPUS = Path("/work/shared/corpus")
+CORPUS = Path(__file__).resolve().parents[1] / "tests" / "corpus"
 
 
 def best_time(fn, budget: float) -> float:

@@ -39,7 +39,7 @@ from planefmt.geometry.hausdorff import hausdorff
 from planefmt.model import GroupKind
 from planefmt.geometry.polygonize import weld
 
-CORPUS = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "corpus")
+CORPUS = os.path.join(os.path.dirname(__file__), "..", "tests", "corpus")
 TOLERANCE = 1e-6
 #: Budget of the certified Hausdorff measure per mesh (pieces); beyond it the bound is reported
 #: uncertified.

@@ -62,6 +62,7 @@ Usage::
     python bench/compare.py --categories cad,convex       # some categories
     python bench/compare.py --tolerances 1e-6,1e-5 --out -   # print instead of writing
     python bench/compare.py --jobs 2                      # two meshes at a time (times of a loaded machine)
+    python bench/compare.py --corpus ../shared/bench-corpus --out -   # the broader benchmark corpus
 """
 
 from __future__ import annotations
@@ -84,7 +85,11 @@ from importlib import metadata
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-CORPUS = os.path.join(HERE, "..", "..", "shared", "corpus")
+#: The test corpus in the repository (37 meshes, tests/corpus/SOURCES.md); ``--corpus`` names another
+#: folder of the same categories, such as the broader benchmark corpus (bench/bench-corpus-SOURCES.md).
+CORPUS = os.path.join(HERE, "..", "tests", "corpus")
+#: Files beside a mesh that are parts of it (a .gltf's buffers and images), not meshes of their own.
+SIDECARS = (".md", ".bin", ".png", ".jpg", ".jpeg")
 DEFAULT_OUT = os.path.join(HERE, "..", "docs", "benchmarks.md")
 #: Corpus folders and the category each reports under.
 CATEGORIES = {"cad": "CAD", "convex": "convex", "nonconvex_watertight": "non-convex watertight", "open": "open",
@@ -307,13 +312,16 @@ def run_forked(target, args: tuple, timeout: float) -> dict:
     return result
 
 
-def corpus_files(categories: list[str]) -> list[tuple[str, str]]:
+def corpus_files(categories: list[str], corpus: str = CORPUS) -> list[tuple[str, str]]:
+    """``(folder, path)`` of each mesh of the corpus's category folders, sorted; a mesh with sidecar
+    files (the benchmark corpus's .gltf with its buffers and images) sits in a sub-folder of its own."""
     out = []
     for folder in categories:
-        d = os.path.join(CORPUS, folder)
+        d = os.path.join(corpus, folder)
         for name in sorted(os.listdir(d)):
-            if not name.endswith((".md", ".bin")):
-                out.append((folder, os.path.join(d, name)))
+            path = os.path.join(d, name)
+            inner = [os.path.join(path, n) for n in sorted(os.listdir(path))] if os.path.isdir(path) else [path]
+            out += [(folder, p) for p in inner if os.path.isfile(p) and not p.lower().endswith(SIDECARS)]
     return out
 
 
@@ -519,6 +527,8 @@ def main(argv: list[str] | None = None) -> int:
                     help="meshes measured at once (default 1; more load the machine, so times rise)")
     ap.add_argument("--out", default=DEFAULT_OUT, help="markdown file to write, - for stdout")
     ap.add_argument("--note", help="a paragraph on the run's conditions, printed under the machine line")
+    ap.add_argument("--corpus", default=CORPUS,
+                    help="folder of category folders (default: tests/corpus; e.g. ../shared/bench-corpus)")
     args = ap.parse_args(argv)
     folders = args.categories.split(",") if args.categories else list(CATEGORIES)
     unknown = [c for c in folders if c not in CATEGORIES]
@@ -533,7 +543,7 @@ def main(argv: list[str] | None = None) -> int:
     import planefmt.codec  # noqa: F401
     import planefmt.geometry.hausdorff  # noqa: F401
     import planefmt_converters.registry  # noqa: F401
-    files = corpus_files(folders)
+    files = corpus_files(folders, args.corpus)
     if args.jobs == 1:
         rows = [measure_file(folder, path, names, tolerances, args.timeout) for folder, path in files]
     else:

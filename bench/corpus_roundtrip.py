@@ -1,6 +1,6 @@
 """Every corpus file to .pln and back to each output format, checked against its source (issues 5 and 35).
 
-For each file of ``../shared/corpus`` (or the paths given):
+For each file of ``tests/corpus`` (or the paths given):
 
 1. ``pln convert SOURCE x.pln`` (default tolerance 1e-6, the CLI as users run
    it, in a subprocess with ``--timeout`` seconds; with ``--allow-open``, so
@@ -56,7 +56,7 @@ import warnings
 
 import numpy as np
 
-CORPUS = os.path.join(os.path.dirname(__file__), "..", "..", "shared", "corpus")
+CORPUS = os.path.join(os.path.dirname(__file__), "..", "tests", "corpus")
 FORMATS = ("obj", "ply", "stl", "off", "glb", "gltf", "usda", "usdc", "usdz")
 SCENES = ("glb", "gltf", "usda", "usdc", "usdz")
 #: Rounding of float32 outputs, relative to the largest coordinate.

@@ -1,5 +1,5 @@
-"""Where the tests find the shared mesh corpus: ``../shared/corpus`` beside the repository, or
-the folder ``PLN_CORPUS`` names (``.ci/run`` sets it for a clone made elsewhere).
+"""Where the tests find the mesh corpus: ``tests/corpus/`` in the repository (37 public meshes,
+``SOURCES.md`` gives their origins and licences), or the folder ``PLN_CORPUS`` names instead.
 
 The one definition of that path. ``conftest.py`` stops the session before any
 test runs when the corpus is missing or a category of it is empty, so a test
@@ -13,7 +13,7 @@ import os
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-CORPUS = Path(os.environ["PLN_CORPUS"]) if os.environ.get("PLN_CORPUS") else ROOT.parent / "shared" / "corpus"
+CORPUS = Path(os.environ["PLN_CORPUS"]) if os.environ.get("PLN_CORPUS") else ROOT / "tests" / "corpus"
 #: The corpus's folders (``SOURCES.md`` describes them); each must hold at least one mesh.
 CATEGORIES = ("cad", "convex", "gltf_scene", "nonconvex_watertight", "open", "smooth_dense", "usd")
 #: Files that are parts of another file (a .gltf's buffer), not meshes of their own.
@@ -34,7 +34,7 @@ def ids(paths: list[Path]) -> list[str]:
 def problem() -> str | None:
     """Why the corpus cannot be used, or None."""
     if not CORPUS.is_dir():
-        return (f"the mesh corpus is missing: the tests expect it at {CORPUS} (../shared/corpus beside the "
+        return (f"the mesh corpus is missing: the tests expect it at {CORPUS} (tests/corpus in the "
                 f"repository, or where PLN_CORPUS points)")
     empty = [c for c in CATEGORIES if not files(c)]
     if empty:

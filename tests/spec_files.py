@@ -58,6 +58,7 @@ def read_read(data: bytes) -> dict:
 
 def read_pipe(data: bytes) -> dict:
     """plnread as the runner calls it, its input a pipe (no size, no seeking back)."""
+    # timeout: a hang guard far above normal (a file takes under 3 s on a loaded machine)
     proc = subprocess.run([sys.executable, str(PLNREAD), "/dev/stdin"], input=data, capture_output=True,
                           timeout=120)
     out = json.loads(proc.stdout)

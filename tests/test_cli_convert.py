@@ -344,11 +344,11 @@ def test_sigkill_leaves_nothing_in_the_temporary_folder(out: str, tmp_path: Path
     assert not (tmp_path / out).exists()
 
 
-def test_version(capsys: pytest.CaptureFixture) -> None:
+def test_version_names_the_package_and_the_format_versions(capsys: pytest.CaptureFixture) -> None:
     import planefmt
 
     assert main(["--version"]) == 0
-    assert capsys.readouterr().out.strip() == f"pln {planefmt.__version__}"
+    assert capsys.readouterr().out.strip() == f"pln {planefmt.__version__} (planefmt; reads .pln 1.0-5.2, writes 5.2)"
 
 
 @pytest.mark.parametrize("to,name", [("glb", "x.pln"), ("obj", "x.ply"), ("pln", "x.glb")])

@@ -1,4 +1,5 @@
-"""Replay every input the fuzzer ever found (fuzz/regressions/) and a short fuzzing run."""
+"""Replay every input the fuzzer ever found (fuzz/regressions/) and a short fuzzing run of a fixed
+number of inputs (the long run is `make fuzz`)."""
 
 from __future__ import annotations
 
@@ -17,13 +18,17 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "fuzz"))
 
 REGRESSIONS = sorted(p for p in (ROOT / "fuzz" / "regressions").iterdir() if p.name != ".keep")
-#: libFuzzer's -timeout of the runs that found these inputs (fuzz/README.md), in CPU seconds: CPU
-#: time, unlike wall time, does not grow when other processes load the machine.
+#: A hang guard in CPU seconds, far above normal: the slowest of these inputs takes 1.3 ms of CPU (the
+#: salvage bug it was saved for took 1.8 s); CPU time, unlike wall time, does not grow when other
+#: processes load the machine.
 TIMEOUT = 2.0
+#: Inputs of the suite's fuzzing run: 15 s of CPU time with the 308 seeds (36 s of wall time at a load
+#: average of 7). `make fuzz` runs longer.
+RUNS = 20000
 
 
 @pytest.mark.parametrize("path", REGRESSIONS, ids=[p.name for p in REGRESSIONS])
-def test_regression_input_raises_only_pln_errors_within_the_fuzzers_timeout(path):
+def test_regression_input_raises_only_pln_errors_and_ends(path):
     # exercise raises whatever is not a PlnError: that exception fails the test.
     from exercise import exercise
 
@@ -45,20 +50,22 @@ def test_a_run_of_missing_groups_is_one_loss():
 
 
 def test_short_fuzzing_run(tmp_path):
-    """A CI-sized libFuzzer run: every crash, >2 s input or >256 MB RSS fails the test."""
+    """A fixed number of fuzzed inputs: an exception outside PlnError, an input past fuzz_pln.py's
+    CPU_LIMIT (a hang) or over 256 MB RSS fails the test; no wall-clock limit can."""
     pytest.importorskip("atheris")
     corpus = tmp_path / "corpus"
     subprocess.run([sys.executable, str(ROOT / "fuzz" / "seeds.py"), str(corpus)], check=True)
-    runs = int(os.environ.get("PLN_FUZZ_RUNS", "20000"))
+    runs = int(os.environ.get("PLN_FUZZ_RUNS", str(RUNS)))
     # A fixed seed keeps CI reproducible; the longer documented run (fuzz/README.md) varies it.
     seed = int(os.environ.get("PLN_FUZZ_SEED", "1"))
-    fuzzer = [sys.executable, str(ROOT / "fuzz" / "fuzz_pln.py"), f"-runs={runs}", f"-seed={seed}", "-timeout=2",
+    fuzzer = [sys.executable, str(ROOT / "fuzz" / "fuzz_pln.py"), f"-runs={runs}", f"-seed={seed}", "-timeout=0",
               "-rss_limit_mb=256", "-max_len=4096", f"-artifact_prefix={tmp_path}/", "-print_final_stats=1",
               str(corpus)]
     # Linux keeps ru_maxrss across fork and exec, so a fuzzer started straight from this (by now
     # large) pytest process would see pytest's peak as its own and stop at once on -rss_limit_mb.
     # A shell that forks it (no exec: the command is not the last) gives it a fresh count.
-    p = subprocess.run(["sh", "-c", '"$@"; exit $?', "sh", *fuzzer], capture_output=True, text=True, timeout=600)
+    # timeout: a hang guard far above normal (the run takes under a minute), not a verdict on speed.
+    p = subprocess.run(["sh", "-c", '"$@"; exit $?', "sh", *fuzzer], capture_output=True, text=True, timeout=3600)
     tail = "\n".join(p.stderr.splitlines()[-25:])
     assert p.returncode == 0, f"fuzzer found a crash; input saved under {tmp_path}:\n{tail}"
     assert "Done" in p.stderr and f"Done {runs} runs" in p.stderr, tail

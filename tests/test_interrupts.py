@@ -78,6 +78,7 @@ def _staged(target: Path, stage: str | None, sig: signal.Signals = signal.SIGKIL
         proc.stdin.write("\n")
         proc.stdin.flush()
     # Not communicate(): closing stdin would end the pause before the signal is handled.
+    # timeout: a hang guard far above normal (each case takes under 2 s on a loaded machine)
     code = proc.wait(timeout=300)
     err = proc.stderr.read()
     for stream in (proc.stdin, proc.stdout, proc.stderr):
@@ -191,6 +192,7 @@ def test_a_signal_during_start_up_ends_the_command_without_a_traceback(sig: str,
     # in main(), under its handlers, and is reported as one during a conversion is.
     target = tmp_path / "out.glb"
     source = Path(__file__).resolve().parents[1] / "samples" / "cylinder.stl"
+    # timeout: a hang guard far above normal (2 s on a loaded machine)
     run = subprocess.run([sys.executable, "-c", _DURING_IMPORT.format(sig=sig), "convert", str(source),
                           str(target)], capture_output=True, text=True, timeout=120)
     assert run.returncode == 130, run.stderr
@@ -211,5 +213,5 @@ def test_the_command_line_runs_outside_the_main_thread(tmp_path: Path) -> None:
 
     worker = threading.Thread(target=run)
     worker.start()
-    worker.join(timeout=300)
+    worker.join(timeout=300)  # a hang guard far above normal (under 2 s)
     assert codes == [0, 0]

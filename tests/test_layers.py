@@ -12,6 +12,7 @@ TOOL = ROOT / "tools" / "layers.py"
 
 
 def _run(root: Path) -> subprocess.CompletedProcess:
+    # timeout: a hang guard far above normal (3 s on a loaded machine)
     return subprocess.run([sys.executable, str(TOOL), str(root)], capture_output=True, text=True, timeout=120)
 
 

@@ -58,6 +58,7 @@ BY_COMMAND = ["valid/cube_float32.pln", "valid/cube_v3.pln", "valid/shell_mixed_
 def test_spec_reader_answers_through_the_runner_s_command_contract(path):
     case = next(c for c in CASES if c.path == path)
     expected = json.loads((SUITE / path).with_suffix(".json").read_text(encoding="utf-8"))
+    # timeout: a hang guard far above normal (a case takes under 3 s on a loaded machine)
     got = runner.run(f"{sys.executable} {READER}", SUITE / path, timeout=120)
     assert runner.check(case, expected, got, "container") is None
 

@@ -3,7 +3,7 @@
     python tools/mutate.py [--keep] [NAME ...]
 
 The repository's files (no .git, .venv or caches) are copied to a scratch
-folder with ``../shared`` linked beside it, as the tests expect the corpus;
+folder, its ``tests/corpus`` a link to the repository's (the mutants leave it alone);
 each mutant is one or two text replacements in that copy, then the test files
 that guard what it breaks run against the copy (``PYTHONPATH`` puts the copy's
 ``planefmt`` and, through a ``planefmt_converters`` link to ``converters/``,
@@ -84,10 +84,10 @@ IGNORED = (".git", ".venv", ".tools", "__pycache__", ".pytest_cache", ".hypothes
 
 
 def scratch_copy(into: Path) -> Path:
-    """The repository copied to ``into/repo``, ``into/shared`` linked to ``../shared``."""
+    """The repository copied to ``into/repo``, its mesh corpus linked, not copied (12 MB)."""
     repo = into / "repo"
     shutil.copytree(ROOT, repo, ignore=shutil.ignore_patterns(*IGNORED), symlinks=True)
-    (into / "shared").symlink_to(ROOT.parent / "shared", target_is_directory=True)
+    (repo / "tests" / "corpus").symlink_to(ROOT / "tests" / "corpus", target_is_directory=True)
     # pyproject.toml installs converters/ as planefmt_converters; the link lets PYTHONPATH find it.
     (repo / "planefmt_converters").symlink_to("converters", target_is_directory=True)
     return repo

@@ -21,11 +21,18 @@ SUBCOMMANDS = ("info", "convert", "validate", "preview", "report")
 EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
 
 
-def build_parser() -> argparse.ArgumentParser:
+def version_line() -> str:
+    """``pln --version``: the package's version and the format versions its reader knows."""
     from planefmt import __version__
+    from planefmt.container.records import VERSIONS
 
+    newest = f"{max(VERSIONS)}.{VERSIONS[max(VERSIONS)]}"
+    return f"pln {__version__} (planefmt; reads .pln {min(VERSIONS)}.0-{newest}, writes {newest})"
+
+
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="pln", description="Read, write and convert .pln plane meshes.")
-    parser.add_argument("--version", action="version", version=f"pln {__version__}")
+    parser.add_argument("--version", action="version", version=version_line())
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in SUBCOMMANDS:
         try:

@@ -9,8 +9,8 @@ import { fileURLToPath } from 'node:url';
 export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 export const PYTHON = path.join(ROOT, '.venv/bin/python');
 const PLN = path.join(ROOT, '.venv/bin/pln');
-// as tests/corpus.py: PLN_CORPUS, or ../shared/corpus beside the repository
-export const CORPUS = process.env.PLN_CORPUS ?? path.join(ROOT, '..', 'shared', 'corpus');
+// as tests/corpus.py: PLN_CORPUS, or the repository's tests/corpus
+export const CORPUS = process.env.PLN_CORPUS ?? path.join(ROOT, 'tests', 'corpus');
 
 /** Whether planefmt (the repository's .venv) and the corpus are here. */
 export const available = fs.existsSync(PLN) && fs.existsSync(CORPUS);

@@ -1,4 +1,4 @@
-// The real corpus (/work/shared/corpus, or PLN_CORPUS) encoded by planefmt's default encoder and
+// The real corpus (tests/corpus, or PLN_CORPUS) encoded by planefmt's default encoder and
 // decoded here and by planefmt (planefmt_decode.py): the two decodings must agree within 1e-9 of
 // the bounding-box diagonal, vertex set against vertex set both ways, triangle count, and area.
 // One file per category by default (under a minute on two busy cores); PLN_JS_CORPUS=all runs

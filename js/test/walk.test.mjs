@@ -13,7 +13,7 @@ import { readPln as readNode } from '../src/node.mjs';
 import { readPln as readBrowser } from '../src/browser.mjs';
 import { conformanceJson } from '../src/report.mjs';
 import { OpenEdges } from '../src/shellwalk.mjs';
-import { varint, varints, zigzag as zigzagBig, unzigzag as unzigzagBig, f64, common, file4, triplet, outcome } from './files.mjs';
+import { varint, varints, zigzag as zigzagBig, unzigzag as unzigzagBig, f64, common, file4, triplet, outcome, HANG_MS } from './files.mjs';
 
 /** @param {number} d */
 const zigzag = (d) => (d >= 0 ? 2 * d : -2 * d - 1);
@@ -946,7 +946,7 @@ test('§9.13: linear time on large and hostile walks', () => {
   const f = readNode(bytes);
   const ms = performance.now() - t0;
   assert.equal(/** @type {any} */ (f.meshes[0]).indices.length, 3 * 12000);
-  assert.ok(ms < 3000, `${ms} ms`);
+  assert.ok(ms < HANG_MS, `${ms} ms`);
   // a fan of 200,000 triangles around corner 0, each third corner new (a chain of attached
   // triangles, each with its edge 2 as its one child): corner 0 gathers open edges, and a last
   // triangle names one through left; then many roots over old corners, each leaving 3 open edges
@@ -958,7 +958,7 @@ test('§9.13: linear time on large and hostile walks', () => {
   const many = 100000;
   const roots = explicitBody({ V: 3, T: many, symbols: new Array(many).fill(0), escapes: [0, 0, 0, ...new Array(many - 1).fill([3, 2, 1]).flat()], flags: [] });
   assert.equal(outcome(kind9(roots)), 'ok');
-  assert.ok(performance.now() - t0 < 3000, `${performance.now() - t0} ms`);
+  assert.ok(performance.now() - t0 < HANG_MS, `${performance.now() - t0} ms`);
 });
 
 // ---------------------------------------------------------------------------------------------
@@ -1212,7 +1212,7 @@ test('§9.14: linear time on large and hostile walks', () => {
   let t0 = performance.now();
   const f = readNode(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: enc.kind10 }], version: [4, 2] }));
   assert.equal(/** @type {any} */ (f.meshes[0]).indices.length, 3 * 12000);
-  assert.ok(performance.now() - t0 < 3000, `${performance.now() - t0} ms`);
+  assert.ok(performance.now() - t0 < HANG_MS, `${performance.now() - t0} ms`);
   // a fan of 200,000 triangles around corner 0, every corner explicit: corner 0's edges are one
   // long run, each later corner finds its far corners by binary search in it
   const T = 200000;
@@ -1224,5 +1224,5 @@ test('§9.14: linear time on large and hostile walks', () => {
   const many = 100000;
   const roots = explicitBody({ V: 3, T: many, symbols: new Array(many).fill(0), escapes: [0, 0, 0, ...new Array(many - 1).fill([3, 2, 1]).flat()], flags: [] });
   assert.equal(outcome(file({ planes: ONE_PLANE, groups: [{ kind: 10, data: roots }], version: [4, 2] })), 'ok');
-  assert.ok(performance.now() - t0 < 3000, `${performance.now() - t0} ms`);
+  assert.ok(performance.now() - t0 < HANG_MS, `${performance.now() - t0} ms`);
 });

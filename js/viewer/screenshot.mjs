@@ -14,7 +14,7 @@ import { serve, JS_ROOT } from './serve.mjs';
 import { launch, problem } from './chromium.mjs';
 
 const ROOT = path.resolve(JS_ROOT, '..');
-const CORPUS = process.env.PLN_CORPUS ?? path.join(ROOT, '..', 'shared', 'corpus');
+const CORPUS = process.env.PLN_CORPUS ?? path.join(ROOT, 'tests', 'corpus');
 const args = process.argv.slice(2);
 /** @param {string} name */
 function option(name) {
