@@ -57,6 +57,9 @@ fuzz: $(STAMP)
 	$(BIN)/python fuzz/seeds.py fuzz/corpus
 	$(BIN)/python fuzz/fuzz_pln.py -runs=$(FUZZ_RUNS) -seed=$(FUZZ_SEED) -timeout=0 -rss_limit_mb=256 \
 	  -max_len=4096 -artifact_prefix=fuzz/artifacts/ fuzz/corpus
+	# mutations of the seeds through decode_mesh and (where node is) the JS decoder: foreign
+	# exceptions, crashes and inputs over 2 s are counted and saved (fuzz/mutations.py)
+	$(BIN)/python fuzz/mutations.py --runs 100000 --js-runs 10000 --seed 1 --save fuzz/artifacts
 
 # plants each bug of tools/mutate.py's fixed list in a scratch copy and runs the tests that guard it
 # (5-6 minutes on 2 busy cores); exit 1 if any bug survives
