@@ -197,7 +197,7 @@ def test_a_closed_source_that_decodes_open_is_refused_with_the_reason():
     obj = preparing._prepare(v, f, np.eye(4), TOL, None, None)
     enc = codec.encode_mesh(v, f, tolerance=TOL, scheme="paper")
     holed = codec.Mesh(enc.mesh.vertices, enc.mesh.faces[1:])
-    assert codec.structure_problem(holed, obj) == "a closed source decodes open (3 edges not on exactly two triangles)"
+    assert codec.structure_problem(holed, obj) == "a closed source decodes open once welded by position (3 edges not on exactly two triangles)"
     assert codec.structure_problem(enc.mesh, obj) is None
 
 
