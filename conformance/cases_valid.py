@@ -698,6 +698,9 @@ L_TREE_EMPTY_LEAF = (5,) + L_TREE + (3, OUT, IN)
 PATCH_REPEATED_OPS = (Obj("open box"),
                       Planes(np.vstack([box((0, 0, 0), (1, 1, 1))[[0, 1, 2, 3, 5]], [[0.46, math.pi, 0.8]]])),
                       Group(0, GroupKind.PSEUDO_CONVEX, (0, 0, 1, 2, 3, 4, 5), bounding=(6,)))
+#: The same face reference given 12 times: more references than planefmt enumerates triples of (14).
+PATCH_REPEATED_MANY_OPS = PATCH_REPEATED_OPS[:2] + (
+    Group(0, GroupKind.PSEUDO_CONVEX, (0,) * 12 + (1, 2, 3, 4, 5), bounding=(16,)),)
 
 CASES = [
     ValidCase("cube_float32", "the unit cube of spec/pln-1.md §12, float32, metres, with index: the 401 bytes "
@@ -1049,4 +1052,8 @@ CASES = [
     ValidCase("patch_repeated_face", "kind 3: the open box of patch_convex with its face reference x <= 1 given "
               "twice: the face is decoded once per reference, twice (spec/pln.md §9.8)",
               Header(coding=Coding.FLOAT64, units=Units.METRE), PATCH_REPEATED_OPS, decoded_bbox=True),
+    ValidCase("patch_face_repeated", "kind 3: the open box of patch_convex with its face reference x <= 1 given "
+              "12 times, 17 references in all: the face is decoded once per reference, 12 times, however many "
+              "references repeat it (spec/pln.md §9.8; planefmt gave it once past 14 references)",
+              Header(coding=Coding.FLOAT64, units=Units.METRE), PATCH_REPEATED_MANY_OPS, decoded_bbox=True),
 ]

@@ -29,6 +29,8 @@ class Outcome:
     detail: str  # result counts, error code, or what went wrong
     seconds: float  # Python: decode_mesh's own; node: the process's (its start ~0.2 s)
     rss_mb: float  # peak RSS of the child above the interpreter's own at start
+    area: float | None = None  # of a result: the triangles' area (Python: in world coordinates; JS: each group's
+    # in its object's, the same for the translations hostile files use)
 
 
 def node() -> str | None:
@@ -79,7 +81,8 @@ def _judge(reader: str, code: int, out: str, err: str, seconds: float, rss: floa
         return Outcome(reader, "error", str(report["error"]), seconds, report.get("rss_mb", rss) - base)
     if isinstance(report, dict) and code == 0:
         counts = report.get("counts") or _js_counts(report)
-        return Outcome(reader, "result", counts, seconds, report.get("rss_mb", rss) - base)
+        area = report["area"] if "area" in report else _js_area(report)
+        return Outcome(reader, "result", counts, seconds, report.get("rss_mb", rss) - base, area)
     if "heap out of memory" in err or "MemoryError" in err:
         return Outcome(reader, "cap", f"out of memory: {err.strip().splitlines()[-1][:160]}", seconds, rss - base)
     return Outcome(reader, "crash", (report or {}).get("foreign") or err.strip()[-300:] or f"exit {code}", seconds, rss - base)
@@ -90,6 +93,18 @@ def _js_counts(report: dict) -> str:
     v = sum(g["vertices"] for g in groups if g and g.get("vertices") is not None)
     t = sum(g["triangles"] for g in groups if g and g.get("triangles") is not None)
     return f"{v} vertices, {t} triangles"
+
+
+def _js_area(report: dict) -> float:
+    groups = (report.get("geometry") or {}).get("groups") or []
+    return float(sum(g["area"] for g in groups if g and g.get("area") is not None))
+
+
+def _area(vertices, faces) -> float:
+    """The area of triangles ``faces`` (T, 3) over ``vertices`` (V, 3)."""
+    import numpy as np
+    p = np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
+    return float(np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum() / 2)
 
 
 def _python_side(path: str) -> int:
@@ -118,7 +133,7 @@ def _python_side(path: str) -> int:
         line(error=type(exc).__name__, foreign=f"{type(exc).__module__}.{type(exc).__name__}: {exc}"[:300])
         return 3
     vertices, faces = mesh if isinstance(mesh, tuple) else (mesh.vertices, mesh.faces)
-    line(counts=f"{len(vertices)} vertices, {len(faces)} triangles")
+    line(counts=f"{len(vertices)} vertices, {len(faces)} triangles", area=_area(vertices, faces))
     return 0
 
 

@@ -261,6 +261,16 @@ def patch_repeated_face(n: int) -> bytes:
     return cube_file([(3, body(refs))])
 
 
+def patch_repeated_polygon(n: int, k: int | None = None) -> bytes:
+    """Patches (kind 3, §9.8, §12.4): a prism of ``n`` sides, its +z face (n - 2 triangles) given
+    ``k`` (default n) times: k (n - 2) triangles from n + k + 2 references, quadratic in the body
+    (n = 3000: 9 M triangles from 72 kB), which a reader counts before making them."""
+    k = n if k is None else k
+    phi = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    planes = [(math.pi / 2, float(p), 1.0) for p in phi] + [(0.0, 0.0, 1.0), (math.pi, 0.0, 1.0)]
+    return cube_file([(3, body(list(range(n + 1)) + [n] * (k - 1) + [n + 1]))], planes=planes)
+
+
 def sealed_many(t: int) -> bytes:
     """Sealed (kind 5, §9.9): the cube's 8 vertices and ``t`` triangles over them, deflated."""
     # local references +x 0, +y 1, -x 2, -y 3, +z 4, -z 5; corners z = 0 first, then z = 1
@@ -382,6 +392,7 @@ CLASSES: dict[str, tuple[Callable[[int], bytes], int, int]] = {
     "i10_h_range_overflow": (h_range_overflow, 0, 0),
     "x_cells_overlapping": (cells_overlapping, 200, 20_000),
     "x_patch_repeated_face": (patch_repeated_face, 10_000, 1_000_000),
+    "x_patch_repeated_polygon": (patch_repeated_polygon, 300, 3_000),
     "x_sealed_many": (sealed_many, 100_000, 10_000_000),
     "x_shell_many": (shell_many, 100_000, 10_000_000),
     "x_shell_tree_chain": (shell_tree_chain, 100_000, 10_000_000),

@@ -37,9 +37,11 @@ function planesOf(group, table) {
  * @param {Float64Array} table the plane table
  * @param {import('./header.mjs').Header} header for the merge distance of polytopes (§9.4)
  * @param {(GroupMesh | null)[]} [earlier] the surfaces of the groups before it, for a copy (kind 11)
+ * @param {number} [trianglesLeft] what the decode budget leaves (§12.4): a patch that repeats a face
+ *   reference, whose output outgrows its body, stops at it before making its triangles
  * @returns {GroupMesh | null}
  */
-export function decodeGroup(group, table, header, earlier = []) {
+export function decodeGroup(group, table, header, earlier = [], trianglesLeft = Infinity) {
   if (group.skipped) return null;
   if (group.kind === 11) {
     // §9.15: the source's surface (its references are the copy's), in the copy's object; the
@@ -57,12 +59,12 @@ export function decodeGroup(group, table, header, earlier = []) {
   const base = { kind: group.kind, freeRef: Math.max(m - 1, 0) };
   switch (group.kind) {
     case 0:
-      return { ...base, ...polytopeFaces(group, planes, null, budget, coding) };
+      return { ...base, ...polytopeFaces(group, planes, null, budget, coding, Infinity) };
     case 3:
     case 4: {
       const faceRefs = [];
       for (let i = 0; i < m; i++) if (!group.roles[i]) faceRefs.push(i);
-      const mesh = polytopeFaces(group, planes, faceRefs, budget, coding);
+      const mesh = polytopeFaces(group, planes, faceRefs, budget, coding, trianglesLeft);
       if (mesh.indices.length === 0) fail('EMPTY_POLYTOPE', 'no face on a face plane');
       if (group.kind === 4) {
         const ix = mesh.indices;
@@ -105,8 +107,10 @@ function codingError(header) {
  *   are emitted, in order, once per reference (patches, §9.8)
  * @param {import('./convex.mjs').Budget} budget
  * @param {import('./convex.mjs').Coding} coding
+ * @param {number} trianglesLeft LIMIT_EXCEEDED before making more triangles: k repeats of a face of
+ *   n sides are k (n - 2) triangles from a body of k + n references
  */
-function polytopeFaces(group, planes, emit, budget, coding) {
+function polytopeFaces(group, planes, emit, budget, coding, trianglesLeft) {
   const m = group.refs.length;
   // a repeated reference adds no plane: the polytope is built from each plane's first reference
   const firstRef = new Map();
@@ -125,6 +129,12 @@ function polytopeFaces(group, planes, emit, budget, coding) {
   for (const f of poly.faces) loops.set(unique[f.plane], f.loop);
   const order = emit ? emit.map((i) => firstRef.get(group.refs[i])) : [...loops.keys()].sort((a, b) => a - b);
   const refOf = emit ?? order;
+  let total = 0;
+  for (const owner of order) total += Math.max((loops.get(owner)?.length ?? 2) - 2, 0);
+  if (total > trianglesLeft) {
+    fail('LIMIT_EXCEEDED', `group ${group.index}: its repeated face references make ${total} triangles, above the `
+      + `${trianglesLeft} this reader's limit leaves (raise it with the option limits: {triangles: N}, or --max-triangles N)`);
+  }
   const remap = new Map();
   /** @type {number[]} */
   const idx = [];

@@ -63,7 +63,8 @@ function read(bytes, options) {
   /** @type {(MeshGroup | null)[]} per group in file order; null: not decoded */
   const meshes = [];
   for (const g of c.groups) {
-    const mesh = decode ? decodeGroup(g, c.planes, c.header, surfaces) : null;
+    const left = c.budget.limits.triangles - c.budget.triangles;
+    const mesh = decode ? decodeGroup(g, c.planes, c.header, surfaces, left) : null;
     surfaces.push(mesh);
     // the reader charged the counts a sealed or shell group declares (and a copy of one): the rest here (§12.4)
     const kind = g.kind === 11 && mesh ? c.groups[g.data.source].kind : g.kind;

@@ -10,7 +10,7 @@ import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
 import { readPln } from '../src/node.mjs';
 import { DEFAULT_LIMITS } from '../src/compression.mjs';
-import { budgetFile, common, f64, outcome, walkFile, zeroPlanes } from './files.mjs';
+import { budgetFile, common, f64, outcome, varint, walkFile, zeroPlanes } from './files.mjs';
 
 const CLI = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../cli.mjs');
 
@@ -105,4 +105,24 @@ test('js/cli.mjs --max-triangles raises the limit; a bad number is a usage error
   } finally {
     fs.rmSync(dir, { recursive: true, force: true });
   }
+});
+
+/**
+ * A kind 3 patch: the prism of `n` sides 2 wide (sides, then +z, then -z), its +z face reference
+ * given `k` times (§9.8): n · 2 + (n − 2) · (k + 1) triangles from n + k + 1 references.
+ */
+const prismPatch = (/** @type {number} */ n, /** @type {number} */ k) => {
+  const planes = [...Array.from({ length: n }, (_, j) => [Math.PI / 2, (2 * Math.PI * j) / n, 1]), [0, 0, 1], [Math.PI, 0, 1]];
+  const raw = planes.flat().flatMap(f64);
+  const block = Uint8Array.from([0, ...varint(planes.length), 0, ...varint(raw.length), ...raw]);
+  const refs = [...Array.from({ length: n }, (_, j) => j), ...new Array(k).fill(n), n + 1];
+  return budgetFile({ coding: 1, blocks: [block], groups: [{ kind: 3, body: Uint8Array.from(common(refs)), method: 1 }] });
+};
+
+test('§9.8, §12.4: a repeated face reference yields its face each time, counted before it is made', () => {
+  const bytes = prismPatch(40, 30);
+  assert.equal(readPln(bytes).mesh().indices.length / 3, 80 + 38 * 31);
+  assert.equal(readPln(prismPatch(8, 20)).mesh().indices.length / 3, 16 + 6 * 21); // past 14 references too
+  assert.throws(() => readPln(bytes, { limits: { triangles: 80 + 38 * 31 - 1 } }),
+    (err) => err.code === 'LIMIT_EXCEEDED' && /repeated face references make 1258 triangles/.test(err.message));
 });

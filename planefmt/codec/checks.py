@@ -43,7 +43,7 @@ def check_group(group: PartGroup, reader: Reader) -> list[Finding]:
             return []
         try:
             decoded = decode_group(group.planes, group, group.index,
-                                   header_plane_error(reader.header))
+                                   header_plane_error(reader.header), budget.triangles_left)
         except GeometryError as exc:
             return [Finding(exc.code, CODES[exc.code].severity, exc.reason, **where)]
         budget.charge_decoded(group, len(decoded.vertices), len(decoded.triangles))

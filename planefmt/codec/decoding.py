@@ -18,11 +18,11 @@ import numpy as np
 from scipy.spatial import QhullError
 
 from ..container import quantize
-from ..errors import GeometryError
+from ..errors import GeometryError, LimitError
 from ..geometry.halfspace import decode_convex, intersect
 from ..geometry.planes import from_triplets
 from ..groups.cells import decode_cells_group
-from ..groups.patches import decode_patch_groups
+from ..groups.patches import decode_patch_groups, first_references, repeat_faces
 from ..groups.sealed import decode_sealed
 from ..groups.shells import Shell, decode_shell
 from ..groups.solids import decode_bsp_group
@@ -98,30 +98,42 @@ def decode_sealed_group(planes: np.ndarray, group: GroupLike, label: object, err
                         np.zeros(0, dtype=np.int64), facets[:, 0])
 
 
-def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError) -> DecodedGroup:
-    """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes (spec §9.8).
+def decode_patch(planes: np.ndarray, group: GroupLike, label: object, error: PlaneError,
+                 max_triangles: float = math.inf) -> DecodedGroup:
+    """A pseudo-convex or pseudo-concave patch: the polytope's faces on face planes, once per face
+    reference (spec §9.8); ``LimitError`` before making more than ``max_triangles``.
 
     Small patches are intersected in numpy (:mod:`planefmt.geometry.polytopes`); where that finds no
     polytope, Qhull (:func:`planefmt.geometry.halfspace.intersect`) decides: near-duplicate bounding
     planes (TestScene.gltf's floor: two copies of one normal, h 3e-7 apart) defeat the former's
-    vertex tests but not the latter's hull.
+    vertex tests but not the latter's hull. Either intersects each plane of the table once, however
+    often the group names it: Qhull keeps one of planes that are one (spec §9.4).
     """
     omega, h = from_triplets(planes)
     face = ~np.asarray(group.bounding, dtype=bool)
     concave = int(group.kind) == GroupKind.PSEUDO_CONCAVE
+    refs = np.asarray(group.refs, dtype=np.int64)
     try:
-        (v, t, inc_v, inc_r, t_ref), = decode_patch_groups(omega, h, [len(h)], face, np.array([concave]))
+        (v, t, inc_v, inc_r, t_ref), = decode_patch_groups(omega, h, [len(h)], face, np.array([concave]), refs,
+                                                           max_triangles)
     except GeometryError:
-        poly = intersect(omega, h, group=label)
-        on_face = face[poly.triangle_plane]
-        t, t_ref = poly.triangles[on_face], poly.triangle_plane[on_face]
+        first, twin = first_references(refs, omega, h, np.zeros(len(refs), dtype=np.int64))
+        distinct = np.flatnonzero((first == np.arange(len(refs))) & ~twin)
+        poly = intersect(omega[distinct], h[distinct], group=label)
+        try:
+            emit, t_ref = repeat_faces(distinct[poly.triangle_plane], first, face & ~twin, max_triangles)
+        except LimitError as exc:
+            raise LimitError(f"part group {label}: {exc.reason}") from None
+        t = poly.triangles[emit]
         if concave:
             t = t[:, ::-1]
         used, local = np.unique(t, return_inverse=True)
         inc_v, inc_r = poly.incidences
         on = np.isin(inc_v, used)
         v, t = poly.vertices[used], local.reshape(-1, 3)
-        inc_v, inc_r = np.searchsorted(used, inc_v[on]), inc_r[on]
+        inc_v, inc_r = np.searchsorted(used, inc_v[on]), distinct[inc_r[on]]
+    except LimitError as exc:
+        raise LimitError(f"part group {label}: {exc.reason}") from None
     if len(t) == 0:
         raise GeometryError(f"part group {label}: no face of the patch lies on a face plane",
                             code="EMPTY_POLYTOPE")
@@ -148,6 +160,8 @@ def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, erro
 
 #: Decoder of each part-group kind: ``decode(planes, group, label, error)`` with ``planes`` the
 #: (m, 3) triplets of ``group.refs`` and ``error`` the coding's :class:`PlaneError`.
+_PATCH_KINDS = (GroupKind.PSEUDO_CONVEX, GroupKind.PSEUDO_CONCAVE)
+
 DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], DecodedGroup]] = {
     GroupKind.CONVEX: decode_convex_group,
     GroupKind.CELLS: decode_cells,
@@ -218,10 +232,12 @@ def header_plane_error(header: Header) -> PlaneError:
 
 
 def decode_group(planes: np.ndarray, group: GroupLike, label: object = None,
-                 error: PlaneError = EXACT) -> DecodedGroup:
+                 error: PlaneError = EXACT, max_triangles: float = math.inf) -> DecodedGroup:
     """Decode one part group from the triplets ``planes`` (m, 3) of its references.
 
-    ``error`` is the coding's :func:`plane_error` (exact planes by default).
+    ``error`` is the coding's :func:`plane_error` (exact planes by default). ``max_triangles`` bounds
+    the output of the one kind whose output may grow faster than its body, patches that repeat a face
+    reference (``LimitError`` before it is made); the caller charges every kind's output (spec §12.4).
     """
     decoder = DECODERS.get(int(group.kind))
     if decoder is None:
@@ -233,6 +249,8 @@ def decode_group(planes: np.ndarray, group: GroupLike, label: object = None,
                             code="UNKNOWN_GROUP_KIND")
     planes = np.asarray(planes, dtype=np.float64).reshape(-1, 3)
     try:
+        if int(group.kind) in _PATCH_KINDS:
+            return decode_patch(planes, group, label, error, max_triangles)
         return decoder(planes, group, label, error)
     except (ArithmeticError, IndexError, ValueError, np.linalg.LinAlgError, QhullError) as exc:
         # Planes from a file can be anything; a numeric failure deep in a decoder is still bad input.
@@ -241,8 +259,9 @@ def decode_group(planes: np.ndarray, group: GroupLike, label: object = None,
 
 
 def decode_groups(items: Sequence[tuple[np.ndarray, GroupLike, object]],
-                  error: PlaneError = EXACT) -> list[DecodedGroup]:
-    """:func:`decode_group` of each ``(planes, group, label)``, the patch groups in one batch.
+                  error: PlaneError = EXACT, max_triangles: float = math.inf) -> list[DecodedGroup]:
+    """:func:`decode_group` of each ``(planes, group, label)``, the patch groups in one batch, their
+    triangles together at most ``max_triangles``.
 
     A mesh stored as patches has tens of thousands of small groups (bun_zipper.ply: 28k); one
     :func:`planefmt.groups.patches.decode_patch_groups` call intersects them together, and gives each the
@@ -251,22 +270,28 @@ def decode_groups(items: Sequence[tuple[np.ndarray, GroupLike, object]],
     """
     out: list[DecodedGroup | None] = [None] * len(items)
     patches = [i for i, (_, g, _) in enumerate(items)
-               if int(g.kind) in (GroupKind.PSEUDO_CONVEX, GroupKind.PSEUDO_CONCAVE)]
+               if int(g.kind) in _PATCH_KINDS]
     if len(patches) > 1:
         try:
             planes = np.concatenate([np.asarray(items[i][0], dtype=np.float64).reshape(-1, 3) for i in patches])
             omega, h = from_triplets(planes)
             face = np.concatenate([~np.asarray(items[i][1].bounding, dtype=bool) for i in patches])
             concave = np.array([int(items[i][1].kind) == GroupKind.PSEUDO_CONCAVE for i in patches])
+            refs = np.concatenate([np.asarray(items[i][1].refs, dtype=np.int64) for i in patches])
             decoded = decode_patch_groups(omega, h, [len(np.asarray(items[i][1].refs)) for i in patches],
-                                          face, concave)
+                                          face, concave, refs, max_triangles)
             for i, (v, t, inc_v, inc_r, t_ref) in zip(patches, decoded):
                 if len(t):
                     out[i] = DecodedGroup(v, t, inc_v, inc_r, np.zeros(0, dtype=np.int64), t_ref)
-        except (GeometryError, ArithmeticError, IndexError, ValueError, np.linalg.LinAlgError, QhullError):
+        except (GeometryError, LimitError, ArithmeticError, IndexError, ValueError, np.linalg.LinAlgError,
+                QhullError):
             out = [None] * len(items)
-    return [d if d is not None else decode_group(planes, g, label, error)
-            for d, (planes, g, label) in zip(out, items)]
+    made = sum(len(d.triangles) for d in out if d is not None)
+    for i, (planes, g, label) in enumerate(items):
+        if out[i] is None:
+            out[i] = decode_group(planes, g, label, error, max_triangles - made)
+            made += len(out[i].triangles)
+    return out
 
 
 def _concatenate(parts: Sequence[DecodedGroup]) -> Mesh:

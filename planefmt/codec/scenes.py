@@ -104,7 +104,11 @@ def decode_scene(source: str | os.PathLike | BinaryIO, *, limits: Limits | None 
 
     def flush() -> None:
         fresh = [g for g in pending if g.source is None]
-        for g, d in zip(fresh, decode_groups([(g.planes, g, g.index) for g in fresh], error)):
+        try:
+            batch = decode_groups([(g.planes, g, g.index) for g in fresh], error, r.budget.triangles_left)
+        except LimitError as exc:
+            raise exc.located(file=r.name, chunk="GRUP")
+        for g, d in zip(fresh, batch):
             decoded[g.index] = d
         for g in pending:
             d = decoded[g.index if g.source is None else g.source]
@@ -172,7 +176,7 @@ def salvage_scene(source: str | os.PathLike | BinaryIO, *, limits: Limits | None
     for g in (g for g in got.part_groups if int(g.kind) in known):
         try:
             if g.source is None:
-                d = decoded[g.index] = decode_group(g.planes, g, g.index, error)
+                d = decoded[g.index] = decode_group(g.planes, g, g.index, error, budget.triangles_left)
                 budget.charge_decoded(g, len(d.vertices), len(d.triangles))
             elif g.source in decoded and all(np.array_equal(a, b) for a, b in zip(refs[g.source], refs[g.index])):
                 # a copy (spec §9.15) of a group salvaged, with its references and roles: its surface

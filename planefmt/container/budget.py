@@ -39,6 +39,11 @@ class Budget:
         self.vertices += vertices
         self.triangles += triangles
 
+    @property
+    def triangles_left(self) -> int:
+        """What the decode may still produce: a decoder whose output outgrows its body stops at it."""
+        return self.limits.max_triangles - self.triangles
+
     def charge_decoded(self, group, vertices: int, triangles: int) -> None:
         """Charge a decoded ``group`` (a ``PartGroup``) whose kind declares no counts (the reader charged
         those that do); a copy's source's counts are remembered for the copies that follow."""

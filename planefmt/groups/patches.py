@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
-from ..errors import GeometryError
+from ..errors import GeometryError, LimitError
 from ..geometry.planetable import PlaneTable
 from ..geometry.polygonize import edge_adjacency
 from ..geometry.polytopes import OK, intersect_many
@@ -641,44 +641,89 @@ def decode_patch_faces(omega: np.ndarray, h: np.ndarray, owner: np.ndarray, coun
     return poly.vertices[used], tris.reshape(-1, 3), row, poly.status
 
 
+def first_references(refs: np.ndarray, omega: np.ndarray, h: np.ndarray,
+                     owner: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(first, twin)``: for each row, the first row of its group (``owner``) with the same plane
+    index (``refs``), whose plane bounds the polytope for all of a repeated reference's rows (spec
+    §9.8); and whether its plane equals that of an earlier reference of the group with another index,
+    which makes it redundant, bounding no face (§9.4's near-copies at distance 0)."""
+    refs = np.asarray(refs, dtype=np.int64)
+    owner = np.asarray(owner, dtype=np.int64)
+    if len(refs) == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
+    _, first, inverse = np.unique(owner * (int(refs.max()) + 1) + refs, return_index=True, return_inverse=True)
+    first = first[inverse.reshape(-1)]
+    value = np.column_stack([owner.astype(np.float64), omega, h])
+    _, same, inverse = np.unique(value, axis=0, return_index=True, return_inverse=True)
+    return first, same[inverse.reshape(-1)] != first
+
+
+def repeat_faces(tri_row: np.ndarray, first: np.ndarray, face: np.ndarray,
+                 max_triangles: float = math.inf) -> tuple[np.ndarray, np.ndarray]:
+    """Spec §9.8: a face reference that appears k times yields its face k times. ``tri_row`` the row of
+    each decoded triangle (rows where ``first`` is the row itself), ``face`` (rows,) the face rows.
+    Returns the triangles to emit (indices into ``tri_row``), face row after face row in row order, and
+    each one's row. Raises ``LimitError`` before allocating more than ``max_triangles``: k repeats of a
+    face of n sides are k (n - 2) triangles from a body of k + n references."""
+    rows = len(first)
+    order = np.argsort(tri_row, kind="stable")
+    count = np.bincount(tri_row, minlength=rows)
+    begin = np.concatenate([[0], np.cumsum(count)[:-1]]).astype(np.int64)
+    emit = np.flatnonzero(face)
+    per = count[first[emit]]
+    total = int(per.sum())
+    if total > max_triangles:
+        raise LimitError(f"its repeated face references make {total:,} triangles, above this reader's limit "
+                         f"of {int(max_triangles):,} left (raise it with Limits(max_triangles=...) or "
+                         f"pln --max-triangles)")
+    return order[_ranges(begin[first[emit]], per)], np.repeat(emit, per)
+
+
 def decode_patch_groups(omega: np.ndarray, h: np.ndarray, sizes: list[int], face: np.ndarray,
-                        concave: np.ndarray) -> list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+                        concave: np.ndarray, refs: np.ndarray | None = None,
+                        max_triangles: float = math.inf) -> list[tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                                        np.ndarray, np.ndarray]]:
     """Decode patch groups in one batch: per group ``(vertices, triangles, inc_vertex, inc_ref,
     triangle_ref)``.
 
     ``omega``, ``h``, ``face`` hold the stored planes and roles of every
-    group's references, group after group (``sizes`` references each);
+    group's references, group after group (``sizes`` references each), ``refs``
+    their plane table indices (each reference a plane of its own without: a
+    reference that repeats another's plane under another index is redundant);
     ``concave`` (groups,) marks kind 4. Triangles are those of faces on face
-    planes (flipped back for kind 4); incidences pair each vertex with every
-    local reference whose plane it lies on (faces on bounding planes
-    included). Raises ``EMPTY_POLYTOPE`` or ``UNBOUNDED_POLYTOPE`` naming the
-    first bad group (by position).
+    planes (flipped back for kind 4), once per face reference (spec §9.8: a
+    repeated reference bounds the polytope once); incidences pair each vertex
+    with the first local reference of every plane it lies on (faces on
+    bounding planes included). Raises ``EMPTY_POLYTOPE`` or
+    ``UNBOUNDED_POLYTOPE`` naming the first bad group (by position), ``LimitError``
+    where the batch's triangles would exceed ``max_triangles``.
     """
     count = len(sizes)
     start = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     owner = np.repeat(np.arange(count), sizes)
+    first, twin = np.arange(len(h)), np.zeros(len(h), dtype=bool)
+    if refs is not None:
+        first, twin = first_references(refs, omega, h, owner)
+    distinct = np.flatnonzero((first == np.arange(len(h))) & ~twin)
     # Each group's own scale: a group decodes the same in any batch, and alone.
     scale = np.ones(count)
     np.maximum.at(scale, owner, np.abs(h))
-    poly = intersect_many(omega, h, owner, count, 1e-11 * scale)
+    poly = intersect_many(omega[distinct], h[distinct], owner[distinct], count, 1e-11 * scale)
     bad = np.flatnonzero(poly.status != OK)
     if len(bad):
         code = "UNBOUNDED_POLYTOPE" if poly.status[bad[0]] == 2 else "EMPTY_POLYTOPE"
         raise GeometryError(f"patch group {int(bad[0])}: its planes bound no {'finite ' if code[0] == 'U' else ''}"
                             f"polytope", code=code)
     tris, tri_face = poly.triangles()
-    row = poly.polygon_row[tri_face]
-    keep = face[row]
-    tris, row = tris[keep], row[keep]
+    emit, row = repeat_faces(distinct[poly.polygon_row[tri_face]], first, face & ~twin, max_triangles)
+    tris = tris[emit]
     flip = concave[owner[row]]
     tris[flip] = tris[flip][:, ::-1]
     size = np.diff(poly.polygon_offsets)
     inc_v = poly.polygon_vertices
-    inc_row = np.repeat(poly.polygon_row, size)
+    inc_row = distinct[np.repeat(poly.polygon_row, size)]
     tri_owner = owner[row]
     inc_owner = owner[inc_row]
-    t_order = np.argsort(tri_owner, kind="stable")
-    tris, row, tri_owner = tris[t_order], row[t_order], tri_owner[t_order]
     # Each group's vertices, numbered in its own order: one sort over (group, vertex) keys for all.
     nv = np.int64(len(poly.vertices))
     used, local = np.unique(tri_owner[:, None] * nv + tris, return_inverse=True)
@@ -688,15 +733,15 @@ def decode_patch_groups(omega: np.ndarray, h: np.ndarray, sizes: list[int], face
     key = inc_owner * nv + inc_v
     pos = np.minimum(np.searchsorted(used, key), max(len(used) - 1, 0))
     on = used[pos] == key if len(used) else np.zeros(len(key), dtype=bool)
-    refs = np.int64(int(np.max(sizes, initial=0)) + 1)
-    pairs = np.unique(pos[on] * refs + (inc_row[on] - start[inc_owner[on]]))
-    p_split = np.searchsorted(pairs // refs, v_split)
+    span = np.int64(int(np.max(sizes, initial=0)) + 1)
+    pairs = np.unique(pos[on] * span + (inc_row[on] - start[inc_owner[on]]))
+    p_split = np.searchsorted(pairs // span, v_split)
     vertex_of = used % nv
     t_split = np.searchsorted(tri_owner, np.arange(count + 1))
     out = []
     for g in range(count):
         a, b = v_split[g], v_split[g + 1]
         pg = pairs[p_split[g]:p_split[g + 1]]
-        out.append((poly.vertices[vertex_of[a:b]], local[t_split[g]:t_split[g + 1]], pg // refs - a, pg % refs,
+        out.append((poly.vertices[vertex_of[a:b]], local[t_split[g]:t_split[g + 1]], pg // span - a, pg % span,
                     row[t_split[g]:t_split[g + 1]] - start[g]))
     return out
