@@ -28,6 +28,11 @@ WELD = 1e-9
 #: fraction of the extent apart, so that no sane decoder's vertex welding can change them.
 DISTINCT = 1e-5
 
+#: ... and only where they are also this fraction of the extent apart: §9.4's merge distance for
+#: float32 planes, 1000 × (2^-22 × R + 2^-24 × max |h|), reaches 1.5e-4 of the extent of a polytope
+#: about the origin (sphere200's shortest edges, 8.9e-5 of its extent, are merged by planefmt).
+UNMERGED = 2e-4
+
 #: |det| of three unit normals at or below which they are linearly dependent (spec §9.9).
 DEPENDENT = 1e-12
 
@@ -275,6 +280,8 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
         gaps = np.linalg.norm(vertices[:, None] - vertices[None], axis=2) + np.eye(len(vertices)) * 1e300
         if gaps.min() < DISTINCT * np.linalg.norm(np.ptp(vertices, axis=0)):
             raise ValueError("vertices too close together for the counts to be unambiguous")
+        if gaps.min() < UNMERGED * np.linalg.norm(np.ptp(vertices, axis=0)):
+            counts = (None, None)  # within a decoder's merge distance (spec §9.4): not normative
     else:
         entries = cells if kind == 1 else bsp_cells(tree, len(h))
         cell_faces = [_cell_faces(omega, h, e) if kind == 1 else _leaf_faces(omega, h, e) for e in entries]

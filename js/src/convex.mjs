@@ -19,8 +19,8 @@ const ON_PLANE = 1e-12;
 const MERGE = 1e-9;
 
 /**
- * How far the coding may have moved a plane (§9.4's E = angle × radius + h, h + hRel × the
- * largest |h| of the group) and half the header's tolerance in model units (L); the merge
+ * How far the coding may have moved a plane (§9.4's E = angle × R + h, R the largest distance of a
+ * vertex from the origin, h + hRel × the largest |h| of the group) and half the header's tolerance in model units (L); the merge
  * distance is max(1e-9 × diagonal, min(1e-2 × diagonal, L, 1000 × E)), as planefmt's.
  * @typedef {{angle: number, h: number, hRel: number, half: number}} Coding
  */
@@ -297,7 +297,10 @@ class Clipper {
       }
     }
     const D = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-    const E = coding.angle * (D / 2) + coding.h + coding.hRel * scale;
+    // a turned normal moves the plane at a vertex by the angle × the vertex's distance from the origin
+    let radius = 0;
+    for (let v = 0; v < nv; v++) radius = Math.max(radius, Math.hypot(vx[3 * v], vx[3 * v + 1], vx[3 * v + 2]));
+    const E = coding.angle * radius + coding.h + coding.hRel * scale;
     const tol = Math.max(MERGE * D, Math.min(1e-2 * D, coding.half, 1000 * E));
     const parent = new Int32Array(nv);
     for (let v = 0; v < nv; v++) parent[v] = v;
