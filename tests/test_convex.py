@@ -381,3 +381,15 @@ def test_separate_convex_bodies_are_groups_sharing_planes():
     assert len(enc.triplets) == 8 and len(set(enc.groups[0].refs) & set(enc.groups[1].refs)) == 4
     assert len(enc.mesh.vertices) == 16 and signed_volume(enc.mesh.vertices, enc.mesh.faces) == \
         pytest.approx(2.0, abs=1e-5)
+
+
+def test_planes_that_keep_no_face_of_three_vertices_give_no_polygon_not_a_numpy_error():
+    # issue 49 item 4: bincount of no incidences is an integer array, and dividing it in place by the
+    # counts raised numpy's UFuncTypeError out of pln validate.
+    from planefmt.geometry.halfspace import _faces
+
+    omega = np.vstack([np.eye(3), -np.eye(3)])
+    positions = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    inc = np.array([[0, 0], [1, 0], [0, 1], [1, 2]])
+    offsets, order, planes = _faces(omega, positions, inc)
+    assert offsets.tolist() == [0] and len(order) == 0 and len(planes) == 0

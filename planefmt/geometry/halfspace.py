@@ -469,8 +469,9 @@ def _faces(omega: np.ndarray, positions: np.ndarray,
     counts = np.bincount(pi, minlength=len(omega))
     keep = counts[pi] >= 3
     vi, pi = vi[keep], pi[keep]
+    # float64 also where no plane keeps three vertices: bincount of nothing is an integer array
     centre = np.column_stack([np.bincount(pi, weights=positions[vi, i], minlength=len(omega))
-                              for i in range(3)])
+                              for i in range(3)]).astype(np.float64)
     with np.errstate(invalid="ignore", divide="ignore"):
         centre /= counts[:, None]
     e1, e2 = in_plane_basis(omega)
