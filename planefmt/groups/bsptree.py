@@ -31,7 +31,7 @@ from typing import Protocol, TypeVar
 
 import numpy as np
 
-from ..errors import GeometryError
+from ..errors import GeometryError, LimitError
 from ..geometry.clipping import split_polygons
 from ..geometry.halfspace import intersect
 from ..geometry.planes import in_plane_basis
@@ -55,6 +55,11 @@ class Tree:
     kind: np.ndarray
     outer: np.ndarray
     end: np.ndarray
+
+
+#: The most work a tree may ask of the decoder (spec §9.7): the sum over its nodes of their depths,
+#: the clips :func:`boundary` makes. A chain of 20,000 splits (4e8) took 25 s; 2^25 takes about a second.
+MAX_TREE_WORK = 1 << 25
 
 
 def parse(tokens: np.ndarray, refs: int) -> Tree:
@@ -86,6 +91,14 @@ def parse(tokens: np.ndarray, refs: int) -> Tree:
     outer = np.where(split, 0, -1)
     idx = np.flatnonzero(split)
     outer[idx] = end[idx + 1]
+    # Depth in preorder: a split's inner child is one deeper, its outer child too (at outer[i]).
+    depth = np.zeros(n, dtype=np.int64)
+    for i in idx.tolist():
+        depth[i + 1] = depth[outer[i]] = depth[i] + 1
+    work = int(depth.sum())
+    if work > MAX_TREE_WORK:
+        raise LimitError(f"BSP tree of {n} tokens asks {work} clips of its decoder, above {MAX_TREE_WORK} "
+                         f"(the sum of its nodes' depths, spec §9.7)")
     kind = np.where(split, SPLIT, np.where(tok == BSP_IN, IN, OUT))
     return Tree(plane=np.where(split, tok, -1), kind=kind, outer=outer, end=end)
 
