@@ -219,12 +219,13 @@ def geometry(case: ValidCase) -> tuple[dict, np.ndarray | None]:
     worlds = world_matrices([(o.parent, o.transform) for o in case.objects])
     summaries, corners = [], []
     kinds = records.kinds_of(*case.header.version)
+    error = _plane_error(case.header)
     for g in case.groups:
         if g.kind not in kinds:
             summaries.append(None)  # skipped: SKIPPED_GROUP_KIND (kind 5 too, in a version before 3.1)
             continue
         s, points = reference.summary(g.kind, case.table[list(g.refs)], _role_bits(g), g.cells, g.tree,
-                                      g.vertex_planes, g.facets, g.shell)
+                                      g.vertex_planes, g.facets, g.shell, error)
         summaries.append({k: v if k in ("vertices", "triangles") else rounded(v) for k, v in s.items()})
         corners.append(points @ worlds[g.obj][:3, :3].T + worlds[g.obj][:3, 3])
     world = None
@@ -234,6 +235,13 @@ def geometry(case: ValidCase) -> tuple[dict, np.ndarray | None]:
     section = {"tolerance": GEOMETRY_TOLERANCE, "world_bbox": None if world is None else world.tolist(),
                "groups": summaries}
     return section, world
+
+
+def _plane_error(header: Header) -> reference.PlaneError:
+    """Spec §9.4's coding error of a case's header, for the merge distance of its counts."""
+    q = header.quantization
+    return reference.plane_error(int(header.coding), q and (q.bits_nu, q.bits_phi, q.bits_h), q and (q.h_min, q.h_max),
+                                 header.tolerance, header.diagonal)
 
 
 def copies(case: ValidCase) -> dict[int, int]:
