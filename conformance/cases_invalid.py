@@ -1330,6 +1330,14 @@ def _():
     return l_file(grup(range(8), kind=2, tree=(6, IN, OUT)), L_PLANES[:8])
 
 
+@geometry_case("xgeom_bsp_unbounded_twice", "UNBOUNDED_POLYTOPE", "a tree whose IN leaf is the half-space z <= 1 "
+               "reached by the same split twice (the second split's outer side an empty OUT leaf)",
+               also=("BAD_GROUP_STRUCTURE",))
+def _():
+    geometry_defect("UNBOUNDED_POLYTOPE", 2, L_PLANES[:8], None, None, (6, 6, IN, OUT, OUT))
+    return l_file(grup(range(8), kind=2, tree=(6, 6, IN, OUT, OUT)), L_PLANES[:8])
+
+
 @geometry_case("xgeom_v3_sealed_parallel", "BAD_VERTEX", "version 3.1 sealed cube whose vertex 7 is named by "
                "x <= 1, x >= 0 and z <= 1: two parallel planes (|det| 1e-16 in float64)")
 def _():

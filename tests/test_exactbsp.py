@@ -185,3 +185,21 @@ def test_a_chain_of_200000_splits_is_refused_before_its_quadratic_decode():
     with pytest.raises(LimitError) as info:
         parse(tokens, 1)
     assert info.value.code == "LIMIT_EXCEEDED"
+
+
+@pytest.mark.parametrize("tokens", [(2, 2, 0, 1, 1), (2, 2, 2, 0, 1, 1, 1)], ids=["twice", "three times"])
+def test_an_in_leaf_reached_by_one_split_repeated_is_unbounded(tmp_path, tokens):
+    # issue 49 item 3: the IN leaf x <= 1 behind the same split twice was "valid (0 findings)" with an
+    # empty mesh (the convex piece's repeated plane clipped its own face away); spec §9.7.
+    import math
+
+    import planefmt
+    from planefmt.errors import GeometryError
+    from spec_files import pln_file, uv
+
+    path = tmp_path / "twice.pln"
+    path.write_bytes(pln_file([(2, [0], [], uv(len(tokens)) + bytes(tokens))], [(math.pi / 2, 0.0, 1.0)],
+                              major=5, minor=2))
+    with pytest.raises(GeometryError) as info:
+        planefmt.decode_mesh(path)
+    assert info.value.code == "UNBOUNDED_POLYTOPE"
