@@ -744,6 +744,10 @@ CASES = [
               (Obj("prism"), Planes(np.array([[0.0, 0.0, 1.0], [math.pi, 0.0, 1.0]] + [
                   [math.pi / 2, k * math.pi / 4, 1.0] for k in range(8)])),
                Group(0, 0, tuple(range(10)))), decoded_bbox=True),
+    ValidCase("sliver_8_7e_8", "a box 8.7e-8 x 1 x 1 in float64: thin, but above spec §9.4's 1e-8 of its diagonal",
+              Header(coding=Coding.FLOAT64, units=Units.METRE),
+              (Obj("sliver"), Planes(box((0, 0, 0), (8.7e-8, 1, 1))), Group(0, 0, tuple(range(6)))),
+              decoded_bbox=True),
     ValidCase("sphere200", "200 planes tangent to the unit sphere, one convex group, float32, uncompressed",
               Header(coding=Coding.FLOAT32, units=Units.METRE),
               (Obj("sphere"), Planes(tangent_planes(200)), Group(0, 0, tuple(range(200)))), decoded_bbox=True),

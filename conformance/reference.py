@@ -18,15 +18,16 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linprog
-from scipy.spatial import HalfspaceIntersection
+from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 #: Candidate vertices closer than this fraction of the polytope's extent are one vertex,
 #: and a vertex this close to a plane lies on it. Qhull's vertices are good to ~1e-15.
 WELD = 1e-9
 
 #: Vertex and triangle counts are only stated where distinct vertices are at least this
-#: fraction of the extent apart, so that no sane decoder's vertex welding can change them.
-DISTINCT = 1e-5
+#: fraction of the extent apart: ten times spec §9.4's 1e-9 that every decoder merges (its other merge
+#: rules are the reference's own, merged_labels).
+DISTINCT = 1e-8
 
 #: A vertex whose planes' unit normals span less than this (|det| of three) is ill-conditioned
 #: (spec §9.4's merge rules).
@@ -99,8 +100,22 @@ def planes_of(triplets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return omega, t[:, 2].copy()
 
 
+#: Spec §9.4: the unit normals of a bounded polytope surround the origin by at least this much, and
+#: a polytope is no thinner than THIN x its diagonal.
+BOUNDED_MARGIN = 1e-6
+THIN = 1e-8
+
+
 def convex_faces(omega: np.ndarray, h: np.ndarray) -> list[Face]:
-    """Faces of ``{x : omega_i . x <= h_i}``; raises ``Defect`` if it is empty, flat or unbounded."""
+    """Faces of ``{x : omega_i . x <= h_i}``; raises ``Defect`` if it is empty, flat or unbounded
+    (spec §9.4's relative criteria: decided at unit size, by a power of two that scales exactly)."""
+    reach = float(np.abs(h).max())
+    unit = 2.0 ** -round(np.log2(reach)) if reach > 0 else 1.0
+    faces = _unit_faces(omega, h * unit)
+    return [Face(f.normal, f.offset / unit, f.points / unit, f.plane) for f in faces]
+
+
+def _unit_faces(omega: np.ndarray, h: np.ndarray) -> list[Face]:
     free = [(None, None)] * 3
     extent = []
     for axis in range(3):
@@ -113,6 +128,12 @@ def convex_faces(omega: np.ndarray, h: np.ndarray) -> list[Face]:
             if res.status == 3:
                 raise Defect("UNBOUNDED_POLYTOPE", "the half-spaces do not bound a finite region")
             extent.append(res.x[axis])
+    try:
+        margin = -float(ConvexHull(omega).equations[:, 3].max())  # min over unit u of max omega . u
+    except QhullError:
+        margin = 0.0
+    if margin < BOUNDED_MARGIN:
+        raise Defect("UNBOUNDED_POLYTOPE", "the plane normals surround the origin by less than 1e-6")
     size = float(np.linalg.norm(np.array(extent[0::2]) - np.array(extent[1::2])))
     # Chebyshev centre: the deepest point, and the radius of the largest ball inside.
     res = linprog([0, 0, 0, -1.0], A_ub=np.column_stack([omega, np.ones(len(h))]), b_ub=h,
@@ -132,6 +153,9 @@ def convex_faces(omega: np.ndarray, h: np.ndarray) -> list[Face]:
         e2 = np.cross(n, e1)  # (e1, e2, n) right-handed: ascending angle is counter-clockwise
         angle = np.arctan2((on - centre) @ e2, (on - centre) @ e1)
         faces.append(Face(n, float(d), on[np.argsort(angle)], i))
+    width = min(max(f.offset - vertices @ f.normal) for f in faces)
+    if width <= THIN * float(np.linalg.norm(np.ptp(vertices, axis=0))):
+        raise Defect("EMPTY_POLYTOPE", "thinner than 1e-8 of its diagonal")
     return faces
 
 

@@ -56,9 +56,12 @@ export function intersectHalfSpaces(planes, count, budget, coding = EXACT) {
   let scale = 0;
   for (let i = 0; i < count; i++) scale = Math.max(scale, Math.abs(planes[4 * i + 3]));
   if (scale === 0) scale = 1;
+  const margin = normalMargin(planes, count, budget);
+  // every point of the solid lies within scale / margin of the origin (§9.4): a box twice that
+  // keeps the rounding margins of the clips at the solid's own size
+  const R = Math.min(BOX, 2 / Math.max(margin, BOUNDED_MARGIN)) * scale;
   const all = new Float64Array(4 * (count + 6));
   all.set(planes.subarray(0, 4 * count));
-  const R = BOX * scale;
   for (let a = 0; a < 3; a++) {
     all[4 * (count + 2 * a) + a] = 1;
     all[4 * (count + 2 * a) + 3] = R;
@@ -75,7 +78,78 @@ export function intersectHalfSpaces(planes, count, budget, coding = EXACT) {
   for (let v = 0; v < poly.nv; v++) {
     for (let s = 0; s < 3; s++) if (poly.vp[3 * v + s] >= count) fail('UNBOUNDED_POLYTOPE', 'a vertex on no three of its planes');
   }
-  return poly.merged(coding, scale);
+  if (margin < BOUNDED_MARGIN) fail('UNBOUNDED_POLYTOPE', `the plane normals surround no direction by ${BOUNDED_MARGIN} (§9.4)`);
+  const out = poly.merged(coding, scale);
+  thick(out, all);
+  return out;
+}
+
+/** A polytope thinner than this fraction of its diagonal has no interior (§9.4, planefmt's THIN). */
+const THIN = 1e-8;
+
+/**
+ * EMPTY_POLYTOPE unless the polytope's least extent along a face's normal exceeds THIN × its diagonal.
+ * @param {Polytope} poly @param {Float64Array} P planes
+ */
+function thick(poly, P) {
+  const used = [...new Set(poly.faces.flatMap((f) => [...f.loop]))];
+  const X = poly.points;
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  for (const v of used) {
+    for (let c = 0; c < 3; c++) {
+      lo[c] = Math.min(lo[c], X[3 * v + c]);
+      hi[c] = Math.max(hi[c], X[3 * v + c]);
+    }
+  }
+  const extent = Math.hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  let width = Infinity;
+  for (const f of poly.faces) {
+    const p = 4 * f.plane;
+    let far = 0;
+    for (const v of used) far = Math.max(far, P[p + 3] - P[p] * X[3 * v] - P[p + 1] * X[3 * v + 1] - P[p + 2] * X[3 * v + 2]);
+    width = Math.min(width, far);
+  }
+  if (!(width > THIN * extent)) fail('EMPTY_POLYTOPE', `${width} thick across ${extent}: no interior (§9.4)`);
+}
+
+/** The least margin by which a bounded polytope's unit normals surround the origin (§9.4, planefmt's
+ * BOUNDED_MARGIN): float32's angles tilt parallel planes by ~1e-7, and a cube missing a plane is
+ * unbounded, not closed 10^7 away. */
+const BOUNDED_MARGIN = 1e-6;
+
+/**
+ * min over unit u of max_i ω_i·u, the distance from the origin to the boundary of the hull of the
+ * unit normals: 1 / the farthest vertex of {x : ω_i·x ≤ 1}, clipped from a box of half-side
+ * 2 / BOUNDED_MARGIN; 0 where that polytope reaches the box.
+ * @param {Float64Array} planes @param {number} count @param {Budget} budget
+ */
+function normalMargin(planes, count, budget) {
+  const R = 2 / BOUNDED_MARGIN;
+  const all = new Float64Array(4 * (count + 6));
+  for (let i = 0; i < count; i++) {
+    for (let c = 0; c < 3; c++) all[4 * i + c] = planes[4 * i + c];
+    all[4 * i + 3] = 1;
+  }
+  for (let a = 0; a < 3; a++) {
+    all[4 * (count + 2 * a) + a] = 1;
+    all[4 * (count + 2 * a) + 3] = R;
+    all[4 * (count + 2 * a + 1) + a] = -1;
+    all[4 * (count + 2 * a + 1) + 3] = R;
+  }
+  const polar = new Clipper(all, count);
+  for (let i = 0; i < count; i++) {
+    polar.clip(i);
+    budget.left -= polar.size;
+    if (budget.left < 0) fail('LIMIT_EXCEEDED', `decoding work above ${WORK_LIMIT} vertex visits`);
+  }
+  polar.compact();
+  let far = 0;
+  for (let v = 0; v < polar.nv; v++) {
+    for (let s = 0; s < 3; s++) if (polar.vp[3 * v + s] >= count) return 0;
+    far = Math.max(far, Math.hypot(polar.vx[3 * v], polar.vx[3 * v + 1], polar.vx[3 * v + 2]));
+  }
+  return 1 / far;
 }
 
 class Clipper {
