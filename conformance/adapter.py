@@ -76,14 +76,17 @@ def _world(objects: list[planefmt.ObjectRecord]) -> list[np.ndarray]:
 
 
 def _geometry(groups: list[planefmt.PartGroup], objects: list[planefmt.ObjectRecord],
-              version: tuple[int, int]) -> dict | None:
-    """Per-group summaries of the decoded surface, or None where planefmt cannot decode every group."""
+              header: planefmt.Header) -> dict | None:
+    """Per-group summaries of the decoded surface, or None where planefmt cannot decode every group.
+    Decoded with the plane error of the header's coding, as ``planefmt.decode_mesh`` decodes the file
+    (its merge distance, spec §9.4, sets the vertex counts)."""
     try:
         from planefmt import codec
     except ImportError:
         return None
     worlds = _world(objects)
-    kinds = records.kinds_of(*version)
+    kinds = records.kinds_of(*header.version)
+    error = codec.header_plane_error(header)
     summaries, corners, complete = [], [], True
     for g in groups:
         if g.kind not in kinds:
@@ -92,7 +95,7 @@ def _geometry(groups: list[planefmt.PartGroup], objects: list[planefmt.ObjectRec
         if int(g.kind) not in codec.DECODERS:
             complete = False  # still decode the others: their geometry errors count
             continue
-        d = codec.decode_group(g.planes, g, g.index)
+        d = codec.decode_group(g.planes, g, g.index, error)
         used = np.unique(d.triangles)
         a, b, c = (d.vertices[d.triangles[:, i]] for i in range(3))
         cross = np.cross(b - a, c - a)
@@ -140,7 +143,7 @@ def describe(path: str) -> dict:
             "colours": list(colours.values()),
             "metadata": {**r.metadata, **({UP_AXIS: r.header.up_axis} if r.header.up_axis else {})},
             "findings": sorted({code for code, _ in r.findings}),
-            "geometry": _geometry(groups, r.objects, r.header.version),
+            "geometry": _geometry(groups, r.objects, r.header),
         }
 
 

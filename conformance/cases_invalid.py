@@ -1307,6 +1307,20 @@ def _():
     return _convex("UNBOUNDED_POLYTOPE", CUBE[[0, 1, 2, 3, 5]])
 
 
+@geometry_case("xgeom_tilt_unbounded", "UNBOUNDED_POLYTOPE", "the cube's planes but z >= 0, their angles rounded to "
+               "float32: the four sides tilt by 4.4e-8 and meet 2.3e7 below, but their normals surround the origin by "
+               "less than spec §9.4's 1e-6")
+def _():
+    tilted = CUBE[:5].copy()
+    tilted[:, :2] = tilted[:, :2].astype(np.float32)
+    return _convex("UNBOUNDED_POLYTOPE", tilted)
+
+
+@geometry_case("xgeom_sliver", "EMPTY_POLYTOPE", "a box 1e-9 x 1 x 1: thinner than spec §9.4's 1e-8 of its diagonal")
+def _():
+    return _convex("EMPTY_POLYTOPE", box((0, 0, 0), (1e-9, 1, 1)))
+
+
 @geometry_case("xgeom_patch_unbounded", "UNBOUNDED_POLYTOPE", "a pseudo-convex patch (kind 3) of the five faces "
                "of an open box with no bounding plane over the opening")
 def _():
@@ -1328,6 +1342,14 @@ def _():
 def _():
     geometry_defect("UNBOUNDED_POLYTOPE", 2, L_PLANES[:8], None, None, (6, IN, OUT))
     return l_file(grup(range(8), kind=2, tree=(6, IN, OUT)), L_PLANES[:8])
+
+
+@geometry_case("xgeom_bsp_unbounded_twice", "UNBOUNDED_POLYTOPE", "a tree whose IN leaf is the half-space z <= 1 "
+               "reached by the same split twice (the second split's outer side an empty OUT leaf)",
+               also=("BAD_GROUP_STRUCTURE",))
+def _():
+    geometry_defect("UNBOUNDED_POLYTOPE", 2, L_PLANES[:8], None, None, (6, 6, IN, OUT, OUT))
+    return l_file(grup(range(8), kind=2, tree=(6, 6, IN, OUT, OUT)), L_PLANES[:8])
 
 
 @geometry_case("xgeom_v3_sealed_parallel", "BAD_VERTEX", "version 3.1 sealed cube whose vertex 7 is named by "

@@ -219,12 +219,13 @@ def geometry(case: ValidCase) -> tuple[dict, np.ndarray | None]:
     worlds = world_matrices([(o.parent, o.transform) for o in case.objects])
     summaries, corners = [], []
     kinds = records.kinds_of(*case.header.version)
+    error = _plane_error(case.header)
     for g in case.groups:
         if g.kind not in kinds:
             summaries.append(None)  # skipped: SKIPPED_GROUP_KIND (kind 5 too, in a version before 3.1)
             continue
         s, points = reference.summary(g.kind, case.table[list(g.refs)], _role_bits(g), g.cells, g.tree,
-                                      g.vertex_planes, g.facets, g.shell)
+                                      g.vertex_planes, g.facets, g.shell, error)
         summaries.append({k: v if k in ("vertices", "triangles") else rounded(v) for k, v in s.items()})
         corners.append(points @ worlds[g.obj][:3, :3].T + worlds[g.obj][:3, 3])
     world = None
@@ -234,6 +235,13 @@ def geometry(case: ValidCase) -> tuple[dict, np.ndarray | None]:
     section = {"tolerance": GEOMETRY_TOLERANCE, "world_bbox": None if world is None else world.tolist(),
                "groups": summaries}
     return section, world
+
+
+def _plane_error(header: Header) -> reference.PlaneError:
+    """Spec §9.4's coding error of a case's header, for the merge distance of its counts."""
+    q = header.quantization
+    return reference.plane_error(int(header.coding), q and (q.bits_nu, q.bits_phi, q.bits_h), q and (q.h_min, q.h_max),
+                                 header.tolerance, header.diagonal)
 
 
 def copies(case: ValidCase) -> dict[int, int]:
@@ -739,6 +747,10 @@ CASES = [
               (Obj("prism"), Planes(np.array([[0.0, 0.0, 1.0], [math.pi, 0.0, 1.0]] + [
                   [math.pi / 2, k * math.pi / 4, 1.0] for k in range(8)])),
                Group(0, 0, tuple(range(10)))), decoded_bbox=True),
+    ValidCase("sliver_8_7e_8", "a box 8.7e-8 x 1 x 1 in float64: thin, but above spec §9.4's 1e-8 of its diagonal",
+              Header(coding=Coding.FLOAT64, units=Units.METRE),
+              (Obj("sliver"), Planes(box((0, 0, 0), (8.7e-8, 1, 1))), Group(0, 0, tuple(range(6)))),
+              decoded_bbox=True),
     ValidCase("sphere200", "200 planes tangent to the unit sphere, one convex group, float32, uncompressed",
               Header(coding=Coding.FLOAT32, units=Units.METRE),
               (Obj("sphere"), Planes(tangent_planes(200)), Group(0, 0, tuple(range(200)))), decoded_bbox=True),

@@ -18,15 +18,45 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linprog
-from scipy.spatial import HalfspaceIntersection
+from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 #: Candidate vertices closer than this fraction of the polytope's extent are one vertex,
 #: and a vertex this close to a plane lies on it. Qhull's vertices are good to ~1e-15.
 WELD = 1e-9
 
 #: Vertex and triangle counts are only stated where distinct vertices are at least this
-#: fraction of the extent apart, so that no sane decoder's vertex welding can change them.
-DISTINCT = 1e-5
+#: fraction of the extent apart: ten times spec §9.4's 1e-9 that every decoder merges (its other merge
+#: rules are the reference's own, merged_labels).
+DISTINCT = 1e-8
+
+#: A vertex whose planes' unit normals span less than this (|det| of three) is ill-conditioned
+#: (spec §9.4's merge rules).
+CONDITIONED = 1e-9
+
+
+@dataclass(frozen=True)
+class PlaneError:
+    """How far a file's coding may move a plane (spec §9.4): ``angle`` (A), ``h`` (H) plus
+    ``h_relative`` times the group's largest |h|, and ``limit`` (L), all model units or radians."""
+
+    angle: float = 0.0
+    h: float = 0.0
+    h_relative: float = 0.0
+    limit: float = float("inf")
+
+
+def plane_error(coding: int, bits=None, h_range=None, tolerance: float = float("nan"),
+                diagonal: float = float("nan")) -> PlaneError:
+    """Spec §9.4's A, H and L of a header: codings 2 and 3 half a step, 0 half an f32 unit."""
+    limit = tolerance / 2 * diagonal
+    limit = limit if np.isfinite(limit) else float("inf")
+    if coding in (2, 3):
+        return PlaneError(max(np.pi / 2.0 ** bits[0], np.pi / 2.0 ** bits[1]),
+                          (h_range[1] - h_range[0]) / (2 * (2.0 ** bits[2] - 1)), 0.0, limit)
+    if coding == 0:
+        return PlaneError(2.0 ** -22, 0.0, 2.0 ** -24, limit)
+    return PlaneError(limit=limit)
+
 
 #: |det| of three unit normals at or below which they are linearly dependent (spec §9.9).
 DEPENDENT = 1e-12
@@ -70,8 +100,22 @@ def planes_of(triplets: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return omega, t[:, 2].copy()
 
 
+#: Spec §9.4: the unit normals of a bounded polytope surround the origin by at least this much, and
+#: a polytope is no thinner than THIN x its diagonal.
+BOUNDED_MARGIN = 1e-6
+THIN = 1e-8
+
+
 def convex_faces(omega: np.ndarray, h: np.ndarray) -> list[Face]:
-    """Faces of ``{x : omega_i . x <= h_i}``; raises ``Defect`` if it is empty, flat or unbounded."""
+    """Faces of ``{x : omega_i . x <= h_i}``; raises ``Defect`` if it is empty, flat or unbounded
+    (spec §9.4's relative criteria: decided at unit size, by a power of two that scales exactly)."""
+    reach = float(np.abs(h).max())
+    unit = 2.0 ** -round(np.log2(reach)) if reach > 0 else 1.0
+    faces = _unit_faces(omega, h * unit)
+    return [Face(f.normal, f.offset / unit, f.points / unit, f.plane) for f in faces]
+
+
+def _unit_faces(omega: np.ndarray, h: np.ndarray) -> list[Face]:
     free = [(None, None)] * 3
     extent = []
     for axis in range(3):
@@ -84,6 +128,12 @@ def convex_faces(omega: np.ndarray, h: np.ndarray) -> list[Face]:
             if res.status == 3:
                 raise Defect("UNBOUNDED_POLYTOPE", "the half-spaces do not bound a finite region")
             extent.append(res.x[axis])
+    try:
+        margin = -float(ConvexHull(omega).equations[:, 3].max())  # min over unit u of max omega . u
+    except QhullError:
+        margin = 0.0
+    if margin < BOUNDED_MARGIN:
+        raise Defect("UNBOUNDED_POLYTOPE", "the plane normals surround the origin by less than 1e-6")
     size = float(np.linalg.norm(np.array(extent[0::2]) - np.array(extent[1::2])))
     # Chebyshev centre: the deepest point, and the radius of the largest ball inside.
     res = linprog([0, 0, 0, -1.0], A_ub=np.column_stack([omega, np.ones(len(h))]), b_ub=h,
@@ -103,6 +153,9 @@ def convex_faces(omega: np.ndarray, h: np.ndarray) -> list[Face]:
         e2 = np.cross(n, e1)  # (e1, e2, n) right-handed: ascending angle is counter-clockwise
         angle = np.arctan2((on - centre) @ e2, (on - centre) @ e1)
         faces.append(Face(n, float(d), on[np.argsort(angle)], i))
+    width = min(max(f.offset - vertices @ f.normal) for f in faces)
+    if width <= THIN * float(np.linalg.norm(np.ptp(vertices, axis=0))):
+        raise Defect("EMPTY_POLYTOPE", "thinner than 1e-8 of its diagonal")
     return faces
 
 
@@ -220,8 +273,94 @@ def sealed_vertices(omega: np.ndarray, h: np.ndarray, vertex_planes) -> np.ndarr
     return np.array(out)
 
 
+def merged_labels(omega: np.ndarray, h: np.ndarray, faces: list[Face], vertices: np.ndarray,
+                  error: PlaneError) -> np.ndarray:
+    """One label per vertex of a polytope: spec §9.4's merge rules, in their words.
+
+    d = max(1e-9 D, min(1e-2 D, L, 1000 (A R + H))). Rule 1 joins the ends of every edge at most d
+    long. Rule 2, on edges whose ends rule 1 left apart, joins them where a well-conditioned end
+    lies within d of every plane through the other; rule 3 then where both ends are
+    ill-conditioned. A group rule 2 or 3 changes stands only if its planes pin one point within d
+    of each; else its vertices keep their labels from before the rule.
+    """
+    size = float(np.linalg.norm(np.ptp(vertices, axis=0)))
+    radius = float(np.linalg.norm(vertices, axis=1).max())
+    e = error.angle * radius + error.h + error.h_relative * float(np.abs(h).max())
+    d = max(WELD * size, min(1e-2 * size, error.limit, 1000 * e))
+    on = np.abs(vertices @ omega.T - h) <= WELD * size  # (V, n): the planes through each vertex
+    planes = [np.flatnonzero(row) for row in on]
+    conditioned = np.array([any(abs(np.linalg.det(omega[list(t)])) >= CONDITIONED
+                                for t in _triples(p)) for p in planes])
+    index = {tuple(v): i for i, v in enumerate(vertices)}
+    edges = sorted({tuple(sorted((index[tuple(a)], index[tuple(b)])))
+                    for f in faces for a, b in zip(f.points, np.roll(f.points, -1, axis=0))})
+
+    def near(u: int, v: int) -> bool:
+        return bool(np.linalg.norm(vertices[u] - vertices[v]) <= d)
+
+    def within(u: int, v: int) -> bool:
+        return bool(conditioned[u] and np.abs(omega[planes[v]] @ vertices[u] - h[planes[v]]).max() <= d)
+
+    chosen = [(u, v) for u, v in edges if near(u, v)]
+    labels = _joined(len(vertices), chosen)
+    for rule in (lambda u, v: within(u, v) or within(v, u), lambda u, v: not conditioned[u] and not conditioned[v]):
+        extra = [(u, v) for u, v in edges if (u, v) not in chosen and rule(u, v)]
+        if not extra:
+            continue
+        chosen += extra
+        joined = _joined(len(vertices), chosen)
+        out = labels + len(vertices)
+        for group in set(joined.tolist()):
+            members = np.flatnonzero(joined == group)
+            if len(set(labels[members].tolist())) == 1 or _pins(omega, h, sorted(set().union(
+                    *(planes[m].tolist() for m in members))), d):
+                out[members] = group
+        labels = np.unique(out, return_inverse=True)[1]
+    return labels
+
+
+def _merged_counts(omega: np.ndarray, h: np.ndarray, every: list[Face], faces: list[Face],
+                   vertices: np.ndarray, error: PlaneError) -> tuple[int, int]:
+    """Vertex and triangle counts of ``faces`` (of the polytope whose faces are ``every``) once
+    its vertices are merged (spec §9.4): a face left with fewer than three vertices is none."""
+    labels = merged_labels(omega, h, every, vertices, error)
+    index = {tuple(v): i for i, v in enumerate(vertices)}
+    used, triangles = set(), 0
+    for f in faces:
+        loop = [int(labels[index[tuple(p)]]) for p in f.points]
+        loop = [x for k, x in enumerate(loop) if x != loop[k - 1]] or loop[:1]
+        if len(loop) >= 3:
+            used.update(loop)
+            triangles += len(loop) - 2
+    return len(used), triangles
+
+
+def _triples(p: np.ndarray):
+    return ((a, b, c) for i, a in enumerate(p) for j, b in enumerate(p[i + 1:], i + 1) for c in p[j + 1:])
+
+
+def _joined(n: int, pairs) -> np.ndarray:
+    """Connected components of ``n`` vertices over ``pairs``, each labelled by its smallest vertex."""
+    label = np.arange(n)
+    for u, v in pairs:
+        a, b = label[u], label[v]
+        label[label == max(a, b)] = min(a, b)
+    return label
+
+
+def _pins(omega: np.ndarray, h: np.ndarray, planes: list[int], d: float) -> bool:
+    """Whether ``planes`` pin one point (smallest eigenvalue of the sum of omega omega^T at least
+    1e-6 of the largest) lying within ``d`` of each."""
+    w = omega[planes]
+    eig = np.linalg.eigvalsh(w.T @ w)
+    if eig[0] < 1e-6 * eig[2]:
+        return False
+    x = np.linalg.lstsq(w, h[planes], rcond=None)[0]
+    return bool(np.abs(w @ x - h[planes]).max() <= d)
+
+
 def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, tree=None, vertex_planes=None,
-            facets=None, shell=None) -> tuple[dict, np.ndarray]:
+            facets=None, shell=None, error: PlaneError = PlaneError()) -> tuple[dict, np.ndarray]:
     """The geometry summary of the conformance contract for one group (see README.md).
 
     ``triplets`` (m, 3) are the planes of the group's references in order;
@@ -256,7 +395,8 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
         volume = float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum()) / 6  # divergence theorem
         counts = (len(points), len(facets))  # vertex identity as stored: readers must not weld (spec §9.9)
     elif kind in (0, 3, 4):
-        faces = convex_faces(omega, h)
+        every = convex_faces(omega, h)
+        faces = every
         if kind == 0:
             if len(faces) < len(h):
                 raise Defect("REDUNDANT_PLANE", "a plane of the convex group bounds no face")
@@ -268,13 +408,13 @@ def summary(kind: int, triplets: np.ndarray, bounding: np.ndarray, cells=None, t
             if kind == 4:
                 faces = [flipped(f) for f in faces]
         points = np.concatenate([f.points for f in faces])
-        vertices = _weld(points, WELD * float(np.linalg.norm(np.ptp(points, axis=0))))
+        vertices = np.unique(np.concatenate([f.points for f in every]), axis=0)
         area = sum(f.area for f in faces)
         vector = sum(f.area_vector for f in faces)
-        counts = (len(vertices), sum(len(f.points) - 2 for f in faces))
         gaps = np.linalg.norm(vertices[:, None] - vertices[None], axis=2) + np.eye(len(vertices)) * 1e300
         if gaps.min() < DISTINCT * np.linalg.norm(np.ptp(vertices, axis=0)):
             raise ValueError("vertices too close together for the counts to be unambiguous")
+        counts = _merged_counts(omega, h, every, faces, vertices, error)
     else:
         entries = cells if kind == 1 else bsp_cells(tree, len(h))
         cell_faces = [_cell_faces(omega, h, e) if kind == 1 else _leaf_faces(omega, h, e) for e in entries]

@@ -381,3 +381,51 @@ def test_separate_convex_bodies_are_groups_sharing_planes():
     assert len(enc.triplets) == 8 and len(set(enc.groups[0].refs) & set(enc.groups[1].refs)) == 4
     assert len(enc.mesh.vertices) == 16 and signed_volume(enc.mesh.vertices, enc.mesh.faces) == \
         pytest.approx(2.0, abs=1e-5)
+
+
+def test_planes_that_keep_no_face_of_three_vertices_give_no_polygon_not_a_numpy_error():
+    # issue 49 item 4: bincount of no incidences is an integer array, and dividing it in place by the
+    # counts raised numpy's UFuncTypeError out of pln validate.
+    from planefmt.geometry.halfspace import _faces
+
+    omega = np.vstack([np.eye(3), -np.eye(3)])
+    positions = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    inc = np.array([[0, 0], [1, 0], [0, 1], [1, 2]])
+    offsets, order, planes = _faces(omega, positions, inc)
+    assert offsets.tolist() == [0] and len(order) == 0 and len(planes) == 0
+
+
+_BOX_NORMALS = np.array([[1.0, 0, 0], [0, 1, 0], [-1, 0, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]])
+
+
+@pytest.mark.parametrize("side", [7e-102, 1e-30, 1.0, 1e30, 3e200])
+def test_a_cube_decodes_at_any_scale(side):
+    # issue 49 item 8: a cube of side 7e-102 was UNBOUNDED_POLYTOPE (Qhull failed on dual points 1e101
+    # from the origin); spec §9.4's criteria are relative, so every size is the same cube.
+    poly = intersect(_BOX_NORMALS, np.full(6, side / 2))
+    assert len(poly.vertices) == 8 and len(poly.triangles) == 12
+    assert np.allclose(np.abs(poly.vertices), side / 2, rtol=1e-12, atol=0)
+
+
+def test_a_cube_missing_a_plane_that_tilt_closes_far_away_is_unbounded():
+    # the four sides tilted by float32's angles (4.4e-8) meet 2.3e7 below: planefmt accepted it, the
+    # JS reader did not; spec §9.4: normals surrounding the origin by less than 1e-6 bound nothing.
+    t = np.array([[math.pi / 2, 0, 1], [math.pi / 2, math.pi / 2, 1], [math.pi / 2, math.pi, 1],
+                  [math.pi / 2, 3 * math.pi / 2, 1], [0, 0, 1]], dtype=np.float32).astype(np.float64)
+    with pytest.raises(GeometryError) as info:
+        decode_convex(t)
+    assert info.value.code == "UNBOUNDED_POLYTOPE"
+
+
+@pytest.mark.parametrize("thickness, valid", [(1e-9, False), (1e-8, False), (8.7e-8, True), (1e-6, True)])
+@pytest.mark.parametrize("offset", [0.0, 1e3])
+def test_a_slab_has_an_interior_above_1e_8_of_its_diagonal(thickness, valid, offset):
+    # spec §9.4: thinner than 1e-8 x the diagonal is EMPTY_POLYTOPE wherever it lies (planefmt said
+    # UNBOUNDED_POLYTOPE for 1e-9 at the origin: its vertices were 1e9 times farther than the nearest plane).
+    h = np.array([thickness, 1, 0, 0, 1, 0]) + _BOX_NORMALS @ np.full(3, offset)
+    if valid:
+        assert len(intersect(_BOX_NORMALS, h).vertices) == 8
+    else:
+        with pytest.raises(GeometryError) as info:
+            intersect(_BOX_NORMALS, h)
+        assert info.value.code == "EMPTY_POLYTOPE"

@@ -169,3 +169,37 @@ def test_exact_side_tests_are_capped(monkeypatch):
     with pytest.raises(GeometryError) as err:
         exact_boundary(parse(tokens, 5), omega, h, 8.0)
     assert err.value.code == "LIMIT_EXCEEDED"
+
+
+def test_a_chain_of_200000_splits_is_refused_before_its_quadratic_decode():
+    # issue 49 item 3: a chain of 20,000 repeated splits took 25 s; the work bound of spec §9.7 (the
+    # sum of the nodes' depths) refuses the 200,000 chain in parse, before any clip.
+    import numpy as np
+
+    from planefmt.errors import LimitError
+    from planefmt.groups.bsptree import parse
+    from planefmt.model import BSP_IN, BSP_OUT
+
+    n = 200_000
+    tokens = np.array([0] * n + [BSP_IN] + [BSP_OUT] * n, dtype=np.int64)
+    with pytest.raises(LimitError) as info:
+        parse(tokens, 1)
+    assert info.value.code == "LIMIT_EXCEEDED"
+
+
+@pytest.mark.parametrize("tokens", [(2, 2, 0, 1, 1), (2, 2, 2, 0, 1, 1, 1)], ids=["twice", "three times"])
+def test_an_in_leaf_reached_by_one_split_repeated_is_unbounded(tmp_path, tokens):
+    # issue 49 item 3: the IN leaf x <= 1 behind the same split twice was "valid (0 findings)" with an
+    # empty mesh (the convex piece's repeated plane clipped its own face away); spec §9.7.
+    import math
+
+    import planefmt
+    from planefmt.errors import GeometryError
+    from spec_files import pln_file, uv
+
+    path = tmp_path / "twice.pln"
+    path.write_bytes(pln_file([(2, [0], [], uv(len(tokens)) + bytes(tokens))], [(math.pi / 2, 0.0, 1.0)],
+                              major=5, minor=2))
+    with pytest.raises(GeometryError) as info:
+        planefmt.decode_mesh(path)
+    assert info.value.code == "UNBOUNDED_POLYTOPE"

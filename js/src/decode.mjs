@@ -82,8 +82,9 @@ export function decodeGroup(group, table, header, earlier = [], trianglesLeft = 
 }
 
 /**
- * §9.4's E and L from the header: half a quantization step (codings 2, 3), half an f32 unit in
- * the last place (coding 0), nothing (coding 1); half the tolerance times the bbox diagonal.
+ * §9.4's E and L from the header: the larger half step of ν and φ and half the h step (codings
+ * 2, 3), 2^-22 rad and 2^-24 × the largest |h| (coding 0), nothing (coding 1); half the tolerance
+ * times the bbox diagonal.
  * @param {import('./header.mjs').Header} header
  * @returns {import('./convex.mjs').Coding}
  */
@@ -92,10 +93,11 @@ function codingError(header) {
   const half = bbox && Number.isFinite(tolerance)
     ? (tolerance / 2) * Math.hypot(bbox[1][0] - bbox[0][0], bbox[1][1] - bbox[0][1], bbox[1][2] - bbox[0][2]) : Infinity;
   if (coding >= 2) {
-    const angle = Math.hypot(Math.PI / 2 ** bits[0], Math.PI / 2 ** bits[1]);
+    const angle = Math.max(Math.PI / 2 ** bits[0], Math.PI / 2 ** bits[1]);
     return { angle, h: (h1 - h0) / (2 * (2 ** bits[2] - 1)), hRel: 0, half };
   }
-  if (coding === 0) return { angle: 2 ** -24, h: 0, hRel: 2 ** -24, half };
+  // half an f32 ulp of φ in [4, 2π), the largest angle stored
+  if (coding === 0) return { angle: 2 ** -22, h: 0, hRel: 2 ** -24, half };
   return { ...EXACT, half };
 }
 

@@ -193,6 +193,10 @@ export function cellsSurface(cells, planes) {
   return mesh;
 }
 
+/** The most work a tree may ask (§9.7): the sum over its nodes of their depths, planefmt's limit.
+ * Real trees stay far below it (js/test/hostile.test.mjs; spec §9.7 gives the corpus's figures). */
+export const TREE_WORK_LIMIT = 2 ** 25;
+
 /**
  * Trees (§9.7): the IN leaves' regions (bounded; empty ones allowed), and their faces pushed
  * down the tree from the root on their outer side: the pieces that reach an OUT leaf are the
@@ -218,6 +222,14 @@ export function treeSurface(tree, planes) {
     }
     if (tree[i] < IN_LEAF) open.push(i);
   }
+  // refused before any clip: a chain of n splits asks n²/2 of them
+  const depth = new Int32Array(t);
+  let work = 0;
+  for (let i = 0; i < t; i++) {
+    work += depth[i];
+    if (tree[i] < IN_LEAF) depth[inner[i]] = depth[outer[i]] = depth[i] + 1;
+  }
+  if (work > TREE_WORK_LIMIT) fail('LIMIT_EXCEEDED', `a tree asking ${work} clips, above ${TREE_WORK_LIMIT} (§9.7)`);
   // each node's parent and the side of its split it lies on, for the paths of the IN leaves
   const up = new Int32Array(t).fill(-1);
   for (let i = 0; i < t; i++) {

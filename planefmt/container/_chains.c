@@ -205,12 +205,41 @@ typedef struct {
     int64_t a, b, value;
 } Slot;
 
+/* Simple tabulation hashing of a directed edge (a, b): 16 tables of 256 random words, one per byte
+ * of a and of b, filled from a key the caller draws per decode (spec §9.13).  A fixed hash lets a file
+ * put every edge into a few slots, and linear probing then costs a probe per edge already there (a
+ * kind 9 walk of 100,000 such edges took 24 s); with keys the file cannot know, linear probing takes
+ * expected constant time per operation (Patrascu and Thorup, "The power of simple tabulation
+ * hashing", 2011), whatever the corners. */
+typedef struct {
+    uint64_t t[16][256];
+} EdgeHash;
+
+static EdgeHash *
+edge_hash_new(uint64_t key)
+{
+    EdgeHash *e = malloc(sizeof(EdgeHash));
+    if (!e)
+        return NULL;
+    for (int i = 0; i < 16; i++)
+        for (int j = 0; j < 256; j++) {
+            /* splitmix64 */
+            uint64_t z = (key += 0x9E3779B97F4A7C15ULL);
+            z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+            z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+            e->t[i][j] = z ^ (z >> 31);
+        }
+    return e;
+}
+
 /* Where directed edge (a, b) starts probing in a table of mask + 1 slots. */
 static int64_t
-edge_hash(int64_t a, int64_t b, int64_t mask)
+edge_hash(const EdgeHash *e, int64_t a, int64_t b, int64_t mask)
 {
-    uint64_t h = ((uint64_t)a * 0x9E3779B97F4A7C15ULL) ^ ((uint64_t)b * 0xC2B2AE3D27D4EB4FULL);
-    return (int64_t)(h >> 24) & mask;
+    uint64_t h = 0, x = (uint64_t)a, y = (uint64_t)b;
+    for (int i = 0; i < 8; i++, x >>= 8, y >>= 8)
+        h ^= e->t[i][x & 0xFF] ^ e->t[8 + i][y & 0xFF];
+    return (int64_t)(h & (uint64_t)mask);
 }
 
 static PyObject *
@@ -307,7 +336,8 @@ parallelograms(PyObject *self, PyObject *args)
     Py_buffer views[4];
     int held = 0;
     int64_t rows = 0;
-    if (!PyArg_ParseTuple(args, "OOOO", &objs[0], &objs[1], &objs[2], &objs[3]))
+    unsigned long long key;
+    if (!PyArg_ParseTuple(args, "OOOOK", &objs[0], &objs[1], &objs[2], &objs[3], &key))
         return NULL;
     for (; held < 4; held++)
         if (int64_view(objs[held], &views[held], held >= 2, names[held]) < 0)
@@ -329,9 +359,11 @@ parallelograms(PyObject *self, PyObject *args)
         size *= 2;
     Slot *slots = malloc(sizeof(Slot) * (size_t)size);
     int64_t *counts = calloc((size_t)(v > 0 ? v : 1), sizeof(int64_t));
-    if (!slots || !counts) {
+    EdgeHash *hash = edge_hash_new(key);
+    if (!slots || !counts || !hash) {
         free(slots);
         free(counts);
+        free(hash);
         PyErr_NoMemory();
         goto done;
     }
@@ -342,7 +374,7 @@ parallelograms(PyObject *self, PyObject *args)
     for (int64_t j = 0; j < t; j++)
         for (int s = 0; s < 3; s++) {
             int64_t a = tri[3 * j + s], b = tri[3 * j + (s + 1) % 3];
-            int64_t k = edge_hash(a, b, mask);
+            int64_t k = edge_hash(hash, a, b, mask);
             while (slots[k].a >= 0 && (slots[k].a != a || slots[k].b != b))
                 k = (k + 1) & mask;
             if (slots[k].a < 0) {
@@ -356,7 +388,7 @@ parallelograms(PyObject *self, PyObject *args)
             int64_t k = tri[3 * j + s], a = tri[3 * j + (s + 1) % 3], b = tri[3 * j + (s + 2) % 3];
             if (counts[k] >= 4 || !explicit[k] || a >= k || b >= k || !explicit[a] || !explicit[b])
                 continue;
-            int64_t q = edge_hash(b, a, mask);
+            int64_t q = edge_hash(hash, b, a, mask);
             while (slots[q].a >= 0 && (slots[q].a != b || slots[q].b != a))
                 q = (q + 1) & mask;
             if (slots[q].a < 0)
@@ -379,6 +411,7 @@ parallelograms(PyObject *self, PyObject *args)
     Py_END_ALLOW_THREADS
     free(slots);
     free(counts);
+    free(hash);
 done:
     for (int i = 0; i < held; i++)
         PyBuffer_Release(&views[i]);
@@ -391,11 +424,13 @@ done:
  * second triangle has closed yet.  Each entry sits on a stack of its directed edge (a hash map
  * from edge to the newest entry) and on two doubly linked lists, of the entries starting and of
  * those ending at a corner, newest first: entering, closing, and the left and right queries take
- * constant time, so a walk is linear in its triangles whatever a file holds. */
+ * constant time (the map's expected, its hash keyed per decode), so a walk is linear in its
+ * triangles whatever a file holds. */
 typedef struct {
     int64_t corners, used, mask;
     int64_t *start, *end, *below, *in_next, *in_prev, *out_next, *out_prev, *in_head, *out_head;
     Slot *slots; /* each edge's newest entry (value: its record, -1 for none) */
+    EdgeHash *hash;
 } Open;
 
 static void
@@ -404,10 +439,11 @@ open_free(Open *o)
     free(o->start);
     free(o->slots);
     free(o->in_head);
+    free(o->hash);
 }
 
 static int
-open_init(Open *o, int64_t triangles, int64_t corners)
+open_init(Open *o, int64_t triangles, int64_t corners, uint64_t key)
 {
     int64_t records = 3 * triangles, size = 16;
     while (size < 2 * records)
@@ -418,7 +454,8 @@ open_init(Open *o, int64_t triangles, int64_t corners)
     o->start = malloc(sizeof(int64_t) * 7 * (size_t)(records > 0 ? records : 1));
     o->slots = malloc(sizeof(Slot) * (size_t)size);
     o->in_head = malloc(sizeof(int64_t) * 2 * (size_t)corners);
-    if (!o->start || !o->slots || !o->in_head) {
+    o->hash = edge_hash_new(key);
+    if (!o->start || !o->slots || !o->in_head || !o->hash) {
         open_free(o);
         return -1;
     }
@@ -440,7 +477,7 @@ open_init(Open *o, int64_t triangles, int64_t corners)
 static int64_t
 open_slot(const Open *o, int64_t a, int64_t b)
 {
-    int64_t k = edge_hash(a, b, o->mask);
+    int64_t k = edge_hash(o->hash, a, b, o->mask);
     while (o->slots[k].a >= 0 && (o->slots[k].a != a || o->slots[k].b != b))
         k = (k + 1) & o->mask;
     return k;
@@ -553,10 +590,11 @@ walk(PyObject *self, PyObject *args)
      * decodes the walk in place and returns (reason, triangle), reason 0 for none. */
     PyObject *objs[4];
     long long corners;
+    unsigned long long key;
     Py_buffer views[4];
     int held = 0, reason = WALK_OK;
     int64_t at = -1;
-    if (!PyArg_ParseTuple(args, "OOLOO", &objs[0], &objs[1], &corners, &objs[2], &objs[3]))
+    if (!PyArg_ParseTuple(args, "OOLOOK", &objs[0], &objs[1], &corners, &objs[2], &objs[3], &key))
         return NULL;
     for (; held < 4; held++)
         if (uint64_view(objs[held], &views[held], held >= 2, "walk") < 0)
@@ -570,7 +608,7 @@ walk(PyObject *self, PyObject *args)
     int64_t *tri = views[2].buf, *links = views[3].buf;
     Open o;
     int64_t *stack = malloc(sizeof(int64_t) * (size_t)(3 * t + 1));
-    if (!stack || open_init(&o, t, corners) < 0) {
+    if (!stack || open_init(&o, t, corners, key) < 0) {
         free(stack);
         reason = WALK_MEMORY;
         goto done;
@@ -652,9 +690,10 @@ walk_codes(PyObject *self, PyObject *args)
      * 3 + zigzag(i2 - i1) otherwise); roots' entries are left as they are. */
     PyObject *objs[3];
     long long corners;
+    unsigned long long key;
     Py_buffer views[3];
     int held = 0;
-    if (!PyArg_ParseTuple(args, "OOLO", &objs[0], &objs[1], &corners, &objs[2]))
+    if (!PyArg_ParseTuple(args, "OOLOK", &objs[0], &objs[1], &corners, &objs[2], &key))
         return NULL;
     for (; held < 3; held++)
         if (uint64_view(objs[held], &views[held], held == 2, "walk_codes") < 0)
@@ -667,7 +706,7 @@ walk_codes(PyObject *self, PyObject *args)
     const int64_t *tri = views[0].buf, *links = views[1].buf;
     int64_t *codes = views[2].buf;
     Open o;
-    if (open_init(&o, t, corners) < 0) {
+    if (open_init(&o, t, corners, key) < 0) {
         PyErr_NoMemory();
         goto done;
     }
@@ -904,10 +943,10 @@ static PyMethodDef methods[] = {
      "value (V, 3) row-major: a turning chain of step sources predicts by reflection, resolve()'s rule "
      "elsewhere (OverflowError past limit, ValueError for a term not before)."},
     {"parallelograms", parallelograms, METH_VARARGS,
-     "parallelograms(triangles, explicit, start, terms): a kind 10 walk's parallelograms (spec §9.14) into "
+     "parallelograms(triangles, explicit, start, terms, key): a kind 10 walk's parallelograms (spec §9.14) into "
      "start (V + 1) and terms (rows a, b, c; at least 12V entries); returns the number of rows."},
     {"walk", walk, METH_VARARGS,
-     "walk(symbols, escapes, corners, triangles, links): decode a shell walk (spec §9.13) into triangles "
+     "walk(symbols, escapes, corners, triangles, links, key): decode a shell walk (spec §9.13) into triangles "
      "(3T int64) and links (T int64) in place; returns (reason, triangle), reason 0 where the walk is valid."},
     {"spanning", spanning, METH_VARARGS,
      "spanning(twin, faces, walk, rotation, links, defer): the encoder's depth-first walk over shared edges, "
@@ -920,7 +959,7 @@ static PyMethodDef methods[] = {
      "unvarints(data, out): the first len(out) LEB128 varints of data into out (64-bit); returns the bytes "
      "they took, or -1 where they are not that many valid varints (spec §2.2)."},
     {"walk_codes", walk_codes, METH_VARARGS,
-     "walk_codes(triangles, links, corners, codes): each attached triangle's corner code of spec §9.13."},
+     "walk_codes(triangles, links, corners, codes, key): each attached triangle's corner code of spec §9.13."},
     {NULL, NULL, 0, NULL},
 };
 

@@ -4,6 +4,7 @@ first-use order, the bodies as written and read, and every check the spec asks o
 from __future__ import annotations
 
 import math
+import secrets
 
 import numpy as np
 
@@ -331,14 +332,14 @@ def parallelograms(triangles: np.ndarray, explicit: np.ndarray) -> tuple[np.ndar
     triangle in order and each place of k in it, the edge (a, b) opposite k and the far corner c of
     that edge (the third corner of the first triangle that has (b, a)), where a, b and c are
     explicit and numbered below k; the first :data:`MAX_PARALLELOGRAMS` of each corner. In C (a hash
-    map of directed edges, two passes over the triangles) where the extension was built; else sorts."""
+    map of directed edges keyed per call, two passes over the triangles) where the extension was built; else sorts."""
     tri = np.asarray(triangles, dtype=np.int64)
     v = len(explicit)
     if _parallelograms is not None and MAX_PARALLELOGRAMS == 4:
         start = np.zeros(v + 1, dtype=np.int64)
         terms = np.zeros(12 * v, dtype=np.int64)
         rows = _parallelograms(np.ascontiguousarray(tri.reshape(-1)), np.asarray(explicit, dtype=np.int64), start,
-                               terms)
+                               terms, secrets.randbits(64))
         return start, terms[:3 * rows].reshape(-1, 3)
     k, a, b = (np.roll(tri, -s, axis=1).reshape(-1) for s in range(3))
     # Far corners: the edges sorted by (start, end), stable, so the first of a run is the first triangle's.

@@ -4,8 +4,9 @@ or "right", the other end of an open edge at the triangle's first two corners; o
 triangle carries both. Explicit corners may be coded as indices into each axis's sorted values.
 
 The walk is sequential (each answer depends on every triangle before it): ``_chains.c`` runs it in
-C, in time linear in the triangles; without the extension :class:`OpenEdges` runs the same rules in
-Python, slowly.
+C, in time linear in the triangles whatever the file holds (its edge map is hashed with a key drawn
+per decode, spec §9.13); without the extension :class:`OpenEdges` runs the same rules in Python,
+slowly.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from __future__ import annotations
 import collections
 import hashlib
 import itertools
+import secrets
 import zlib
 
 import brotli
@@ -48,44 +50,72 @@ _REASONS = {1: "a symbol is past its range", 2: "the walk needs more escapes tha
 
 
 class OpenEdges:
-    """The open edges of spec §9.13 in Python: per directed edge a stack of its entries, per corner
-    the entries starting and ending there, newest first (lists with lazy removal would be quadratic
-    on a hostile file; these dicts of insertion-ordered entries are not)."""
+    """The open edges of spec §9.13 in Python, as ``_chains.c`` keeps them: each entry on the stack of
+    its directed edge (a dict from the edge to its newest entry; Python's int-tuple hashes cannot be
+    made to collide by small corner numbers) and on two doubly linked lists, of the entries starting
+    and of those ending at its corners, newest first: every operation takes constant time."""
 
     def __init__(self) -> None:
-        self._stacks: dict[tuple[int, int], list[int]] = {}
-        self._ins: dict[int, dict[int, int]] = {}
-        self._outs: dict[int, dict[int, int]] = {}
-        self._ends: list[tuple[int, int]] = []
+        self._top: dict[tuple[int, int], int] = {}
+        self._start: list[int] = []
+        self._end: list[int] = []
+        self._below: list[int] = []
+        # per entry: next and previous in its start corner's list (out) and its end corner's (in)
+        self._links: list[list[int]] = []
+        self._out: dict[int, int] = {}
+        self._in: dict[int, int] = {}
+
+    def _unlink(self, r: int) -> None:
+        on, op, inn, inp = self._links[r]
+        if op >= 0:
+            self._links[op][0] = on
+        else:
+            self._out[self._start[r]] = on
+        if on >= 0:
+            self._links[on][1] = op
+        if inp >= 0:
+            self._links[inp][2] = inn
+        else:
+            self._in[self._end[r]] = inn
+        if inn >= 0:
+            self._links[inn][3] = inp
+
+    def _edge(self, s: int, e: int) -> None:
+        r = self._top.get((e, s), -1)
+        if r >= 0:
+            self._top[e, s] = self._below[r]
+            self._unlink(r)
+            return
+        r = len(self._start)
+        self._start.append(s)
+        self._end.append(e)
+        self._below.append(self._top.get((s, e), -1))
+        self._top[s, e] = r
+        on, inn = self._out.get(s, -1), self._in.get(e, -1)
+        self._links.append([on, -1, inn, -1])
+        if on >= 0:
+            self._links[on][1] = r
+        if inn >= 0:
+            self._links[inn][3] = r
+        self._out[s] = self._in[e] = r
 
     def triangle(self, a: int, b: int, c: int) -> None:
         for s, e in ((a, b), (b, c), (c, a)):
-            stack = self._stacks.get((e, s))
-            if stack:
-                r = stack.pop()
-                del self._outs[e][r], self._ins[s][r]
-                continue
-            r = len(self._ends)
-            self._ends.append((s, e))
-            self._stacks.setdefault((s, e), []).append(r)
-            self._outs.setdefault(s, {})[r] = e
-            self._ins.setdefault(e, {})[r] = s
-
-    @staticmethod
-    def _newest(entries: dict[int, int] | None, skip: int) -> int:
-        if not entries:
-            return -1
-        it = reversed(entries.values())
-        w = next(it)
-        return next(it, -1) if w == skip else w
+            self._edge(s, e)
 
     def left(self, i1: int, x: int) -> int:
         """The start of the newest open edge ending at ``i1`` (the second newest where that is ``x``)."""
-        return self._newest(self._ins.get(i1), x)
+        r = self._in.get(i1, -1)
+        if r >= 0 and self._start[r] == x:
+            r = self._links[r][2]
+        return self._start[r] if r >= 0 else -1
 
     def right(self, i0: int, x: int) -> int:
         """The end of the newest open edge starting at ``i0`` (the second newest where that is ``x``)."""
-        return self._newest(self._outs.get(i0), x)
+        r = self._out.get(i0, -1)
+        if r >= 0 and self._end[r] == x:
+            r = self._links[r][0]
+        return self._end[r] if r >= 0 else -1
 
 
 def _codes(tri: np.ndarray, links: np.ndarray, v: int) -> np.ndarray:
@@ -94,7 +124,7 @@ def _codes(tri: np.ndarray, links: np.ndarray, v: int) -> np.ndarray:
     tri = np.ascontiguousarray(tri, dtype=np.int64)
     links = np.ascontiguousarray(links, dtype=np.int64)
     if _walk_codes_c is not None:
-        _walk_codes_c(tri.reshape(-1), links, v, codes)
+        _walk_codes_c(tri.reshape(-1), links, v, codes, secrets.randbits(64))
         return codes
     edges, n = OpenEdges(), 0
     for j, (a, b, c) in enumerate(tri.tolist()):
@@ -208,7 +238,7 @@ def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray,
         tri = np.zeros(3 * t, dtype=np.int64)
         links = np.zeros(t, dtype=np.int64)
         reason, at = _walk_c(np.ascontiguousarray(symbols, dtype=np.uint64),
-                             np.ascontiguousarray(escapes, dtype=np.uint64), v, tri, links)
+                             np.ascontiguousarray(escapes, dtype=np.uint64), v, tri, links, secrets.randbits(64))
         tri = tri.reshape(-1, 3)
     else:
         tri, links, reason, at = _walk_python(symbols, escapes, v)

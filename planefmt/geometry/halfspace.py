@@ -76,9 +76,10 @@ MERGE_CAP = 1e-2
 #: Relative margin below which a point is not strictly inside, and a
 #: Chebyshev radius below which the intersection has no interior.
 _INTERIOR_EPS = 1e-12
-#: Dual facets closer to the origin than this (relative to the dual points' size) are vertices at
-#: infinity: above the joggle of "QJ" (~1e-11), so that joggling never makes an unbounded set look
-#: bounded (a vertex 1e9 times farther than the nearest plane is not one a mesh has).
+#: Dual facets closer to the origin than this (relative to the dual points' size) are vertices over
+#: 1e9 times farther from the interior point than its nearest plane: above the joggle of "QJ"
+#: (~1e-11). Boundedness is decided before (BOUNDED_MARGIN), so such a vertex means a sliver, or a
+#: point hugging one face, and the Chebyshev centre decides.
 _UNBOUNDED_EPS = 1e-9
 
 
@@ -140,8 +141,71 @@ def intersect(omega: np.ndarray, h: np.ndarray, *, group: object = None,
         raise GeometryError(f"{label}: plane normals and distances must be finite and non-zero")
     omega = omega / length[:, None]
     h = h / length
+    # Decided at unit size (spec §9.4's conditions are relative): a power of two scales exactly, and
+    # Qhull fails on the dual points of a solid 1e-101 across (1e101 from the origin).
+    reach = float(np.abs(h).max())
+    unit = 2.0 ** -round(math.log2(reach)) if reach > 0 else 1.0
+    if unit != 1.0:
+        poly = _intersect(omega, h * unit, label, (plane_error[0], plane_error[1] * unit), merge_limit * unit)
+        return Polytope(**{**poly.__dict__, "vertices": poly.vertices / unit, "interior": poly.interior / unit})
+    return _intersect(omega, h, label, plane_error, merge_limit)
 
+
+#: The least margin by which the unit normals of a bounded polytope surround the origin (spec §9.4):
+#: every direction u has a normal with omega . u at least this, so no point of the polytope lies
+#: farther from the origin than max |h| / this. Float32's angles tilt parallel planes by ~1e-7:
+#: a cube missing a plane is unbounded, not closed 10^7 away.
+BOUNDED_MARGIN = 1e-6
+
+
+def _normal_margin(omega: np.ndarray) -> float:
+    """min over unit u of max_i omega_i . u: the distance from the origin to the boundary of the
+    hull of the unit normals (0 or less where they lie in a half-space or a plane)."""
+    try:
+        hull = ConvexHull(omega)
+    except (QhullError, ValueError):
+        return 0.0
+    return float(-hull.equations[:, 3].max())
+
+
+def _intersect(omega: np.ndarray, h: np.ndarray, label: str, plane_error: tuple[float, float],
+               merge_limit: float) -> Polytope:
+    """:func:`intersect` of unit normals ``omega`` and ``h`` at unit size."""
     c = _interior_point(omega, h, label)
+    if _normal_margin(omega) < BOUNDED_MARGIN:
+        raise _unbounded(label, f"the plane normals surround no direction by {BOUNDED_MARGIN:g} (spec §9.4)")
+    try:
+        poly = _from_point(omega, h, c, label, plane_error, merge_limit)
+    except _FarFromCentre:
+        # The least-squares centre hugs a face of a long solid: the deepest point decides.
+        c = _interior_point(omega, h, label, least_squares=False)
+        try:
+            poly = _from_point(omega, h, c, label, plane_error, merge_limit)
+        except _FarFromCentre:
+            raise GeometryError(f"{label}: a sliver thinner than 1e-9 of its extent has no interior (spec §9.4)",
+                                code="EMPTY_POLYTOPE") from None
+    faces = poly.polygon_plane
+    v = poly.vertices
+    width = float((h[faces][:, None] - omega[faces] @ v.T).max(axis=1).min())
+    extent = float(np.linalg.norm(np.ptp(v, axis=0)))
+    if not width > THIN * extent:
+        raise GeometryError(f"{label}: the solid is {width:.3g} thick across {extent:.3g}, at most {THIN:g} of "
+                            f"its extent: no interior (spec §9.4)", code="EMPTY_POLYTOPE")
+    return poly
+
+
+#: A polytope thinner than this fraction of its diagonal (its least extent along a face's normal) has
+#: no interior (spec §9.4): far above float64's rounding at the polytope, below any solid a mesh holds.
+THIN = 1e-8
+
+
+class _FarFromCentre(Exception):
+    """A vertex 1e9 times farther from the interior point than its nearest plane."""
+
+
+def _from_point(omega: np.ndarray, h: np.ndarray, c: np.ndarray, label: str, plane_error: tuple[float, float],
+                merge_limit: float) -> Polytope:
+    """:func:`_intersect` from the interior point ``c`` of a bounded intersection."""
     # Near-copies of one plane (all but the innermost redundant) would put clusters of dual points
     # closer than Qhull's joggle: one copy each.
     slack = h - omega @ c
@@ -231,7 +295,7 @@ def _vertices(omega: np.ndarray, rhs: np.ndarray, dual: np.ndarray, c: np.ndarra
     # infinity, i.e. a direction in which the solid does not end.
     offsets = hull.equations[:, 3]
     if not (offsets < -_UNBOUNDED_EPS * np.abs(dual).max()).all():
-        raise _unbounded(label, "the intersection extends to infinity")
+        raise _FarFromCentre()
     simplices = hull.simplices.astype(np.int64)
     facet_points = -hull.equations[:, :3] / offsets[:, None]
     if joggle:
@@ -287,11 +351,12 @@ def _unbounded(label: str, why: str) -> GeometryError:
                          code="UNBOUNDED_POLYTOPE")
 
 
-def _interior_point(omega: np.ndarray, h: np.ndarray, label: str) -> np.ndarray:
-    """A point strictly inside every half-space, or ``EMPTY_POLYTOPE``."""
+def _interior_point(omega: np.ndarray, h: np.ndarray, label: str, least_squares: bool = True) -> np.ndarray:
+    """A point strictly inside every half-space (the least-squares centre where it is, else the
+    Chebyshev centre), or ``EMPTY_POLYTOPE``."""
     scale = max(float(np.abs(h).max()), 1e-300)
     a = np.column_stack([omega, np.ones(len(h))])
-    if len(h) >= 4:
+    if len(h) >= 4 and least_squares:
         # The point equidistant (in least squares) from all planes: the centre of the inscribed
         # sphere for spheres and boxes, and inside for most solids.
         ata = a.T @ a
@@ -469,8 +534,9 @@ def _faces(omega: np.ndarray, positions: np.ndarray,
     counts = np.bincount(pi, minlength=len(omega))
     keep = counts[pi] >= 3
     vi, pi = vi[keep], pi[keep]
+    # float64 also where no plane keeps three vertices: bincount of nothing is an integer array
     centre = np.column_stack([np.bincount(pi, weights=positions[vi, i], minlength=len(omega))
-                              for i in range(3)])
+                              for i in range(3)]).astype(np.float64)
     with np.errstate(invalid="ignore", divide="ignore"):
         centre /= counts[:, None]
     e1, e2 = in_plane_basis(omega)

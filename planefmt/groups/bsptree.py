@@ -31,7 +31,7 @@ from typing import Protocol, TypeVar
 
 import numpy as np
 
-from ..errors import GeometryError
+from ..errors import GeometryError, LimitError
 from ..geometry.clipping import split_polygons
 from ..geometry.halfspace import intersect
 from ..geometry.planes import in_plane_basis
@@ -55,6 +55,11 @@ class Tree:
     kind: np.ndarray
     outer: np.ndarray
     end: np.ndarray
+
+
+#: The most work a tree may ask of the decoder (spec §9.7): the sum over its nodes of their depths,
+#: the clips :func:`boundary` makes. A chain of 20,000 splits (4e8) took 25 s; 2^25 takes about a second.
+MAX_TREE_WORK = 1 << 25
 
 
 def parse(tokens: np.ndarray, refs: int) -> Tree:
@@ -86,6 +91,14 @@ def parse(tokens: np.ndarray, refs: int) -> Tree:
     outer = np.where(split, 0, -1)
     idx = np.flatnonzero(split)
     outer[idx] = end[idx + 1]
+    # Depth in preorder: a split's inner child is one deeper, its outer child too (at outer[i]).
+    depth = np.zeros(n, dtype=np.int64)
+    for i in idx.tolist():
+        depth[i + 1] = depth[outer[i]] = depth[i] + 1
+    work = int(depth.sum())
+    if work > MAX_TREE_WORK:
+        raise LimitError(f"BSP tree of {n} tokens asks {work} clips of its decoder, above {MAX_TREE_WORK} "
+                         f"(the sum of its nodes' depths, spec §9.7)")
     kind = np.where(split, SPLIT, np.where(tok == BSP_IN, IN, OUT))
     return Tree(plane=np.where(split, tok, -1), kind=kind, outer=outer, end=end)
 
@@ -163,14 +176,24 @@ def piece_faces(tree: Tree, start: int, leaf: int, omega: np.ndarray, h: np.ndar
         else:
             path.append((j, 1))
             node = int(tree.outer[node])
-    own = [int(tree.plane[k]) for k in range(start, leaf)]
-    rows = path + [(j, 0) for j in own]
+    # A half-space the path takes twice bounds the piece once: the copy would give no face of its own
+    # (the fallback clips its square away on the first copy) and so hide a piece that does not end.
+    own = [(int(tree.plane[k]), 0) for k in range(start, leaf)]
+    taken = dict.fromkeys(path)
+    path = list(taken)
+    kept: list[int] = []
+    for k, r in enumerate(own):
+        if r not in taken:
+            taken[r] = None
+            kept.append(k)
+    node_of = start + np.array(kept, dtype=np.int64)
+    rows = path + [own[k] for k in kept]
     plane = np.array([r[0] for r in rows], dtype=np.int64)
     sign = np.array([1.0 - 2.0 * r[1] for r in rows])
     try:
         poly = intersect(omega[plane] * sign[:, None], h[plane] * sign)
     except GeometryError:
-        return _clipped_piece(rows, len(path), start, omega, h, size, eps)
+        return _clipped_piece(rows, len(path), node_of, omega, h, size, eps)
     offs = poly.polygon_offsets
     size_f = np.diff(offs)
     ring = poly.polygon_vertices
@@ -203,18 +226,18 @@ def piece_faces(tree: Tree, start: int, leaf: int, omega: np.ndarray, h: np.ndar
         a, b = offs[fidx], offs[fidx + 1]
         pts[i, :b - a] = poly.vertices[ring[a:b]]
         lab[i, :b - a] = edge_label[a:b]
-    src = start + poly.polygon_plane[faces] - len(path)
+    src = node_of[poly.polygon_plane[faces] - len(path)]
     z = np.zeros(len(faces), dtype=np.int64)
     return _Batch(pts, lab, size_f[faces].astype(np.int64), src, z + 3, z + 1, z)
 
 
-def _clipped_piece(rows: list[tuple[int, int]], depth: int, start: int, omega: np.ndarray, h: np.ndarray,
-                   size: float, eps: float) -> _Batch:
+def _clipped_piece(rows: list[tuple[int, int]], depth: int, node_of: np.ndarray, omega: np.ndarray,
+                   h: np.ndarray, size: float, eps: float) -> _Batch:
     """The faces of a convex piece by clipping a square on each of its planes by every other half-space.
 
     ``rows`` are the ``(plane, side)`` of the piece's ancestors (the first
-    ``depth``), then of its own nodes from ``start`` on; each face is tagged
-    with its node, as :func:`piece_faces` tags them.
+    ``depth``), then of its own nodes ``node_of``; each face is tagged with
+    its node, as :func:`piece_faces` tags them.
     """
     parts = []
     for k in range(depth, len(rows)):
@@ -233,7 +256,7 @@ def _clipped_piece(rows: list[tuple[int, int]], depth: int, start: int, omega: n
                 break
         if len(cnt):
             z = np.zeros(1, dtype=np.int64)
-            parts.append(_Batch(pts, lab, cnt, z + start + k - depth, z + 3, z + 1, z))
+            parts.append(_Batch(pts, lab, cnt, z + node_of[k - depth], z + 3, z + 1, z))
     return _concat(parts) if parts else _empty()
 
 
