@@ -104,7 +104,10 @@ def _area(vertices, faces) -> float:
     """The area of triangles ``faces`` (T, 3) over ``vertices`` (V, 3)."""
     import numpy as np
     p = np.asarray(vertices, dtype=np.float64)[np.asarray(faces, dtype=np.int64)]
-    return float(np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum() / 2)
+    # at unit size: a squared edge of a cube of side 7e-102 (fuzz/hostile.py i8_tiny_cube) underflows to 0
+    scale = float(np.abs(p).max(initial=0.0)) or 1.0
+    p = p / scale
+    return float(np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum() / 2) * scale * scale
 
 
 def _python_side(path: str) -> int:

@@ -21,14 +21,7 @@ import hostile  # noqa: E402
 
 #: Classes whose readers still disagree, each owned by another part of issue 49; remove an entry once
 #: its fix is merged.
-SKIP = {
-    "i3_tree_chain": "item 3 (trees): planefmt an empty mesh, js/ UNBOUNDED_POLYTOPE as §9.7 requires",
-    "i3_tree_twice_in": "item 3 (trees): planefmt an empty mesh, js/ UNBOUNDED_POLYTOPE as §9.7 requires",
-    "i4_convex_needle": "items 4 and 8 (marginal geometry): planefmt UFuncTypeError here (EMPTY_POLYTOPE "
-                        "after 41ac46d), js/ an empty result: whether a convex group whose faces all merge "
-                        "(§9.4's merge distance) is EMPTY_POLYTOPE is not written",
-    "i8_tiny_cube": "item 8 (marginal geometry): planefmt UNBOUNDED_POLYTOPE, js/ the cube",
-}
+SKIP: dict[str, str] = {}
 
 #: Classes whose groups are cells or trees: area only (§9.4).
 AREA_ONLY = {"x_cells_overlapping"}
