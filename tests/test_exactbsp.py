@@ -107,6 +107,7 @@ def test_split_pinches_gives_each_sheet_its_own_vertex():
     assert np.array_equal(nv[nf], v[f])
 
 
+@pytest.mark.slow  # about 90 s on a quiet core: make test-slow, which CI runs
 def test_exact_decoding_closes_what_rounded_decisions_misplace(monkeypatch):
     """King_geom.usd's base (7,392 triangles, fillets of 30 planes within a micrometre): its first
     tree decodes open when sides are decided in float64 and closed, with the source's volume and

@@ -183,6 +183,7 @@ def test_nearly_concurrent_planes_weld_into_one_closed_surface() -> None:
     assert check_solid(v, f)["kinds"] == ["solid"]
 
 
+@pytest.mark.slow  # about 75 s on a quiet core: make test-slow, which CI runs
 def test_smooth_closed_body_uses_exact_planes_and_closes_its_cracks() -> None:
     """ballA.off: merged planes pass up to 3e-6 from their vertices, where many meet the cells'
     corners stray; the second attempt on exactly coplanar planes decodes closed once the cracks
@@ -199,6 +200,7 @@ def test_smooth_closed_body_uses_exact_planes_and_closes_its_cracks() -> None:
     assert out["kinds"] == ["solid"] and out["notes"] == ["exact planes"]
 
 
+@pytest.mark.slow  # about 50 s on a quiet core: make test-slow, which CI runs
 def test_merged_planes_that_stray_are_replaced_by_exact_ones_only_there() -> None:
     """angle_block.STL at 1e-6: its merged planes meet at grazing angles, so a corner of the first
     splitter strategy's tree strays 1.9e-5 for a target of 2.2e-6; the all-exact planes do not
