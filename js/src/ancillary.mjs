@@ -24,11 +24,23 @@ export function readColours(payload, groups, major) {
   if (count !== groups[group].refs.length) fail('BAD_COLOURS', `${count} colours for ${groups[group].refs.length} references`);
   // a group without references (version 5, §9.2) takes one colour for all its triangles
   if (count === 0 && !uniform) fail('BAD_COLOURS', 'a count of 0 without its one colour');
-  // expanded only now that count is the group's ref_count (within the reader's limit)
-  const rgba = new Uint8Array(4 * Math.max(count, 1));
-  if (uniform) for (let i = 0; i < rgba.length; i += 4) rgba.set(colours, i);
-  else rgba.set(colours);
-  return { group, rgba };
+  const size = 4 * Math.max(count, 1);
+  /** @type {Uint8Array | null} */
+  let rgba = null;
+  return {
+    group,
+    // Expanded on first use, now that count is the group's ref_count (within the reader's limit): a
+    // later cOLR of the group replaces this one (§10.1), so a file of many one-colour chunks for a
+    // large group costs one expansion, not one per chunk (fuzz/hostile.py x_colour_expansion).
+    get rgba() {
+      if (rgba === null) {
+        rgba = new Uint8Array(size);
+        rgba.set(colours);
+        if (uniform) for (let n = 4; n < size; n *= 2) rgba.copyWithin(n, 0, Math.min(n, size - n));
+      }
+      return rgba;
+    },
+  };
 }
 
 /**
