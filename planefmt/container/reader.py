@@ -198,7 +198,9 @@ class Reader:
                     self._offsets[group.index] = raw.offset
                 else:
                     self._payloads[group.index] = bytes(raw.payload)
-            if group.kind == GroupKind.COPY:
+            # a kind-11 group of a file whose version has no copies (a newer minor of major 3: fuzz
+            # input py-foreign-44153) is skipped, with no source to read
+            if group.kind == GroupKind.COPY and group.source is not None:
                 group = self._copied(group)
             if self.retain_planes:
                 group = _with_planes(group, self._table[group.refs])
