@@ -194,8 +194,8 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
     status.update(f"reading {src_name}")
     pln_opts = dict(pln_opts)
     caps = Limits(**pln_opts.get(READ_LIMITS, {}))
+    fmt_in = registry.get(from_) if from_ else registry.detect(src)
     if salvage:
-        fmt_in = registry.get(from_) if from_ else registry.detect(src)
         if fmt_in.name != "pln":
             raise _Usage(f"--salvage reads damaged .pln files; {src_name} is {fmt_in.name}",
                          code="UNKNOWN_FORMAT")
@@ -204,7 +204,6 @@ def _convert(src: str, dst: str, to: str | None, from_: str | None, pln_opts: di
         scene, lost = codec.salvage_scene(src, limits=caps)
         dropped: list[str] = []
     else:
-        fmt_in = registry.get(from_) if from_ else registry.detect(src)
         scene, dropped = registry.read(src, from_, **({"limits": caps} if fmt_in.name == "pln" else {}))
     scene = _with_units(scene, pln_opts.get("units"), src_name)
     facts["triangles"] = sum(len(node.mesh.faces) for node in scene.nodes if node.mesh is not None)
