@@ -205,9 +205,60 @@ def encode_shell(plan: ShellPlan, omega: np.ndarray, h: np.ndarray, budget: floa
         if span / step >= MAX_GRID:
             raise GeometryError(f"a shell spans {span:g} model units, more than {MAX_GRID:.3g} steps of "
                                 f"{step:g} (the budget)", code="DEGENERATE_GEOMETRY")
-        grid = np.rint((q - origin) / step).astype(np.int64)
+        grid = _apart(q, np.rint((q - origin) / step).astype(np.int64), origin, step, budget)
     return Shell(explicit=explicit, vertex_planes=triple[named], grid=grid, origin=origin, step=step,
                  facets=plan.facets)
+
+
+#: The 26 grid steps to a cell's neighbours, nearest first.
+_NEIGHBOURS = np.array([d for d in np.ndindex(3, 3, 3) if d != (1, 1, 1)], dtype=np.int64) - 1
+_NEIGHBOURS = _NEIGHBOURS[np.argsort((_NEIGHBOURS ** 2).sum(axis=1), kind="stable")]
+
+#: Rounds of :func:`_apart`: each settles the corners that wanted distinct free points.
+_APART_ROUNDS = 8
+
+
+def _apart(points: np.ndarray, grid: np.ndarray, origin: np.ndarray, step: float, budget: float) -> np.ndarray:
+    """``grid`` (the nearest grid point of each of ``points``) with corners that round onto one point
+    moved apart: all but the nearest of them to a free neighbouring point within ``budget`` of their
+    source, where there is one.
+
+    Distinct corners on one point are joined by every reader that welds by position, which the encoder
+    refuses (a closed source must stay closed so welded); it used to refuse the whole grid and retry at
+    a quarter of the budget, every corner paying for a few: ten of kuka_kr10r1420_link_4.stl's 4,379
+    corners met at Draco-14's error, and the file came out 1.7 times Draco's on a grid 64 times finer
+    than the tolerance asks. Moved corners stay within the budget, so the bound holds as before; where
+    no free point is near enough, the corners stay joined and the caller's check still sees them.
+    """
+    rows = lambda g: np.ascontiguousarray(g).view(np.dtype((np.void, 24))).reshape(-1)  # noqa: E731
+    grid = grid.copy()
+    for _ in range(_APART_ROUNDS):
+        _, first, inverse, count = np.unique(rows(grid), return_index=True, return_inverse=True, return_counts=True)
+        inverse = inverse.reshape(-1)
+        if (count == 1).all():
+            break
+        # Of the corners on one point, the nearest keeps it.
+        gap = np.linalg.norm(origin + step * grid - points, axis=1)
+        order = np.lexsort((gap, inverse))
+        keeps = np.zeros(len(grid), dtype=bool)
+        keeps[order[np.r_[True, inverse[order][1:] != inverse[order][:-1]]]] = True
+        movers = np.flatnonzero(~keeps)
+        taken = np.sort(rows(grid))
+        cand = grid[movers, None, :] + _NEIGHBOURS[None, :, :]
+        near = np.linalg.norm(origin + step * cand - points[movers, None, :], axis=2) <= budget
+        flat = rows(cand.reshape(-1, 3))
+        at = np.minimum(np.searchsorted(taken, flat), len(taken) - 1)
+        free = (taken[at] != flat).reshape(near.shape)
+        ok = near & free
+        has = ok.any(axis=1)
+        if not has.any():
+            break
+        pick = np.argmax(ok, axis=1)
+        movers, chosen = movers[has], cand[np.flatnonzero(has), pick[has]]
+        # Two movers that chose one point: the first takes it, the other tries again next round.
+        _, once = np.unique(rows(chosen), return_index=True)
+        grid[movers[once]] = chosen[once]
+    return grid
 
 
 def _f32_down(x):
