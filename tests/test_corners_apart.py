@@ -84,3 +84,30 @@ def _written(v: np.ndarray, f: np.ndarray, tolerance: float) -> bytes:
     buf = io.BytesIO()
     codec.encode_scene(Scene(nodes=[Node(name="part", mesh=Mesh(vertices=v, faces=f))]), buf, tolerance=tolerance)
     return buf.getvalue()
+
+
+def _bowl_with_a_slit(n: int = 10) -> tuple[np.ndarray, np.ndarray]:
+    """An open bowl z = 0.3 (x² + y²) over the unit square whose corner vertex, the least on every
+    axis, is split in two copies 1e-7 apart (the fan's two triangles each keep one): two distinct
+    corners that round onto one grid point wherever the grid's origin is that corner."""
+    x, y = np.meshgrid(np.linspace(0.0, 1.0, n), np.linspace(0.0, 1.0, n), indexing="ij")
+    v = np.column_stack([x.ravel(), y.ravel(), 0.3 * (x.ravel() ** 2 + y.ravel() ** 2)])
+    i = np.arange(n - 1)[:, None] * n + np.arange(n - 1)[None, :]
+    a, b, c, d = i.ravel(), i.ravel() + n, i.ravel() + n + 1, i.ravel() + 1
+    f = np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
+    v = np.vstack([v, v[0] + [1e-7, 0.0, 0.0]])
+    f[n - 1 + (n - 1) * (n - 1) - (n - 1), 0] = len(v) - 1  # the second triangle at the corner, (0, n + 1, 1)
+    return v, f
+
+
+def test_corners_closer_than_a_step_at_a_grid_point_get_another_origin():
+    v, f = _bowl_with_a_slit()
+    assert (f == len(v) - 1).any() and (f == 0).any()
+    tolerance = 4e-5
+    encoded = codec.encode_mesh(v, f, tolerance=tolerance)
+    diagonal = float(np.linalg.norm(v.max(axis=0) - v.min(axis=0)))
+    steps = [g.shell.step for g in encoded.groups if g.shell is not None and np.asarray(g.shell.explicit).any()]
+    assert steps and min(steps) > 0.5 * 2.0 * tolerance * diagonal / math.sqrt(3.0)
+    decoded = codec.decode_mesh(io.BytesIO(_written(v, f, tolerance)))
+    corners, _ = weld(decoded.vertices, decoded.faces)
+    assert len(corners) == len(weld(v, f)[0]) == len(v)
