@@ -260,7 +260,8 @@ def structure_kept(mesh: Mesh, obj: _Object, distance: float = 0.0) -> bool:
 
 
 def structure_problem(mesh: Mesh, obj: _Object, distance: float = 0.0, topology: bool = True,
-                      moved: float | None = None, joins: bool = False) -> str | None:
+                      moved: float | None = None, joins: bool = False,
+                      moved_extent: tuple[float, int] | None = None) -> str | None:
     """How a decoding fails :func:`structure_kept`, in words; None if it keeps the structure. Without
     ``topology``, closedness and the Euler characteristic are taken as kept (they are by construction).
 
@@ -271,7 +272,9 @@ def structure_problem(mesh: Mesh, obj: _Object, distance: float = 0.0, topology:
     those of the shell or group it touched).
 
     ``moved`` (model units): the decoding's triangles are the source's one to one, each corner moved
-    by at most that (a shell). An open surface's area may then change by what
+    by at most that (a shell); with ``moved_extent`` (the half perimeters, summed, and the count of the
+    triangles that moved so), only those did, and the rest (convex groups) has the allowance it has
+    without ``moved``, the two added. An open surface's area may then change by what
     such moves make, at most ``moved`` times half of each triangle's perimeter plus ``2 moved^2``
     per triangle (|d(a x b)| over the corners), beside the rim's allowance: bun_zipper.ply at 2.5e-4
     (draco-11's error) lost 2e-4 of its area to its corners' moves and, held to the rim's 3e-6,
@@ -285,10 +288,13 @@ def structure_problem(mesh: Mesh, obj: _Object, distance: float = 0.0, topology:
     if joins and not obj.closed and euler_characteristic(welded) != obj.euler:
         return (f"Euler characteristic {euler_characteristic(welded)} once welded by position, the source's "
                 f"{obj.euler} (bodies that touched come apart, or corners join)")
-    half_perimeters = 0.0
-    if moved is not None:
+    half_perimeters, moving = 0.0, len(obj.faces)
+    if moved is not None and moved_extent is not None:
+        half_perimeters, moving = moved_extent
+    elif moved is not None:
         p = obj.vertices[obj.faces]
         half_perimeters = float(np.linalg.norm(p - p[:, [1, 2, 0]], axis=2).sum()) / 2.0
+    combine = (lambda a, b: a + b) if moved_extent is not None else max
     if obj.closed:
         if topology and not is_closed_manifold(welded, int(welded.max(initial=-1)) + 1):
             sides = np.sort(np.column_stack([welded.reshape(-1), welded[:, [1, 2, 0]].reshape(-1)]), axis=1)
@@ -301,14 +307,14 @@ def structure_problem(mesh: Mesh, obj: _Object, distance: float = 0.0, topology:
         if moved is not None:
             # Each triangle sweeps at most its area times the move, plus the move squared times its
             # half perimeter and the move cubed, when its corners move by at most ``moved``.
-            allowed = max(allowed, 2.0 * (obj.area * moved + half_perimeters * moved * moved
-                                          + len(obj.faces) * moved ** 3))
+            allowed = combine(allowed, 2.0 * (obj.area * moved + half_perimeters * moved * moved
+                                              + moving * moved ** 3))
         off = abs(signed_volume(mesh.vertices, mesh.faces) - obj.volume)
         return None if off <= allowed else f"volume off by {off / abs(obj.volume):.2g} (relative)"
     off = abs(_area(mesh.vertices, mesh.faces) - obj.area)
     allowed = max(STRUCTURE_TOLERANCE * obj.area, obj.rim * distance)
     if moved is not None:
-        allowed = max(allowed, moved * half_perimeters + 2.0 * len(obj.faces) * moved * moved)
+        allowed = combine(allowed, moved * half_perimeters + 2.0 * moving * moved * moved)
     return None if off <= allowed else f"area off by {off / obj.area:.2g} (relative)"
 
 
