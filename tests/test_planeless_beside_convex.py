@@ -43,8 +43,10 @@ def test_a_shell_beside_a_convex_body_is_coded_without_planes_where_that_is_smal
         codec.encode_scene(Scene(nodes=[Node(name="part", mesh=Mesh(vertices=v, faces=f))]), buf, tolerance=4e-5)
     with planefmt.open(io.BytesIO(buf.getvalue())) as reader:
         groups = list(reader.part_groups())
-    kinds = sorted((g.kind == GroupKind.CONVEX, len(g.refs)) for g in groups)
-    # The box a convex group of its six planes; the tube one shell of one reference (before: 48 planes).
-    assert kinds == [(False, 1), (True, 6)]
+    # The tube's shell names no corner by planes (before: 48 plane references); the box is a convex group
+    # of its six planes, or a part of that planeless shell where that makes the smaller file.
+    shells = [len(g.refs) for g in groups if g.kind != GroupKind.CONVEX]
+    assert shells and max(shells) <= 1
+    assert all(len(g.refs) == 6 for g in groups if g.kind == GroupKind.CONVEX)
     decoded = codec.decode_mesh(io.BytesIO(buf.getvalue()))
     assert relative_hausdorff((v, f), (decoded.vertices, decoded.faces), tolerance=1e-7).upper <= 4e-5
