@@ -68,9 +68,10 @@ def record_bytes(tag: int, payload: bytes) -> bytes:
     return bytes([tag]) + schema.Varint32.build(len(payload)) + payload
 
 
-def segment_bytes(raw: bytes, compress: bool = True) -> bytes:
-    """A body segment of ``raw``: whichever of methods 0, 1 and 2 is smallest (spec §4.5)."""
-    method, stored = pack(raw, compress, brotli_allowed=True)
+def segment_bytes(raw: bytes, compress: bool = True, brotli: bool = True) -> bytes:
+    """A body segment of ``raw``: whichever of methods 0, 1 and 2 is smallest (spec §4.5); without ``brotli``,
+    of methods 0 and 1 (an encoder's size trial)."""
+    method, stored = pack(raw, compress, brotli_allowed=brotli)
     return bytes([method]) + schema.Varint32.build(len(raw)) + stored
 
 

@@ -169,7 +169,7 @@ class Writer:
         """Write the segment being filled: in PHDR if it is the first (``last``: and the file's only one),
         else as a BODY chunk."""
         raw = b"".join(self._segment)
-        segment = segments.segment_bytes(raw, self._compress) if raw else b""
+        segment = segments.segment_bytes(raw, self._compress, self._brotli) if raw else b""
         if not self._headed:
             header = self._header
             if last and len(raw) < SMALL_SEGMENT_BYTES:
