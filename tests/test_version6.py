@@ -237,3 +237,14 @@ def test_salvage_loses_the_records_of_a_damaged_segment_and_says_so() -> None:
     got = salvage(io.BytesIO(bytes(data)))
     assert [type(x).__name__ for x in got.records] == ["ObjectRecord", "PlaneBlock"]
     assert [x.code for x in got.losses] == ["CRC_MISMATCH"]
+
+
+def test_the_decode_budget_holds_in_version_6() -> None:
+    from planefmt.errors import LimitError
+
+    scene, _ = registry.read(str(CORPUS / "gltf_scene" / "pins.glb"))
+    data = _encoded(scene, 6)
+    triangles = sum(len(n.mesh.faces) for n in codec.decode_scene(io.BytesIO(data)).nodes if n.mesh is not None)
+    with pytest.raises(LimitError):
+        codec.decode_scene(io.BytesIO(data), limits=Limits(max_triangles=triangles - 1))
+    codec.decode_scene(io.BytesIO(data), limits=Limits(max_triangles=triangles))
