@@ -19,7 +19,7 @@ import brotli
 import numpy as np
 
 from planefmt import chunk_bytes
-from planefmt.container import records, schema, segments
+from planefmt.container import headers, records, schema, segments
 from planefmt.model import UP_AXIS, Coding, Header, Quantization, Units
 
 Layout = list[tuple[bytes, bytes]]
@@ -107,8 +107,8 @@ def stored_header(h: Header) -> Header:
 
     if h.version[0] >= 6:
         # Version 6 keeps 12 explicit mantissa bits of both (spec §5).
-        return dataclasses.replace(h, bbox=bbox, tolerance=records.r32_up(h.tolerance, "tolerance"),
-                                   error_bound=records.r32_up(h.error_bound, "error_bound"))
+        return dataclasses.replace(h, bbox=bbox, tolerance=headers.r32_up(h.tolerance, "tolerance"),
+                                   error_bound=headers.r32_up(h.error_bound, "error_bound"))
     return dataclasses.replace(h, bbox=bbox, tolerance=up(h.tolerance), error_bound=up(h.error_bound))
 
 

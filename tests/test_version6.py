@@ -12,7 +12,7 @@ import pytest
 
 import planefmt
 from planefmt import codec
-from planefmt.container import records, schema, segments
+from planefmt.container import headers, records, schema, segments
 from planefmt.container.chunks import Limits, chunk_bytes, chunks_of
 from planefmt.errors import PlnError
 from planefmt.model import Coding, GroupKind, Header, Quantization, Units
@@ -86,11 +86,11 @@ def test_the_cube_obj_is_at_most_72_bytes(tmp_path) -> None:
 
 def test_tolerance_and_error_bound_round_up_to_12_mantissa_bits_keeping_the_bound_under_the_tolerance() -> None:
     for tol, bound in [(3e-5, 3e-5), (1e-6, 9.99999e-7), (0.1, 0.0999)]:
-        t, b = records.r32_up(tol, "t"), records.r32_up(bound, "b")
+        t, b = headers.r32_up(tol, "t"), headers.r32_up(bound, "b")
         assert t >= tol and b >= bound and b <= t
         assert t <= tol * (1 + 2 ** -11)
         assert len(schema.R32.build(t)) <= 3
-    assert len(schema.R32.build(records.r32_up(float("nan"), "t"))) == 2
+    assert len(schema.R32.build(headers.r32_up(float("nan"), "t"))) == 2
 
 
 def test_a_large_file_is_cut_into_segments_of_at_most_a_mebibyte_and_reads_one_at_a_time() -> None:

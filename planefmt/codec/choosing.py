@@ -20,7 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .. import progress
-from ..container import quantize, records, shellfields, shellwalk
+from ..container import headers, quantize, records, shellfields, shellwalk
 from ..errors import GeometryError, PlnError, PlnWarning
 from ..geometry.hausdorff import DEFAULT_MAX_PIECES
 from ..geometry.planes import from_triplets, transform_points
@@ -83,7 +83,7 @@ def _candidates(coding: Coding | None, bits: int | tuple[int, int, int] | None, 
     """Codings to try, cheapest first; forced ones alone."""
     h_min, h_max = float(table[:, 2].min()), float(table[:, 2].max())
     if F32_RANGE.get():
-        h_min, h_max = records.f32_range(h_min, h_max)
+        h_min, h_max = headers.f32_range(h_min, h_max)
     if bits is not None:
         widths = (bits,) * 3 if isinstance(bits, int) else tuple(bits)
         if len(widths) != 3 or not all(isinstance(b, (int, np.integer)) for b in widths):

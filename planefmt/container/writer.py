@@ -18,7 +18,7 @@ from typing import BinaryIO
 
 import numpy as np
 
-from . import records, schema, segments, shellfields, shellwalk
+from . import headers, records, schema, segments, shellfields, shellwalk
 from .chunks import chunk_bytes, is_ancillary, valid_type
 from ..errors import PlnError
 from ..model import (TREE_KINDS, UP_AXIS, Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record,
@@ -98,7 +98,7 @@ class Writer:
         q = header.quantization
         if self._major >= 6 and header.coding.quantized and q is not None:
             header = dataclasses.replace(header, quantization=dataclasses.replace(
-                q, **dict(zip(("h_min", "h_max"), records.f32_range(q.h_min, q.h_max)))))
+                q, **dict(zip(("h_min", "h_max"), headers.f32_range(q.h_min, q.h_max)))))
         declared = (header.plane_count, header.object_count, header.group_count)
         # Version 3 counts are varints: written up front if the caller declares them, never patched.
         self._declared = declared if self._major >= 3 and None not in declared else None
