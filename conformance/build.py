@@ -13,11 +13,13 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import zlib
 
+import brotli
 import numpy as np
 
 from planefmt import chunk_bytes
-from planefmt.container import records, schema
+from planefmt.container import headers, records, schema, segments
 from planefmt.model import UP_AXIS, Coding, Header, Quantization, Units
 
 Layout = list[tuple[bytes, bytes]]
@@ -103,6 +105,10 @@ def stored_header(h: Header) -> Header:
     def up(v: float) -> float:
         return v if math.isnan(v) else toward(v, math.inf)
 
+    if h.version[0] >= 6:
+        # Version 6 keeps 12 explicit mantissa bits of both (spec §5).
+        return dataclasses.replace(h, bbox=bbox, tolerance=headers.r32_up(h.tolerance, "tolerance"),
+                                   error_bound=headers.r32_up(h.error_bound, "error_bound"))
     return dataclasses.replace(h, bbox=bbox, tolerance=up(h.tolerance), error_bound=up(h.error_bound))
 
 
@@ -200,3 +206,78 @@ def dumps(obj, indent: int = 0) -> str:
     if isinstance(obj, list) and any(isinstance(v, (dict, list)) for v in obj):
         return "[\n" + ",\n".join(inner + dumps(v, indent + 1) for v in obj) + "\n" + pad + "]"
     return json.dumps(obj, allow_nan=False, ensure_ascii=False)
+
+
+# -- version 6: records in body segments (spec §4.5, §4.6, §10.2) -----------------------------------
+
+#: One item of a version 6 layout: ``(tag, payload)`` a record; ``(b"BODY", b"")`` the start of a new
+#: segment; ``(ctype, payload)`` of a four-letter type an ancillary chunk between segments.
+Item = tuple
+
+
+def split() -> Item:
+    """Marks where a new body segment starts (a BODY chunk)."""
+    return (schema.BODY, b"")
+
+
+def forced_segment(raw: bytes, method: int) -> bytes:
+    """A body segment of ``raw`` stored with ``method`` (0, 1 or 2), whichever size that gives."""
+    stored = {0: lambda b: b, 1: lambda b: zlib.compress(b, 9), 2: lambda b: brotli.compress(b, quality=11)}[method](raw)
+    return bytes([method]) + schema.Varint32.build(len(raw)) + stored
+
+
+def small_v6(items: list[Item]) -> bool:
+    """Whether a writer leaves the bbox and counts out (spec §5 "Small files"): one segment, in PHDR, under
+    256 raw bytes."""
+    if any(isinstance(i[0], bytes) for i in items):
+        return False
+    return sum(len(segments.record_bytes(t, p)) for t, p in items) < 256
+
+
+def assemble_v6(header: Header, items: list[Item], *, index: bool = False, compress: bool = True,
+                methods: tuple[int, ...] | None = None) -> bytes:
+    """A version 6 file: ``items`` (records, segment starts, chunks) in body segments, the first in PHDR,
+    each stored by the smallest method (``methods``: the method of each segment), then iNDX and PEND."""
+    if small_v6(items):
+        header = dataclasses.replace(header, bbox=None, plane_count=None, object_count=None, group_count=None)
+    out = bytearray(schema.SIGNATURE)
+    entries, ordinals = [], {schema.TAG_OBJECT: 0, schema.TAG_PLANES: 0, schema.TAG_GROUP: 0}
+    pending: list[tuple[int, bytes]] = []
+    written = 0  # segments written
+
+    def flush() -> None:
+        nonlocal written
+        raw = b"".join(segments.record_bytes(t, p) for t, p in pending)
+        if written and not raw:
+            return
+        segment = b"" if not raw else (forced_segment(raw, methods[written]) if methods
+                                        else segments.segment_bytes(raw, compress))
+        chunk = len(out)
+        pos = 0
+        for t, p in pending:
+            if t in ordinals:
+                entries.append((chunk, pos, t, ordinals[t]))
+                ordinals[t] += records.leading_index(p, 3, 0) if t == schema.TAG_PLANES else 1
+            pos += len(segments.record_bytes(t, p))
+        if written:
+            out.extend(chunk_bytes(schema.BODY, segment, True))
+        else:
+            out.extend(chunk_bytes(schema.PHDR, records.encode_header(header) + segment))
+        written += 1
+        pending.clear()
+
+    for item in items:
+        if item[0] == schema.BODY:
+            flush()
+        elif isinstance(item[0], bytes):
+            flush()
+            out.extend(chunk_bytes(item[0], item[1], True))
+        else:
+            pending.append(item)
+    flush()
+    at = 0
+    if index:
+        at = len(out)
+        out.extend(chunk_bytes(schema.INDX, segments.encode_index(entries), True))
+    out.extend(chunk_bytes(schema.PEND, records.encode_end(at, 6), True))
+    return bytes(out)

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planefmt.container import records, schema, shellfields, shellwalk, varint
+from planefmt.container import records, schema, segments, shellfields, shellwalk, varint
 from planefmt.container.chunks import chunk_bytes
 from planefmt.model import Coding, Colours, GroupKind, Header, ObjectRecord, PartGroup, Quantization, Units
 
@@ -292,9 +292,21 @@ def _():
 
 # -- header (spec §5) --------------------------------------------------------------------------
 
-@case("xhdr_major6", "UNSUPPORTED_VERSION", "version 6.0")
+@case("xhdr_major6", "SIZE_MISMATCH", "the version 5.0 header of the cube with version 6.0 in its first byte: read "
+      "as version 6 (spec §5), header_size 6 holds flags 0, units 0, tolerance 0, error bound 0 and two later "
+      "bytes; the body segment after them says method 0 and raw size 0, with 32 bytes stored (spec §6)")
 def _():
-    return file(cube(PHDR=header(version=(6, 0))))
+    # The bytes of version 5's header with major 6 (the case of version 5.2, which rejected major 6).
+    phdr = bytearray(header(version=(5, 0)))
+    phdr[0] = 6
+    return file(cube(PHDR=bytes(phdr)))
+
+
+@case("xhdr_major7", "UNSUPPORTED_VERSION", "version 7.0: the cube of version 6.0 with major 7")
+def _():
+    phdr = bytearray(V6_PHDR)
+    phdr[0] = 7
+    return v6_framed(bytes(phdr) + segment(cube_records()))
 
 
 @case("xhdr_predicted_v1", "UNSUPPORTED_CODING", "coding 3 (predicted, version 2.0) in a version 1.0 header")
@@ -2106,3 +2118,264 @@ def _():
 def _():
     layout = finish(cube())
     return frame(layout[:-1] + [(schema.META, b"up_axis\x00Z"), layout[-1]])
+
+
+# -- version 6.0 (issue 52): header, body segments, records, index (spec §4.5, §4.6, §5, §10.2) ------------
+
+V6_HEADER = dataclasses.replace(SPEC_HEADER, version=(6, 0))
+#: The version 6 header fields of the float32 cube with its bbox and without counts.
+V6_PHDR = records.encode_header(V6_HEADER)
+
+
+def cube_records(**parts: bytes) -> list[tuple[int, bytes]]:
+    """The cube's object, planes and group records of version 6; ``OBJT=``, ``PLNS=``, ``GRUP=`` replace one."""
+    payloads = {"OBJT": records.encode_object(ObjectRecord(0, "cube", None, None), 6),
+                "PLNS": records.encode_planes(0, CUBE, V6_HEADER, False),
+                "GRUP": records.encode_group(PartGroup(0, 0, 0, np.arange(6, dtype=np.uint32), np.zeros(6, bool)),
+                                             False, 6)}
+    payloads.update(parts)
+    return [(schema.RECORD_TAGS[t.encode()], p) for t, p in payloads.items()]
+
+
+def raw_records(items: list[tuple[int, bytes]]) -> bytes:
+    return b"".join(segments.record_bytes(t, p) for t, p in items)
+
+
+def segment(items: list[tuple[int, bytes]] | bytes, method: int = 0, raw_size: int | None = None) -> bytes:
+    """A body segment of raw ``items`` (records, or raw bytes), stored with ``method``."""
+    raw = items if isinstance(items, bytes) else raw_records(items)
+    stored = raw if method == 0 else zlib.compress(raw, 9)
+    return bytes([method]) + schema.Varint32.build(len(raw) if raw_size is None else raw_size) + stored
+
+
+def v6_framed(phdr: bytes, *chunks: tuple[bytes, bytes], end: bytes = b"") -> bytes:
+    """Signature, PHDR (u32 length), ``chunks`` and PEND with varint lengths (spec §4.1)."""
+    return (schema.SIGNATURE + chunk_bytes(schema.PHDR, phdr)
+            + b"".join(chunk_bytes(t, p, True) for t, p in chunks) + chunk_bytes(schema.PEND, end, True))
+
+
+def v6_fields(fields: bytes, header_size: int | None = None) -> bytes:
+    """A version 6.0 PHDR payload's version and header fields, ``header_size`` as given or right."""
+    return b"\x06\x00" + schema.Varint32.build(len(fields) if header_size is None else header_size) + fields
+
+
+V6_FILE = v6_framed(V6_PHDR + segment(cube_records()))
+
+
+@case("xv6_header_size_past", "BAD_PAYLOAD", "version 6.0: header_size 17, more than the 15 bytes of the PHDR "
+      "payload after it (spec §5 check 3)")
+def _():
+    fields = V6_PHDR[3:]
+    return v6_framed(v6_fields(fields, len(fields) + 2))
+
+
+@case("xv6_header_size_short", "BAD_PAYLOAD", "version 6.0: header_size 4, with flags saying BBOX_KNOWN: the header "
+      "fields end inside the bbox (spec §5 check 4), though a segment follows")
+def _():
+    return v6_framed(v6_fields(V6_PHDR[3:], 4) + segment(cube_records()))
+
+
+@case("xv6_r32_not_minimal", "BAD_PAYLOAD", "version 6.0: the tolerance an r32 written 80 00, a varint that is not "
+      "minimal (spec §2.2)")
+def _():
+    return v6_framed(v6_fields(bytes([0, 1, 0x80, 0, 0])) + segment(cube_records()))
+
+
+@case("xv6_r32_past_32_bits", "BAD_PAYLOAD", "version 6.0: the error bound an r32 of 2^32 (80 80 80 80 10), above "
+      "a varint32 (spec §2.2)")
+def _():
+    return v6_framed(v6_fields(bytes([0, 1, 0, 0x80, 0x80, 0x80, 0x80, 0x10])) + segment(cube_records()))
+
+
+@case("xv6_h_range_reversed", "BAD_HEADER_VALUE", "version 6.0: coding 2 with h_min 1.0 and h_max 0.0 (spec §5 "
+      "check 5)")
+def _():
+    fields = bytes([2 << 3, 1]) + (0x21).to_bytes(2, "little") + b"\xfc\x03\x00" + b"\x00\x00"
+    return v6_framed(v6_fields(fields))
+
+
+@case("xv6_body_empty", "BAD_PAYLOAD", "version 6.0: a BODY chunk with an empty payload, which ends inside the "
+      "segment's compression byte (spec §4.5 check 1)")
+def _():
+    return v6_framed(V6_PHDR + segment(cube_records()), (schema.BODY, b""))
+
+
+@case("xv6_body_method_3", "BAD_COMPRESSION", "version 6.0: the body segment in PHDR with compression method 3 "
+      "(spec §4.5, §6 check 1)")
+def _():
+    seg = bytearray(segment(cube_records()))
+    seg[0] = 3
+    return v6_framed(V6_PHDR + bytes(seg))
+
+
+@case("xv6_body_raw_limit", "LIMIT_EXCEEDED", "version 6.0: a BODY segment of deflate declaring a raw size of "
+      "256 MiB + 1, above the payload limit of spec §12.4 (§6 check 2)")
+def _():
+    return v6_framed(V6_PHDR + segment(cube_records()[:2]),
+                     (schema.BODY, segment(cube_records()[2:], 1, (256 << 20) + 1)))
+
+
+@case("xv6_body_ratio", "LIMIT_EXCEEDED", "version 6.0: a deflated segment of the cube's records declaring a raw "
+      "size 1101 times its stored bytes (spec §6 check 4)")
+def _():
+    stored = zlib.compress(raw_records(cube_records()), 9)
+    return v6_framed(V6_PHDR + bytes([1]) + schema.Varint32.build(1101 * len(stored)) + stored)
+
+
+@case("xv6_body_size", "SIZE_MISMATCH", "version 6.0: the segment in PHDR stored (method 0) with a raw size one "
+      "more than its stored bytes (spec §6 check 3)")
+def _():
+    raw = raw_records(cube_records())
+    return v6_framed(V6_PHDR + segment(raw, 0, len(raw) + 1))
+
+
+@case("xv6_record_past_segment", "BAD_PAYLOAD", "version 6.0: the group record's length one more than the bytes "
+      "left in its segment (spec §4.6 check 2)")
+def _():
+    raw = bytearray(raw_records(cube_records()))
+    group = raw_records(cube_records()[:2])
+    raw[len(group) + 1] += 1
+    return v6_framed(V6_PHDR + segment(bytes(raw)))
+
+
+@case("xv6_record_head_cut", "BAD_PAYLOAD", "version 6.0: the segment ends after the tag of a fourth record, inside "
+      "its head (spec §4.6 check 1)")
+def _():
+    return v6_framed(V6_PHDR + segment(raw_records(cube_records()) + b"\x04"))
+
+
+@case("xv6_record_tag_6", "UNKNOWN_CRITICAL_CHUNK", "version 6.0: a record of tag 6 after the cube's group, a "
+      "critical record type 6.0 does not define (spec §4.6 check 3)")
+def _():
+    return v6_framed(V6_PHDR + segment(cube_records() + [(6, b"")]))
+
+
+@case("xv6_record_tag_0", "UNKNOWN_CRITICAL_CHUNK", "version 6.0: a record of tag 0 before the cube's object "
+      "(spec §4.6 check 3)")
+def _():
+    return v6_framed(V6_PHDR + segment([(0, b"\x00")] + cube_records()))
+
+
+@case("xv6_objt_chunk", "CHUNK_ORDER", "version 6.0: the cube's object as an OBJT chunk of version 5 after PHDR, "
+      "before a segment of its planes and group: a record of a body segment in version 6 (spec §4.2)")
+def _():
+    return v6_framed(V6_PHDR, (schema.OBJT, records.encode_object(ObjectRecord(0, "cube", None, None), 5)),
+                     (schema.BODY, segment(cube_records()[1:])))
+
+
+@case("xv6_meta_chunk", "CHUNK_ORDER", "version 6.0: a mETA chunk (keyword units_note) after PHDR: metadata is a "
+      "record of tag 5 in version 6 (spec §4.2, §10.3)")
+def _():
+    return v6_framed(V6_PHDR, (schema.META, b"units_note\x00m"), (schema.BODY, segment(cube_records())))
+
+
+@case("xv6_body_after_index", "CHUNK_ORDER", "version 6.0: a BODY chunk after iNDX (spec §4.3 rule 3)")
+def _():
+    recs = cube_records()
+    entries = [(8, 0, 1, 0), (8, len(raw_records(recs[:1])), 2, 0), (8, len(raw_records(recs[:2])), 3, 0)]
+    return v6_framed(V6_PHDR + segment(recs), (schema.INDX, segments.encode_index(entries)),
+                     (schema.BODY, segment([(5, b"note\x00x")])))
+
+
+@case("xv6_meta_after_object", "BAD_METADATA", "version 6.0: a metadata record after the cube's object record "
+      "(spec §4.6 check 4, §10.3)")
+def _():
+    recs = cube_records()
+    return v6_framed(V6_PHDR + segment(recs[:1] + [(5, b"note\x00x")] + recs[1:]))
+
+
+@case("xv6_meta_up_axis", "BAD_METADATA", "version 6.0: a metadata record up_axis = Z, which a version 6 file says "
+      "in its header (spec §10.3)")
+def _():
+    return v6_framed(V6_PHDR + segment([(5, b"up_axis\x00Z")] + cube_records()))
+
+
+@case("xv6_group_before_object", "BAD_OBJECT_REFERENCE", "version 6.0: the group record before the object record "
+      "it names (spec §4.3 rule 2)")
+def _():
+    o, p, g = cube_records()
+    return v6_framed(V6_PHDR + segment([p, g, o]))
+
+
+@case("xv6_group_before_planes", "BAD_PLANE_REFERENCE", "version 6.0: the group record before the planes record "
+      "it references (spec §4.3 rule 2)")
+def _():
+    o, p, g = cube_records()
+    return v6_framed(V6_PHDR + segment([o, g, p]))
+
+
+@case("xv6_planes_size", "SIZE_MISMATCH", "version 6.0: a planes record of count 6 with 71 bytes of float32 "
+      "data, not 72 (spec §7.1 check 3)")
+def _():
+    planes = records.encode_planes(0, CUBE, V6_HEADER, False)[:-1]
+    return v6_framed(V6_PHDR + segment(cube_records(PLNS=planes)))
+
+
+@case("xv6_planes_count_cut", "BAD_PAYLOAD", "version 6.0: a planes record of one byte 0x86, a count varint the "
+      "record ends inside (spec §7.1 check 1)")
+def _():
+    return v6_framed(V6_PHDR + segment(cube_records(PLNS=b"\x86")))
+
+
+@case("xv6_colours_extra", "BAD_COLOURS", "version 6.0: a colours record of group 0, count 6, with 28 bytes of "
+      "colours: not 4 and more than 6 x 4 (spec §10.1)")
+def _():
+    return v6_framed(V6_PHDR + segment(cube_records() + [(4, b"\x00\x06" + bytes(28))]))
+
+
+@case("xv6_colours_short", "BAD_PAYLOAD", "version 6.0: a colours record of group 0, count 6, with 8 bytes of "
+      "colours: not 4 and fewer than 6 x 4 (spec §10.1)")
+def _():
+    return v6_framed(V6_PHDR + segment(cube_records() + [(4, b"\x00\x06" + bytes(8))]))
+
+
+def _indexed(entries: list[tuple[int, int, int, int]] | None = None, payload: bytes | None = None) -> bytes:
+    recs = cube_records()
+    right = [(8, 0, 1, 0), (8, len(raw_records(recs[:1])), 2, 0), (8, len(raw_records(recs[:2])), 3, 0)]
+    payload = segments.encode_index(right if entries is None else entries) if payload is None else payload
+    phdr = V6_PHDR + segment(recs)
+    at = 8 + len(chunk_bytes(schema.PHDR, phdr))
+    return v6_framed(phdr, (schema.INDX, payload), end=at.to_bytes(8, "little"))
+
+
+@case("xv6_index_raw_offset", "BAD_INDEX", "version 6.0: an index whose planes entry gives raw offset 1, not the "
+      "planes record's offset in its segment (spec §10.2)")
+def _():
+    return _indexed([(8, 0, 1, 0), (8, 1, 2, 0), (8, len(raw_records(cube_records()[:2])), 3, 0)])
+
+
+@case("xv6_index_chunk_offset", "BAD_INDEX", "version 6.0: an index whose group entry's chunk offset difference is "
+      "1, naming byte 9, not the PHDR chunk at 8 that holds the record (spec §10.2)")
+def _():
+    return _indexed([(8, 0, 1, 0), (8, len(raw_records(cube_records()[:1])), 2, 0),
+                     (9, len(raw_records(cube_records()[:2])), 3, 0)])
+
+
+@case("xv6_index_count", "BAD_PAYLOAD", "version 6.0: an index of count 5 in 13 bytes: more entries than a quarter "
+      "of the bytes after the count (spec §10.2)")
+def _():
+    recs = cube_records()
+    right = segments.encode_index([(8, 0, 1, 0), (8, len(raw_records(recs[:1])), 2, 0),
+                                   (8, len(raw_records(recs[:2])), 3, 0)])
+    return _indexed(payload=b"\x05" + right[1:])
+
+
+@case("xv6_index_extra", "BAD_INDEX", "version 6.0: an index with a byte after its three entries (spec §10.2)")
+def _():
+    recs = cube_records()
+    right = segments.encode_index([(8, 0, 1, 0), (8, len(raw_records(recs[:1])), 2, 0),
+                                   (8, len(raw_records(recs[:2])), 3, 0)])
+    return _indexed(payload=right + b"\x00")
+
+
+@case("xv6_count_mismatch", "COUNT_MISMATCH", "version 6.0: the header's counts say 2 objects; the file has 1 "
+      "(spec §4.4, §5)")
+def _():
+    phdr = records.encode_header(dataclasses.replace(V6_HEADER, plane_count=6, object_count=2, group_count=1))
+    return v6_framed(phdr + segment(cube_records()))
+
+
+@case("xv50_body_chunk", "UNKNOWN_CRITICAL_CHUNK", "version 5.0: a BODY chunk, a critical chunk type of version "
+      "6 only (spec §4.2)")
+def _():
+    return v5_file(v5_layout((schema.BODY, segment(cube_records()))))

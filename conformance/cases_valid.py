@@ -27,8 +27,8 @@ from planefmt.model import (UP_AXIS, Coding, Colours, GroupKind, Header, Metadat
                             Quantization, Shell, Units)
 
 from . import reference
-from .build import (CUBE, SPEC_HEADER, box, finish, frame, header_json, metadata_json, rounded, shell_json, stored_header, stored_planes,
-                    world_matrices)
+from .build import (CUBE, SPEC_HEADER, assemble_v6, box, finish, frame, header_json, metadata_json, rounded,
+                    shell_json, small_v6, split, stored_header, stored_planes, world_matrices)
 
 #: Relative tolerance of geometry comparisons (see README.md).
 GEOMETRY_TOLERANCE = 1e-6
@@ -75,8 +75,13 @@ class Meta:
 
 @dataclass(frozen=True)
 class Chunk:
-    type: bytes
+    type: bytes  # version 6: one byte of 128 to 255, an ancillary record (spec §4.6)
     payload: bytes
+
+
+@dataclass(frozen=True)
+class Segment:
+    """Version 6: a new body segment starts here, in a BODY chunk (spec §4.5; assembled cases only)."""
 
 
 @dataclass(frozen=True)
@@ -96,6 +101,8 @@ class ValidCase:
     edit: Callable[[list], list] | None = field(default=None, compare=False)
     findings: tuple[str, ...] = ()
     findings_optional: tuple[str, ...] = ()
+    #: Version 6: the compression method of each body segment, where not the smallest (assembled cases only).
+    methods: tuple[int, ...] | None = None
     table: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -172,8 +179,10 @@ def written(case: ValidCase, header: Header) -> bytes:
                 w.add_colours(op.group, op.rgba)
             elif isinstance(op, Meta):
                 w.add_metadata(op.key, op.value)
-            else:
+            elif isinstance(op, Chunk):
                 w.add_chunk(op.type, op.payload)
+            else:
+                raise AssertionError(f"{case.name}: a writer cannot start a segment where it is told")
     return bytes(sink.data) if case.stream else sink.getvalue()
 
 
@@ -181,6 +190,9 @@ def assembled(case: ValidCase, header: Header) -> bytes:
     """The file assembled chunk by chunk from planefmt's payload encoders and ``chunk_bytes``."""
     counts = case.counts or (None, None, None)
     header = dataclasses.replace(header, plane_count=counts[0], object_count=counts[1], group_count=counts[2])
+    if header.version[0] >= 6:
+        return assemble_v6(header, items_v6(case, header), index=case.index, compress=case.compress,
+                           methods=case.methods)
     phdr = bytearray(records.encode_header(header))
     phdr[2:4] = (int.from_bytes(phdr[2:4], "little") | case.header_flags).to_bytes(2, "little")
     layout = [(schema.PHDR, bytes(phdr))]
@@ -212,6 +224,39 @@ def assembled(case: ValidCase, header: Header) -> bytes:
     if case.edit is not None:
         layout = case.edit(layout)
     return frame(finish(layout, case.index, header.version[0]))
+
+
+def items_v6(case: ValidCase, header: Header) -> list[tuple]:
+    """The records of a version 6 case, ``(tag, payload)``, with its segment starts and chunks between them."""
+    items: list[tuple] = []
+    planes = objects = groups = 0
+    copied = copies(case)
+    for op in case.ops:
+        if isinstance(op, Obj):
+            items.append((schema.TAG_OBJECT, records.encode_object(ObjectRecord(objects, op.name, op.parent,
+                                                                                op.transform), 6) + op.extra))
+            objects += 1
+        elif isinstance(op, Planes):
+            items.append((schema.TAG_PLANES, records.encode_planes(planes, op.triplets, header, case.compress)))
+            planes += len(op.triplets)
+        elif isinstance(op, Group):
+            rec = PartGroup(groups, op.obj, op.kind, np.array(op.refs, dtype=np.uint32), _role_bits(op),
+                            cells=_cells(op), tree=_tree(op), extra=op.extra, vertex_planes=_vertex_planes(op),
+                            facets=_facets(op), shell=op.shell)
+            if groups in copied:
+                rec = PartGroup(groups, op.obj, int(GroupKind.COPY), rec.refs, rec.bounding, source=copied[groups])
+            items.append((schema.TAG_GROUP, records.encode_group(rec, case.compress, 6)))
+            groups += 1
+        elif isinstance(op, Colour):
+            items.append((schema.TAG_COLOURS, records.encode_colours(Colours(op.group, op.rgba), 6,
+                                                                     len(case.groups[op.group].refs))))
+        elif isinstance(op, Meta):
+            items.append((schema.TAG_METADATA, records.encode_metadata(Metadata(op.key, op.value))))
+        elif isinstance(op, Segment):
+            items.append(split())
+        else:
+            items.append((op.type[0], op.payload) if len(op.type) == 1 else (op.type, op.payload))
+    return items
 
 
 def geometry(case: ValidCase) -> tuple[dict, np.ndarray | None]:
@@ -261,7 +306,9 @@ def copies(case: ValidCase) -> dict[int, int]:
     return out
 
 
-def expected(case: ValidCase, header: Header, geo: dict) -> dict:
+def expected(case: ValidCase, header: Header, geo: dict, counts: tuple[int, int, int] | None | bool = True) -> dict:
+    """The expected result; ``counts`` True: the case's own."""
+    counts = case.counts if counts is True else counts
     objects = [{"name": o.name, "parent": o.parent,
                 "transform": None if o.transform is None else np.asarray(o.transform, float).ravel().tolist()}
                for o in case.objects]
@@ -285,7 +332,7 @@ def expected(case: ValidCase, header: Header, geo: dict) -> dict:
     colours = [{"group": op.group, "rgba": np.asarray(op.rgba).tolist()} for op in case.ops
                if isinstance(op, Colour)]
     result = {
-        "header": header_json(header, case.counts),
+        "header": header_json(header, counts),
         "planes": case.table.tolist(),
         "objects": objects,
         "groups": groups,
@@ -312,6 +359,9 @@ def build(case: ValidCase) -> tuple[bytes, dict]:
         by_writer = written(case, header)
         if by_writer != data:
             raise AssertionError(f"{case.name}: planefmt.Writer and the chunk assembler disagree")
+    if header.version[0] >= 6 and small_v6(items_v6(case, header)):
+        # A file of one small segment leaves out its bbox and counts (spec §5).
+        return data, expected(case, stored_header(dataclasses.replace(header, bbox=None)), geo, None)
     return data, expected(case, stored_header(header), geo)
 
 
@@ -497,6 +547,7 @@ V42_CUBE = dataclasses.replace(SPEC_HEADER, version=(4, 2))
 V50_CUBE = dataclasses.replace(SPEC_HEADER, version=(5, 0))
 V51_CUBE = dataclasses.replace(SPEC_HEADER, version=(5, 1))
 V52_CUBE = dataclasses.replace(SPEC_HEADER, version=(5, 2))
+V60_CUBE = dataclasses.replace(SPEC_HEADER, version=(6, 0))
 
 
 def _explicit_walk(mesh, edge_two_first: bool = False, steps: float = 4.0) -> Shell:
@@ -1068,4 +1119,65 @@ CASES = [
               "12 times, 17 references in all: the face is decoded once per reference, 12 times, however many "
               "references repeat it (spec/pln.md §9.8; planefmt gave it once past 14 references)",
               Header(coding=Coding.FLOAT64, units=Units.METRE), PATCH_REPEATED_MANY_OPS, decoded_bbox=True),
+    # -- version 6.0 (issue 52): records in body segments (spec §4.5, §4.6), the compact header (§5)
+    ValidCase("cube_v6_0", "version 6.0: the cube as one convex group of six quantized planes (widths 2/2/1, h in "
+              "[0, 1], metres, tolerance 1e-6 rounded up to 12 mantissa bits), its three records in one "
+              "segment in the PHDR payload after the header fields; one segment under 256 raw bytes: no bbox, no "
+              "counts (spec §5), no index: 73 bytes, the records uncompressed (method 0, smaller than Brotli here)",
+              dataclasses.replace(quantized((2, 2, 1), (0.0, 1.0)), version=(6, 0), lossy=False, tolerance=1e-6,
+                                  error_bound=0.0),
+              cube_ops(), compress=True, index=False),
+    ValidCase("scene_v6_0", "version 6.0: a root, the cube as a convex group in one colour, the torus of "
+              "shell_walk_torus_v4_1 as a shell walk with multi-parallelograms on one reference in a colour of its "
+              "own, a gem of ten planes under a rotation, and the cube again in one colour per reference; up axis Z "
+              "in the header, float32 planes, bbox and counts (over 256 raw bytes), one compressed segment in PHDR",
+              dataclasses.replace(V60_CUBE, up_axis="Z"),
+              (Obj("root"), Obj("cube", 0, translation(0.0, 0.0, 2.0)), Planes(CUBE),
+               Group(1, GroupKind.CONVEX, tuple(range(6))),
+               Colour(0, np.tile(np.array([[20, 120, 220, 255]], dtype=np.uint8), (6, 1))),
+               Obj("torus", 0, translation(3.0, 0.0, 0.0)),
+               Group(2, GroupKind.SHELL_WALK_MULTI, (4,), shell=WALK_TORUS),
+               Colour(1, np.array([[250, 200, 0, 255]], dtype=np.uint8)),
+               Obj("gem", 0, affine(ROT30, -3.0, 0.0, 0.0)), Planes(GEM),
+               Group(3, GroupKind.CONVEX, tuple(range(6, 16))),
+               Obj("cube b", 0, translation(0.0, 3.0, 0.0)), Group(4, GroupKind.CONVEX, tuple(range(6))),
+               Colour(3, np.array([[10, 20, 30, 255]] * 3 + [[90, 80, 70, 128]] * 3, dtype=np.uint8))),
+              compress=True, decoded_bbox=True, index=False),
+    ValidCase("shell_walk_v6_0", "version 6.0: the icosphere of shell_walk_sphere_v4_1 as a shell walk (kind 9) "
+              "without references in a file without planes (coding 0), in one colour (a colours record of count "
+              "0), its grid in f32, uncompressed (method 0): one segment in PHDR", V60_CUBE,
+              (Obj("sphere"), Group(0, GroupKind.SHELL_WALK, (), shell=WALK_SPHERE),
+               Colour(0, np.array([[230, 120, 40, 255]], dtype=np.uint8))), decoded_bbox=True, index=False),
+    ValidCase("segments_v6_0", "version 6.0: three body segments, the first in PHDR stored with Brotli (method "
+              "2), then BODY chunks stored with deflate (method 1) and stored raw (method 0), an unknown ancillary "
+              "chunk (bOGU) between them and an unknown ancillary record (tag 200) in the last, which a reader skips "
+              "(UNKNOWN_ANCILLARY_CHUNK); group 1 references planes of the first segment; an index whose entries "
+              "name three chunks (spec §10.2)", V60_CUBE,
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.CONVEX, tuple(range(6))), Segment(),
+               Obj("box", None, translation(2.0, 0.0, 0.0)), Planes(box((0.0, 0.0, 0.0), (1.0, 2.0, 0.5))),
+               Group(1, GroupKind.CONVEX, (0, 2, 3, 5, 7, 10)),
+               Colour(1, np.array([[200, 30, 40, 255]], dtype=np.uint8).repeat(6, axis=0)),
+               Chunk(b"bOGU", b"ancillary"), Obj("cube twin", 0, translation(0.0, 2.0, 0.0)),
+               Chunk(bytes([200]), b"a record to skip"), Group(2, GroupKind.CONVEX, tuple(range(6)))),
+              compress=True, decoded_bbox=True, assembled_only=True, methods=(2, 1, 0),
+              findings=("UNKNOWN_ANCILLARY_CHUNK",)),
+    ValidCase("index_v6_0", "version 6.0: the scene of scene_transforms_v4_0 (transforms entry by entry, one colour "
+              "for a group, one per reference for another) written by planefmt.Writer with an index: one segment in "
+              "PHDR, iNDX entries whose chunk offsets are all 8 (differences 0 after the first)", V60_CUBE,
+              (Obj("root"), Obj("a", 0, translation(2.5, -1.0, 0.125)), Planes(CUBE),
+               Group(1, GroupKind.CONVEX, tuple(range(6))), Colour(0, np.array([[200, 30, 40, 255]] * 6, dtype=np.uint8)),
+               Obj("b", 0, affine(ROT30, 0.1, 0.0, 0.0)), Group(2, GroupKind.CONVEX, tuple(range(6))),
+               Colour(1, np.array([[10, 20, 30, 255]] * 3 + [[90, 80, 70, 128]] * 3, dtype=np.uint8)),
+               Obj("c", 0, affine(MIRROR, 0.0, 3.0, -0.0)), Group(3, GroupKind.CONVEX, tuple(range(6)))),
+              compress=True, decoded_bbox=True),
+    ValidCase("copies_v6_0", "version 6.0: the scene of copies_v4_2 (a shell walk cube and a convex cube, each "
+              "placed twice, the second of each a copy, kind 11, of the first) with an index, uncompressed",
+              V60_CUBE,
+              (Obj("walk"), Planes(CUBE), Group(0, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
+               Obj("walk twin", None, translation(2.0, 0.0, 0.0)),
+               Group(1, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
+               Colour(1, np.tile(np.array([[200, 30, 30, 255]], dtype=np.uint8), (6, 1))),
+               Obj("solid", None, translation(0.0, 3.0, 0.0)), Group(2, GroupKind.CONVEX, tuple(range(6))),
+               Obj("solid twin", None, translation(2.0, 3.0, 0.0)), Group(3, GroupKind.CONVEX, tuple(range(6)))),
+              decoded_bbox=True),
 ]

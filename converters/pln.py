@@ -36,7 +36,7 @@ def read(path: str | os.PathLike[str], limits: Limits | None = None) -> tuple[Sc
 
 def write(scene: Scene, path: str | os.PathLike[str], *, tolerance: float = 1e-6, bits=None, coding=None,
           delta: float | None = None, tau: float | None = None, compress: bool = True,
-          compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 5,
+          compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 6,
           keep_corners: bool = False, keep_triangles: bool = False) -> list[str]:
     """Encode ``scene`` (atomically); face colours go into cOLR chunks, one colour per plane.
 

@@ -182,7 +182,7 @@ LEAKS = re.compile(r"\b[A-Z]\w*(Error|Exception|Warning)\b|\.tmp|/tmp/|Traceback
 
 def _bad_inputs(cube: bytes) -> dict[str, bytes]:
     crc = bytearray(cube)
-    crc[cube.index(b"PLNS") + 8] ^= 0xFF  # a byte of the plane table's payload
+    crc[cube.index(b"PHDR") + 24] ^= 0xFF  # a byte of the header chunk's payload: its body segment (version 6)
     return {
         "empty.glb": b"",
         "header-only.glb": b"glTF\x02\x00\x00\x00\x0c\x00\x00\x00",
@@ -348,7 +348,7 @@ def test_version_names_the_package_and_the_format_versions(capsys: pytest.Captur
     import planefmt
 
     assert main(["--version"]) == 0
-    assert capsys.readouterr().out.strip() == f"pln {planefmt.__version__} (planefmt; reads .pln 1.0-5.2, writes 5.2)"
+    assert capsys.readouterr().out.strip() == f"pln {planefmt.__version__} (planefmt; reads .pln 1.0-6.0, writes 6.0)"
 
 
 @pytest.mark.parametrize("to,name", [("glb", "x.pln"), ("obj", "x.ply"), ("pln", "x.glb")])
@@ -370,14 +370,15 @@ def test_output_extension_that_fits_to_or_no_format_is_kept(to: str, name: str, 
 
 def test_readme_cube_figures_are_what_pln_convert_writes(tmp_path: Path) -> None:
     readme = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
-    claim = re.search(r"`convex/cube_subd\.obj` \(six planes\) takes (\d+)\s+bytes, (\d+) as version 1\.0", readme)
+    claim = re.search(r"`convex/cube_subd\.obj` \(six planes\) takes (\d+)\s+bytes, (\d+) as version 1\.0\s+"
+                      r"\(`--no-compact`\), (\d+) as version 5\.0", readme)
     assert claim, "README no longer states the cube's sizes"
     sizes = []
-    for options in ([], ["--no-compact"]):
+    for options in ([], ["--no-compact"], ["--major", "5"]):
         out = tmp_path / f"cube{len(options)}.pln"
         assert main(["convert", *options, str(CUBE), str(out)]) == 0
         sizes.append(out.stat().st_size)
-    assert sizes == [int(claim[1]), int(claim[2])]
+    assert sizes == [int(claim[1]), int(claim[2]), int(claim[3])]
     assert "version\n2.0" not in readme and "version 2.0 (`pln convert`" not in readme
 
 

@@ -423,7 +423,7 @@ def test_newer_minor_version_is_read_and_unknown_kind_skipped():
 
 def test_major_version_mismatch():
     data = write_bytes(Header(version=(2, 0)), lambda w: None)
-    data = data[:16] + b"\x06" + data[17:]  # PHDR's version_major: 6, which no reader of this version knows
+    data = data[:16] + b"\x07" + data[17:]  # PHDR's version_major: 7, which no reader of this version knows
     data = data[:124] + zlib.crc32(data[8:12] + data[16:124]).to_bytes(4, "little") + data[128:]
     with pytest.raises(planefmt.VersionError):
         read_all(data)

@@ -28,7 +28,7 @@ def test_encode_scene_defaults_are_the_command_lines(cube_scene: Scene, tmp_path
     library = tmp_path / "library.pln"
     header = planefmt.encode_scene(cube_scene, library)
     assert main(["convert", str(CUBE), str(tmp_path / "cli.pln")]) == 0
-    assert header.version == (5, 0)
+    assert header.version == (6, 0)
     assert library.read_bytes() == (tmp_path / "cli.pln").read_bytes()
 
 
@@ -65,10 +65,16 @@ def test_decode_mesh_of_something_else_is_a_pln_error() -> None:
 
 def test_reader_counts_come_from_the_header_before_iterating(cube_scene: Scene, tmp_path: Path) -> None:
     path = tmp_path / "cube.pln"
-    planefmt.encode_scene(cube_scene, path)
+    planefmt.encode_scene(cube_scene, path, major=5)
     with planefmt.open(path) as f:
         assert (f.plane_count, f.group_count, f.object_count) == (6, 1, 1)
         groups = list(f.part_groups())
+        assert (f.plane_count, f.group_count, f.object_count) == (6, 1, 1)
+    # Version 6 leaves the counts of a file of one small segment out (spec §5): they are what was read.
+    planefmt.encode_scene(cube_scene, path)
+    with planefmt.open(path) as f:
+        assert f.header.plane_count is None and (f.plane_count, f.group_count, f.object_count) == (0, 0, 0)
+        list(f)
         assert (f.plane_count, f.group_count, f.object_count) == (6, 1, 1)
     assert groups[0].kind is GroupKind.CONVEX
     assert repr(groups[0]) == "PartGroup(0, object=0, kind=CONVEX, 6 refs)"

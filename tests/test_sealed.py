@@ -101,11 +101,13 @@ def _grid_cube(n: int) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(box.vertices, dtype=np.float64), np.asarray(box.faces)
 
 
-def test_sealed_files_are_version_5_0_and_decode_as_encoded(no_tree) -> None:
+@pytest.mark.parametrize("major", [5, 6])
+def test_sealed_files_are_version_5_0_and_decode_as_encoded(no_tree, major) -> None:
     v, f = shapes.ring(12)
     buf = io.BytesIO()
-    header = codec.encode_scene(Scene(nodes=(Node(name="ring", mesh=Mesh(v, f)),)), buf, tolerance=TOL, scheme="paper")
-    assert header.version == (5, 0)
+    header = codec.encode_scene(Scene(nodes=(Node(name="ring", mesh=Mesh(v, f)),)), buf, tolerance=TOL, scheme="paper",
+                                major=major)
+    assert header.version == (major, 0)
     with planefmt.open(io.BytesIO(buf.getvalue())) as r:
         groups = list(r.part_groups())
     assert [g.kind for g in groups] == [GroupKind.SEALED]

@@ -99,7 +99,7 @@ def test_wall_with_a_hole_converts():
     v, f = wall_with_hole()
     assert len(f) == 66
     header, mesh, data = encode(v, f, 1e-6)
-    assert header.version == (5, 0) and header.error_bound <= 1e-6 and not header.lossy
+    assert header.version == (6, 0) and header.error_bound <= 1e-6 and not header.lossy
     assert len(mesh.faces) == 66
     assert abs(shapes.area(mesh.vertices, mesh.faces) - 8.25) <= 1e-6 * 8.25
     with planefmt.open(io.BytesIO(data)) as r:
@@ -271,7 +271,7 @@ def test_shell_tree_is_chosen_where_smaller_and_its_bound_holds(path, tolerance,
         (group,) = list(r.part_groups())
     assert group.kind in TREE_KINDS and header.error_bound <= tolerance
     # 5.0, or 5.2 where the walk is kind 13 (the CAD parts'), spec §11.
-    assert header.version == (5, 2 if group.kind == GroupKind.SHELL_WALK_LATER else 0)
+    assert header.version == (6, 0)  # every kind is one of 6.0 (spec §9.3)
     # The same corners and triangles in the layout of kind 6 take ``gain`` times the deflated bytes or more
     # (CAD at draco-14's error: 1.5; at 1e-6 the coordinates are most of either).
     flat = reordered(dataclasses.replace(group.shell, links=None), np.arange(len(group.refs)))
@@ -362,7 +362,7 @@ def test_the_smaller_predictor_is_chosen(path, kind, gain, monkeypatch):
     header, decoded, data = encode(v, f, 3.5e-5)
     with planefmt.open(io.BytesIO(data)) as r:
         (group,) = list(r.part_groups())
-    assert group.kind == kind and header.version == (5, 0)
+    assert group.kind == kind and header.version == (6, 0)
     sizes = {p: len(zlib.compress(shellfields._shell_tree_body(group.shell, p), 6)) for p in (False, True)}
     chosen = kind == GroupKind.SHELL_TREE_PARALLELOGRAM
     assert sizes[not chosen] > gain * sizes[chosen]
@@ -382,7 +382,7 @@ def test_a_shell_walk_is_chosen_where_smaller_in_its_smallest_mode(path, kind, m
     header, decoded, data = encode(v, f, 3.5e-5)
     with planefmt.open(io.BytesIO(data)) as r:
         (group,) = list(r.part_groups())
-    assert group.kind == kind and header.version == (5, 2 if kind == GroupKind.SHELL_WALK_LATER else 0)
+    assert group.kind == kind and header.version == (6, 0)  # every kind is one of 6.0 (spec §9.3)
     fields = shellwalk.shell_walk_fields(group.shell, kind=kind)
     assert fields["mode"] == bytes([mode])
     trees = shellfields.shell_tree_bodies(group.shell)

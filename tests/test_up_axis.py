@@ -56,8 +56,8 @@ def plns(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 def test_pln_stores_the_source_up_axis(plns: dict[str, Path]) -> None:
     for name, axis in (("bolt", "Z"), ("scene", "Y")):
         with planefmt.open(plns[name]) as r:
-            # Version 5: in the header, so a stream knows it before any record.
-            assert r.header.version == (5, 0) and r.header.up_axis == axis and r.up_axis == axis
+            # Versions 5 and 6: in the header, so a stream knows it before any record.
+            assert r.header.version == (6, 0) and r.header.up_axis == axis and r.up_axis == axis
             assert not any(isinstance(rec, planefmt.Metadata) for rec in r)
 
 

@@ -33,7 +33,7 @@ def test_a_corpus_shell_is_stored_as_brotli_and_decodes_as_before(tmp_path) -> N
     from planefmt_converters import registry
 
     scene, _ = registry.read(str(CORPUS / "nonconvex_watertight" / "torus.STL"))
-    header = codec.encode_scene(scene, tmp_path / "t.pln", tolerance=3e-5)
+    header = codec.encode_scene(scene, tmp_path / "t.pln", tolerance=3e-5, major=5)
     data = (tmp_path / "t.pln").read_bytes()
     assert header.version[0] == 5 and schema.COMPRESSION_BROTLI in _payload_methods(data)
     source = next(n.mesh for n in scene.nodes if n.mesh is not None)
@@ -88,7 +88,7 @@ def test_one_colour_for_a_group_is_stored_once(tmp_path) -> None:
     colours = np.tile(np.array([[12, 34, 56, 255]], dtype=np.uint8), (len(box.faces), 1))
     scene = Scene(nodes=(Node("box", mesh=Mesh(np.asarray(box.vertices), np.asarray(box.faces),
                                                face_colours=colours)),))
-    codec.encode_scene(scene, tmp_path / "c.pln", tolerance=1e-6)
+    codec.encode_scene(scene, tmp_path / "c.pln", tolerance=1e-6, major=5)
     data = (tmp_path / "c.pln").read_bytes()
     at = data.index(schema.COLR)
     assert int.from_bytes(data[at + 4:at + 8], "little") == 12
@@ -155,5 +155,5 @@ def test_an_unknown_major_is_refused_before_any_work(tmp_path) -> None:
     box = trimesh.creation.box()
     scene = Scene(nodes=(Node("box", mesh=Mesh(np.asarray(box.vertices), np.asarray(box.faces))),))
     with pytest.raises(planefmt.PlnError) as err:
-        codec.encode_scene(scene, tmp_path / "x.pln", major=6)
+        codec.encode_scene(scene, tmp_path / "x.pln", major=7)
     assert err.value.code == "UNSUPPORTED_VERSION" and not (tmp_path / "x.pln").exists()

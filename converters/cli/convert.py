@@ -65,15 +65,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--bits", type=int, help="force quantized coding with this many bits per component")
     g.add_argument("--coding", choices=["float32", "float64", "quantized"], help="force a triplet coding")
     g.add_argument("--compress", action=argparse.BooleanOptionalAction, default=True,
-                   help="deflate or Brotli-compress plane and group payloads, whichever is smaller, where that "
-                        "saves bytes (spec §6; the default)")
+                   help="deflate or Brotli-compress body segments (version 5: plane and group payloads), whichever "
+                        "is smaller, where that saves bytes (spec §6; the default)")
     g.add_argument("--compact", action=argparse.BooleanOptionalAction, default=True,
-                   help="write version 5.0 (spec/pln.md; the default): bit-packed or predicted plane codes, "
+                   help="write version 6.0 (spec/pln.md; the default): bit-packed or predicted plane codes, "
                         "whichever is smaller, varint group bodies and chunk heads, transforms entry by entry. "
                         "--no-compact writes version 1.0, for readers of 1.x only, where the groups allow: shell "
                         "and sealed groups need version 3 or later (--major), and a warning says which was written")
-    g.add_argument("--major", type=int, choices=[3, 4, 5], default=5,
-                   help="5 (the default): version 5.0; 4: the lowest of versions 4.0 to 4.2 that holds the file, "
+    g.add_argument("--major", type=int, choices=[3, 4, 5, 6], default=6,
+                   help="6 (the default): version 6.0, every record in compressed body segments; 5: the lowest "
+                        "of versions 5.0 to 5.2 that holds the file, for readers of 5.x; 4: the lowest of versions 4.0 to 4.2 that holds the file, "
                         "for readers of 4.x (32-bit chunk lengths, a mETA up axis, float64 shell grids); 3: the "
                         "lowest of 3.0 to 3.4, for readers of 3.x (deflate only, transforms as 16 doubles)")
     g.add_argument("--allow-open", action="store_true",

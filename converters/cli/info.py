@@ -97,7 +97,11 @@ def describe(source: str, caps: Limits | None = None) -> dict:
             summary.add(rec)
         chunks = {name: {"count": r.chunk_counts[name], "bytes": r.chunk_stats[name]} for name in r.chunk_stats}
         findings = [{"code": c, "severity": errors.CODES[c].severity, "message": m} for c, m in r.findings]
-        return _render_dict(r.name, r.header, summary, chunks, sum(r.chunk_stats.values()) + 8, findings)
+        info = _render_dict(r.name, r.header, summary, chunks, sum(r.chunk_stats.values()) + 8, findings)
+        # Version 6: the records of the body segments, by type, in raw (decompressed) bytes (spec §4.6).
+        info["records"] = {name: {"count": r.record_counts[name], "bytes": r.record_stats[name]}
+                           for name in r.record_stats}
+        return info
 
 
 def _render_dict(name: str, h, summary: _Summary, chunks: dict, file_bytes: int | None,
@@ -181,7 +185,7 @@ def render(info: dict) -> str:
         f"coding:      {coding}",
         f"units:       {info['units']}",
         *([f"metadata:    {', '.join(f'{k}={v}' for k, v in info['metadata'].items())}"] if info["metadata"] else []),
-        f"bbox:        {info['bbox'] if info['bbox'] is not None else '-'}",
+        f"bbox:        {info['bbox'] if info['bbox'] is not None else '- (not stored)'}",
         f"error:       requested {tol}, verified {bound} (fraction of the bbox diagonal)",
         f"planes:      {info['planes']}",
         f"objects:     {len(info['objects'])}",
@@ -205,6 +209,10 @@ def render(info: dict) -> str:
     lines.append("chunks:")
     for name, c in sorted(info["chunks"].items(), key=lambda kv: -kv[1]["bytes"]):
         lines.append(f"  {name}  {c['count']:>8} x  {c['bytes']:>12} bytes")
+    if info.get("records"):
+        lines.append("records (in body segments, raw bytes):")
+        for name, c in sorted(info["records"].items(), key=lambda kv: -kv[1]["bytes"]):
+            lines.append(f"  {name}  {c['count']:>8} x  {c['bytes']:>12} bytes")
     for f in info["findings"]:
         lines.append(f"{f['severity']}: {f['code']}: {f['message']}")
     for loss in info.get("losses", []):

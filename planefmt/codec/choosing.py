@@ -14,12 +14,13 @@ import itertools
 import math
 import warnings
 from collections.abc import Callable, Sequence
+from contextvars import ContextVar
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .. import progress
-from ..container import quantize, records, shellfields, shellwalk
+from ..container import headers, quantize, records, shellfields, shellwalk
 from ..errors import GeometryError, PlnError, PlnWarning
 from ..geometry.hausdorff import DEFAULT_MAX_PIECES
 from ..geometry.planes import from_triplets, transform_points
@@ -71,10 +72,18 @@ class _Choice:
     lossy: bool
 
 
+#: Set while a version 6 file is encoded: its header holds the h range as two float32 values (spec §5), so
+#: the range is chosen as those before any plane is quantized and measured (a context variable, not an
+#: argument of every chooser, because only the candidates' range depends on it).
+F32_RANGE: ContextVar[bool] = ContextVar("f32_range", default=False)
+
+
 def _candidates(coding: Coding | None, bits: int | tuple[int, int, int] | None, table: np.ndarray,
                 radius: float) -> list[tuple[Coding, Quantization | None]]:
     """Codings to try, cheapest first; forced ones alone."""
     h_min, h_max = float(table[:, 2].min()), float(table[:, 2].max())
+    if F32_RANGE.get():
+        h_min, h_max = headers.f32_range(h_min, h_max)
     if bits is not None:
         widths = (bits,) * 3 if isinstance(bits, int) else tuple(bits)
         if len(widths) != 3 or not all(isinstance(b, (int, np.integer)) for b in widths):

@@ -27,7 +27,7 @@ from ..groups.shells import reordered, reordered_tree
 from ..groups.solids import FLAT_STRATEGIES, STRATEGIES, Splitter
 from ..model import (BSP_MAX_SPLIT, FREE, TREE_KINDS, UP_AXIS, Coding, GroupKind, Header, Mesh, Node, PartGroup, Quantization,
                      Scene, Shell, Units)
-from .choosing import _Choice, _choose, _choose_shells
+from .choosing import F32_RANGE, _Choice, _choose, _choose_shells
 from .decoding import SHELL_KINDS
 from .preparing import LOSSLESS_TOLERANCE, _Object, _diagonal, _prepare, _world_transforms
 from .strategies import GroupSpec
@@ -141,7 +141,7 @@ def encode_mesh(vertices: np.ndarray, faces: np.ndarray, *, tolerance: float = 1
 def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, tolerance: float = 1e-6,
                  coding: Coding | None = None, bits: int | tuple[int, int, int] | None = None,
                  delta: float | None = None, tau: float | None = None, compress: bool = True,
-                 compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 5,
+                 compact: bool = True, watertight: bool = True, scheme: str = "shell", major: int = 6,
                  keep_corners: bool = False, keep_triangles: bool = False) -> Header:
     """Write ``scene`` to a .pln file (path, written atomically, or binary stream); returns its header.
 
@@ -157,7 +157,9 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
 
     ``compress`` (the default, as ``pln convert``): payloads deflated or Brotli-compressed, whichever
     is smaller, where that saves bytes. ``compact`` (the default, as ``pln convert``; False writes
-    version 1.0): a version 5.0 file (spec/pln.md; ``major`` 4: 4.0 to 4.2, with 32-bit chunk lengths,
+    version 1.0): a version 6.0 file (spec/pln.md: every record in body segments compressed whole, the h
+    range chosen as float32 values before quantizing; ``major`` 5: 5.0 to 5.2, each chunk framed and
+    compressed alone; ``major`` 4: 4.0 to 4.2, with 32-bit chunk lengths,
     a mETA up axis and float64 shell grids): quantized planes in whichever of the bit-packed
     and the predicted coding takes fewer bytes, group references, cells and trees as varints, chunk
     heads as varints, transforms entry by entry, a group's one colour once. The planes and the
@@ -166,9 +168,21 @@ def encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, *, toleranc
     readers of 3.x, the lowest version 3.0 to 3.4 that holds the file (spec Appendix A.3): deflate
     only, transforms as 16 doubles, a colour per reference.
     """
-    if major not in (3, 4, 5):
-        raise PlnError(f"version {major}.x cannot be written: 3, 4 or 5 (or 1.0 with compact=False)",
+    if major not in (3, 4, 5, 6):
+        raise PlnError(f"version {major}.x cannot be written: 3, 4, 5 or 6 (or 1.0 with compact=False)",
                        code="UNSUPPORTED_VERSION")
+    token = F32_RANGE.set(major >= 6 and compact)
+    try:
+        return _encode_scene(scene, target, tolerance, coding, bits, delta, tau, compress, compact, watertight,
+                             scheme, major, keep_corners, keep_triangles)
+    finally:
+        F32_RANGE.reset(token)
+
+
+def _encode_scene(scene: Scene, target: str | os.PathLike | BinaryIO, tolerance: float, coding: Coding | None,
+                  bits: int | tuple[int, int, int] | None, delta: float | None, tau: float | None, compress: bool,
+                  compact: bool, watertight: bool, scheme: str, major: int, keep_corners: bool,
+                  keep_triangles: bool) -> Header:
     # Each encode starts cold, so that an encode repeated on the same scene (a benchmark's) costs what
     # the first did.
     shellwalk.forget()

@@ -19,7 +19,7 @@ from typing import BinaryIO
 
 import numpy as np
 
-from . import records, schema
+from . import records, schema, segments
 from .budget import Budget, declared
 from .chunks import ChunkStream, Limits, RawChunk, chunk_bytes, is_ancillary
 from ..errors import FormatError, PlnError
@@ -51,6 +51,11 @@ class Reader:
         self.metadata: dict[str, str] = {}
         self.chunk_stats: Counter[str] = Counter()  # payload + framing bytes per chunk type
         self.chunk_counts: Counter[str] = Counter()
+        # Version 6: raw bytes (tag, length, payload) and count of the records of each type (spec §4.6).
+        self.record_stats: Counter[str] = Counter()
+        self.record_counts: Counter[str] = Counter()
+        # Version 6: the chunk whose segment is being read, and its raw bytes (spec §4.5).
+        self._segment: tuple[RawChunk, bytes | bytearray | memoryview] | None = None
         self._table = np.empty((0, 3), dtype=np.float64)
         self._plane_count = 0
         self._group_refs: dict[int, int] = {}
@@ -65,8 +70,9 @@ class Reader:
         self._done = False
         self._started = False
         self.index_offset: int | None = None
-        # (offset, type, ordinal) of every OBJT, PLNS and GRUP chunk so far: what iNDX must list.
-        self._listed: list[tuple[int, bytes, int]] = []
+        # (offset, type, ordinal) of every OBJT, PLNS and GRUP chunk so far: what iNDX must list (version 6:
+        # (chunk offset, raw offset, tag, ordinal) of every record of tags 1 to 3).
+        self._listed: list[tuple] = []
         self._base = _tell(self._fp)
         try:
             self._stream = ChunkStream(self._fp, file=self.name, limits=self.limits)
@@ -78,6 +84,9 @@ class Reader:
             self._count(first)
             self.header, found = self._located(lambda raw: records.decode_header(raw.payload), first)
             self._after_header = first.end
+            self._first = first
+            if self.header.version[0] >= 6:
+                self._segment_start = self._located(lambda raw: records.decode_header6(raw.payload)[2], first)
             # Version 5 frames every chunk after PHDR with a varint length (spec §4.1).
             self._stream.compact = self._compact = self.header.version[0] >= 5
             self.findings.extend(found)
@@ -136,12 +145,68 @@ class Reader:
             raise PlnError("a reader iterates once; open the file again to re-read it", code="CHUNK_ORDER",
                            file=self.name)
         self._started = True
+        if self.header.version[0] >= 6:
+            yield from self._records6()
+            return
         while not self._done:
             raw = self._stream.next_chunk()
             self._count(raw)
             record = self._located(self._dispatch, raw)
             if record is not None:
                 yield record
+
+    def _records6(self) -> Iterator[Record]:
+        """The records of a version 6 file: those of each body segment in turn, one segment held at a time
+        (spec §4.5), then iNDX and PEND."""
+        if self._segment_start < len(self._first.payload):
+            yield from self._segment_records(self._first, self._segment_start)
+        while not self._done:
+            raw = self._stream.next_chunk()
+            self._count(raw)
+            if raw.type == schema.BODY and self.index_offset is None:
+                yield from self._segment_records(raw, 0)
+            elif raw.type in schema.RECORD_CHUNKS and self.index_offset is None:
+                raise FormatError(f"a {raw.name} chunk: a record of a body segment in version 6",
+                                  code="CHUNK_ORDER", file=self.name, chunk=raw.name, offset=raw.offset)
+            else:
+                record = self._located(self._dispatch, raw)
+                if record is not None:
+                    yield record
+
+    def _segment_records(self, chunk: RawChunk, start: int) -> Iterator[Record]:
+        raw = self._located(lambda c: segments.segment_raw(memoryview(c.payload)[start:], self.limits), chunk)
+        self._segment = (chunk, raw)
+        views = segments.records(raw)
+        while True:
+            try:
+                view = next(views, None)
+                if view is None:
+                    break
+                record = self._record(chunk, view)
+            except PlnError as exc:
+                raise exc.located(file=self.name, chunk=chunk.name, offset=chunk.offset)
+            if record is not None:
+                yield record
+        self._segment = None
+
+    def _record(self, chunk: RawChunk, view: segments.RecordView) -> Record | None:
+        """One record of a segment (spec §4.6 checks 3 to 5), as the chunk of version 5 it replaces."""
+        t = schema.RECORD_TYPES.get(view.tag)
+        name = t.decode() if t else f"tag {view.tag}"
+        self.record_stats[name] += view.size
+        self.record_counts[name] += 1
+        if t is None:
+            if view.tag >= schema.ANCILLARY_TAG:
+                self.findings.append(("UNKNOWN_ANCILLARY_CHUNK", f"skipped record of tag {view.tag} at raw byte "
+                                      f"{view.offset} of the {chunk.name} chunk at byte {chunk.offset}"))
+                return UnknownChunk(type=bytes([view.tag]), payload=bytes(view.payload), offset=view.offset)
+            raise FormatError(f"unknown critical record of tag {view.tag} at raw byte {view.offset}",
+                              code="UNKNOWN_CRITICAL_CHUNK")
+        try:
+            return self._payload(t, view.payload, (chunk.offset, view.offset))
+        except PlnError as exc:
+            exc.reason = f"{exc.reason} (record {name} at raw byte {view.offset} of the segment)"
+            raise
 
     def records(self) -> Iterator[Record]:
         """Every record in file order (same as iterating the reader)."""
@@ -168,36 +233,47 @@ class Reader:
         except PlnError as exc:
             raise exc.located(file=self.name, chunk=raw.name, offset=raw.offset)
 
+    def _listing(self, where: tuple[int, int] | int, t: bytes, ordinal: int) -> tuple:
+        """What iNDX lists for a record (spec §10.2): version 6, (chunk offset, raw offset, tag, ordinal)."""
+        if isinstance(where, tuple):
+            return (*where, schema.RECORD_TAGS[t], ordinal)
+        return (where, t, ordinal)
+
     def _dispatch(self, raw: RawChunk) -> Record | None:
         t = raw.type
         if self.index_offset is not None and t != schema.PEND:
             raise FormatError(f"{raw.name} after iNDX: iNDX must be followed by PEND", code="CHUNK_ORDER")
+        return self._payload(t, raw.payload, raw.offset)
+
+    def _payload(self, t: bytes, payload: bytes, where: tuple[int, int] | int) -> Record | None:
+        """A chunk of type ``t``, or the record of version 6 that replaces it, at ``where``: a chunk's offset,
+        or a record's (chunk offset, raw offset)."""
         if t == schema.PLNS:
-            self._listed.append((raw.offset, t, self._plane_count))
-            block = records.decode_planes(raw.payload, self.header, self._plane_count, self.limits)
+            self._listed.append(self._listing(where, t, self._plane_count))
+            block = records.decode_planes(payload, self.header, self._plane_count, self.limits)
             self._append_planes(block.triplets)
             return block
         if t == schema.OBJT:
             if len(self.objects) >= self.limits.max_objects:
                 raise PlnError(f"more than {self.limits.max_objects} objects", code="LIMIT_EXCEEDED")
-            self._listed.append((raw.offset, t, len(self.objects)))
-            obj = records.decode_object(raw.payload, len(self.objects), self.header.version[0])
+            self._listed.append(self._listing(where, t, len(self.objects)))
+            obj = records.decode_object(payload, len(self.objects), self.header.version[0])
             self.objects.append(obj)
             return obj
         if t == schema.GRUP:
             group, found = records.decode_group(
-                raw.payload, expected_index=self._group_count, objects=len(self.objects),
+                payload, expected_index=self._group_count, objects=len(self.objects),
                 planes=self._plane_count, minor=self.header.version[1], limits=self.limits,
                 major=self.header.version[0], budget=self.budget)
             self.findings.extend(found)
-            self._listed.append((raw.offset, t, group.index))
+            self._listed.append(self._listing(where, t, group.index))
             self._group_refs[group.index] = len(group.refs)
             self._group_count += 1
             if int(GroupKind.COPY) in records.kinds_of(*self.header.version):
                 if self._rereadable:
-                    self._offsets[group.index] = raw.offset
+                    self._offsets[group.index] = where
                 else:
-                    self._payloads[group.index] = bytes(raw.payload)
+                    self._payloads[group.index] = bytes(payload)
             # a kind-11 group of a file whose version has no copies (a newer minor of major 3: fuzz
             # input py-foreign-44153) is skipped, with no source to read
             if group.kind == GroupKind.COPY and group.source is not None:
@@ -206,21 +282,25 @@ class Reader:
                 group = _with_planes(group, self._table[group.refs])
             return group
         if t == schema.COLR:
-            return records.decode_colours(raw.payload, self._group_refs, self.header.version[0])
+            return records.decode_colours(payload, self._group_refs, self.header.version[0])
         if t == schema.META:
             if self._listed:
                 raise FormatError("mETA after an OBJT, PLNS or GRUP chunk: metadata precedes the geometry",
                                   code="BAD_METADATA")
-            meta = records.decode_metadata(raw.payload)
+            meta = records.decode_metadata(payload)
             if meta.key == UP_AXIS and self.header.version[0] >= 5:
                 raise FormatError("a version 5 file says its up axis in the header, not in mETA", code="BAD_METADATA")
             if meta.key in self.metadata:
                 raise FormatError(f"a second mETA {meta.key}", code="BAD_METADATA")
             self.metadata[meta.key] = meta.value
             return meta
+        raw = RawChunk(t, payload, where)
         if t == schema.INDX:
             self.index_offset = raw.offset
-            self._check_index(records.decode_index(raw.payload, raw.offset, self._after_header))
+            if self.header.version[0] >= 6:
+                self._check_index(segments.decode_index(raw.payload))
+            else:
+                self._check_index(records.decode_index(raw.payload, raw.offset, self._after_header))
             return None
         if t == schema.PEND:
             self._finish(raw)
@@ -240,7 +320,7 @@ class Reader:
         if source is None:
             payload = self._payloads.get(s)
             if payload is None and s in self._offsets:
-                payload = self._reread(self._offsets[s]).payload
+                payload = self._source_payload(self._offsets[s])
             if payload is not None:
                 source, _ = records.decode_group(
                     payload, expected_index=s, objects=len(self.objects), planes=self._plane_count,
@@ -264,24 +344,51 @@ class Reader:
     def _rereadable(self) -> bool:
         return self._base is not None and self._stream._size is not None
 
-    def _reread(self, offset: int) -> RawChunk:
+    def _source_payload(self, where: tuple[int, int] | int) -> bytes:
+        """The stored payload of an earlier group: its chunk read again (version 6: the record in its segment,
+        the one held where it is that one, else its chunk read and decompressed again)."""
+        if isinstance(where, int):
+            return self._reread(where).payload
+        chunk_offset, raw_offset = where
+        if self._segment is not None and self._segment[0].offset == chunk_offset:
+            raw = self._segment[1]
+        else:
+            chunk = self._reread(chunk_offset, (schema.PHDR, schema.BODY))
+            start = records.decode_header6(chunk.payload)[2] if chunk.type == schema.PHDR else 0
+            raw = segments.segment_raw(memoryview(chunk.payload)[start:], self.limits)
+        view = next(segments.records(memoryview(raw)[raw_offset:]))
+        return view.payload
+
+    def _reread(self, offset: int, types: tuple[bytes, ...] = (schema.GRUP,)) -> RawChunk:
         """The GRUP chunk at ``offset`` (from the file's start), its CRC checked again; the stream is left
         where it was."""
         here = self._fp.tell()
         try:
-            stream = ChunkStream(self._fp, file=self.name, limits=self.limits, compact=self._compact)
+            # PHDR has a u32 length in every version (spec §4.1).
+            stream = ChunkStream(self._fp, file=self.name, limits=self.limits,
+                                 compact=self._compact and offset != len(schema.SIGNATURE))
             stream.seek(self._base + offset)
             stream.offset = offset
             raw = stream.next_chunk()
         finally:
             self._fp.seek(here)
-        if raw.type != schema.GRUP:
-            raise FormatError(f"byte {offset} held a GRUP chunk, now {raw.name}: the file changed while read",
-                              code="BAD_GROUP_STRUCTURE", offset=offset)
+        if raw.type not in types:
+            raise FormatError(f"byte {offset} held a {types[0].decode()} chunk, now {raw.name}: the file changed "
+                              "while read", code="BAD_GROUP_STRUCTURE", offset=offset)
         return raw
 
-    def _check_index(self, entries: np.ndarray) -> None:
-        """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §10.2)."""
+    def _check_index(self, entries: np.ndarray | list) -> None:
+        """iNDX must list exactly the OBJT, PLNS and GRUP chunks read so far (spec §10.2); in version 6 the
+        object, planes and group records."""
+        if isinstance(entries, list):
+            if len(entries) != len(self._listed):
+                raise FormatError(f"iNDX lists {len(entries)} records; the file has {len(self._listed)} object, "
+                                  "planes and group records", code="BAD_INDEX")
+            for i, (got, want) in enumerate(zip(entries, self._listed)):
+                if got != want:
+                    raise FormatError(f"iNDX entry {i} says (chunk at byte {got[0]}, raw byte {got[1]}, tag "
+                                      f"{got[2]}, ordinal {got[3]}); the file has {want}", code="BAD_INDEX")
+            return
         listed = np.array(self._listed, dtype=schema.INDEX_ENTRY_DTYPE)
         if len(entries) != len(listed):
             raise FormatError(f"iNDX lists {len(entries)} chunks; the file has {len(listed)} OBJT, PLNS and GRUP "
@@ -322,8 +429,9 @@ class Reader:
 
     # -- random access ---------------------------------------------------------------------
 
-    def index(self) -> np.ndarray:
-        """The iNDX entries (offset, type, ordinal) of a seekable file, read from its end."""
+    def index(self) -> np.ndarray | list[segments.Entry]:
+        """The iNDX entries (offset, type, ordinal) of a seekable file, read from its end; version 6: (chunk
+        offset, raw offset, tag, ordinal) of each record of tags 1 to 3 (spec §10.2)."""
         if self._base is None:
             raise PlnError("random access needs a seekable file", code="BAD_INDEX", file=self.name)
         end = self._fp.seek(0, os.SEEK_END) - self._base
@@ -354,6 +462,8 @@ class Reader:
             raise FormatError("PEND does not point at an iNDX chunk", code="BAD_INDEX", file=self.name,
                               offset=index_offset)
         try:
+            if major >= 6:
+                return segments.decode_index(raw.payload)
             return records.decode_index(raw.payload, index_offset, self._after_header)
         except PlnError as exc:
             raise exc.located(file=self.name, chunk="iNDX", offset=index_offset)
@@ -364,6 +474,8 @@ class Reader:
         Reads the objects and plane blocks it depends on and the group chunk itself.
         """
         entries = self.index()
+        if isinstance(entries, list):
+            return self._group6(k, entries)
         types = entries["type"]
         groups = np.flatnonzero(types == schema.GRUP)
         if not 0 <= k < len(groups):
@@ -386,6 +498,41 @@ class Reader:
                                   code="BAD_INDEX", file=self.name, offset=offset)
             sub._group_count = k
             record = sub._located(sub._dispatch, raw)
+        return record
+
+
+    def _group6(self, k: int, entries: list[segments.Entry]) -> PartGroup:
+        """Group ``k`` of a version 6 file through its index: the object and planes records before it and
+        its own, each segment they are in read and decompressed once."""
+        groups = [i for i, e in enumerate(entries) if e[2] == schema.TAG_GROUP]
+        if not 0 <= k < len(groups):
+            raise PlnError(f"no part group {k}; the file has {len(groups)}", code="BAD_INDEX", file=self.name)
+        pos = groups[k]
+        sub = copy.copy(self)
+        sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
+        sub._payloads, sub._offsets, sub._sources = {}, {}, {}
+        sub.budget = Budget(self.limits)
+        sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
+        sub.record_stats, sub.record_counts = Counter(), Counter()
+        wanted = [i for i in range(pos) if entries[i][2] in (schema.TAG_OBJECT, schema.TAG_PLANES)] + [pos]
+        record = None
+        for i in wanted:
+            chunk_offset, raw_offset, tag, _ = entries[i]
+            if sub._segment is None or sub._segment[0].offset != chunk_offset:
+                chunk = sub._reread(chunk_offset, (schema.PHDR, schema.BODY))
+                start = records.decode_header6(chunk.payload)[2] if chunk.type == schema.PHDR else 0
+                sub._segment = (chunk, sub._located(
+                    lambda c: segments.segment_raw(memoryview(c.payload)[start:], self.limits), chunk))
+            chunk, raw = sub._segment
+            try:
+                view = next(segments.records(memoryview(raw)[raw_offset:]), None)
+                if view is None or view.tag != tag:
+                    raise FormatError(f"index says tag {tag} at raw byte {raw_offset}, found "
+                                      f"{'nothing' if view is None else view.tag}", code="BAD_INDEX")
+                sub._group_count = k
+                record = sub._record(chunk, segments.RecordView(view.tag, raw_offset, view.payload))
+            except PlnError as exc:
+                raise exc.located(file=self.name, chunk=chunk.name, offset=chunk.offset)
         return record
 
 

@@ -13,6 +13,7 @@ import construct as cs
 import numpy as np
 
 from . import quantize, schema, varint
+from .headers import VERSIONS, _f32_toward, _f32_up, _parse, decode_header6, encode_header6
 from .budget import Budget, Charge
 from .chunks import Limits
 from .compression import SHELL_TREE_LEVEL, pack, unpack
@@ -22,10 +23,8 @@ from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, TREE_KINDS, UP_A
 from .shellfields import _decode_shell, _decode_shell_tree
 from .shellwalk import WALK_KINDS, decode_shell_walk, shell_kind_data
 
-#: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2}
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
-CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3), 5: (0, 1, 2, 3)}
+CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3), 5: (0, 1, 2, 3), 6: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
 #: The kind each version added after 1.0: ``(major, minor)`` it needs.
 KIND_VERSION = {int(GroupKind.SEALED): (3, 1), int(GroupKind.SHELL): (3, 2), int(GroupKind.SHELL_TREE): (3, 3),
@@ -48,16 +47,11 @@ def kinds_of(major: int, minor: int) -> frozenset[int]:
                      if k not in KIND_VERSION or (major, minor) >= KIND_VERSION[k])
 
 
-def _parse(struct: cs.Construct, payload: bytes, what: str):
-    try:
-        return struct.parse(payload)
-    except (cs.ConstructError, ValueError, OverflowError) as exc:
-        raise FormatError(f"{what} payload is malformed ({type(exc).__name__})", code="BAD_PAYLOAD") from None
-
-
 # spec §5 Header ------------------------------------------------------------------------------
 
 def encode_header(h: Header) -> bytes:
+    if h.version[0] >= 6:
+        return encode_header6(h)
     q = h.quantization
     flags = (schema.FLAG_LOSSY if h.lossy else 0)
     counts = (h.plane_count, h.object_count, h.group_count)
@@ -90,22 +84,6 @@ def encode_header(h: Header) -> bytes:
     ))
 
 
-def _f32_toward(values: np.ndarray, direction: float, what: str) -> list[float]:
-    """Each value rounded to the nearest float32 on the side of ``direction`` (spec §5)."""
-    v = np.asarray(values, dtype=np.float64)
-    with np.errstate(over="ignore"):
-        f = v.astype(np.float32)
-    wrong = (f < v) if direction > 0 else (f > v)
-    f = np.where(wrong, np.nextafter(f, np.float32(direction)), f)
-    if not np.isfinite(f).all():
-        raise PlnError(f"{what} is beyond the float32 range", code="BAD_HEADER_VALUE")
-    return [float(x) for x in f]
-
-
-def _f32_up(value: float, name: str) -> float:
-    return value if math.isnan(value) else _f32_toward(np.array([value]), math.inf, f"{name} {value}")[0]
-
-
 def header_size(major: int) -> int:
     """The smallest PHDR payload of a version ``major`` file."""
     return schema.HEADER5_FIXED if major >= 5 else schema.HEADER3_FIXED if major >= 3 else schema.HEADER_SIZE
@@ -117,7 +95,9 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
         raise FormatError("PHDR is too short to hold a version", code="BAD_PAYLOAD")
     major, minor = payload[0], payload[1]
     if major not in VERSIONS:
-        raise VersionError(f"major version {major} is not supported (this reader reads 1.x to 5.x)")
+        raise VersionError(f"major version {major} is not supported (this reader reads 1.x to 6.x)")
+    if major >= 6:
+        return decode_header6(payload)[:2]
     if len(payload) < header_size(major):
         raise FormatError(f"PHDR is {len(payload)} bytes, version {major} needs {header_size(major)}",
                           code="BAD_PAYLOAD")
@@ -185,6 +165,8 @@ def leading_index(payload: bytes, major: int, width: int) -> int:
 
 def encode_planes(first: int, triplets: np.ndarray, header: Header, compress: bool, brotli_allowed: bool = True) -> bytes:
     raw = quantize.encode_payload(triplets, header.coding, header.quantization)
+    if header.version[0] >= 6:
+        return schema.Varint32.build(len(triplets)) + raw
     method, stored = pack(raw, compress, brotli_allowed=brotli_allowed and header.version[0] >= 4)
     if header.version[0] >= 3:
         return schema.PlaneBlock3.build(dict(first=first, count=len(triplets), compression=method,
@@ -195,6 +177,8 @@ def encode_planes(first: int, triplets: np.ndarray, header: Header, compress: bo
 
 def decode_planes(payload: bytes, header: Header, expected_first: int, limits: Limits) -> PlaneBlock:
     # Only the head goes through construct: the data stays a zero-copy view.
+    if header.version[0] >= 6:
+        return _decode_planes6(payload, header, expected_first, limits)
     if header.version[0] >= 3:
         r = _parse(schema.PlaneBlock3, bytes(payload[:schema.PLANE_BLOCK3_MAX_HEAD]), "PLNS")
         start = r.data_offset
@@ -223,6 +207,23 @@ def decode_planes(payload: bytes, header: Header, expected_first: int, limits: L
     return PlaneBlock(first=r.first, triplets=triplets)
 
 
+def _decode_planes6(payload: bytes, header: Header, first: int, limits: Limits) -> PlaneBlock:
+    """A planes record (spec §7.1, version 6): the count, then raw triplet data, its size checked against it."""
+    r = _parse(schema.PlaneRecordHead, bytes(payload[:5]), "planes record")
+    if first + r.count > limits.max_planes:
+        raise LimitError(f"plane table would exceed {limits.max_planes} planes")
+    data = memoryview(payload)[r.data_offset:]
+    expected = quantize.payload_size(r.count, header.coding, header.quantization)
+    if expected is None:
+        low, high = schema.PREDICTED_BYTES
+        if not low * r.count <= len(data) <= high * r.count:
+            raise FormatError(f"{len(data)} bytes of data are outside 3..15 bytes a plane for {r.count} planes",
+                              code="SIZE_MISMATCH")
+    elif len(data) != expected:
+        raise FormatError(f"{len(data)} bytes of data != {expected} bytes for {r.count} planes", code="SIZE_MISMATCH")
+    return PlaneBlock(first=first, triplets=quantize.decode_payload(data, r.count, header.coding, header.quantization))
+
+
 # spec §8 Objects ---------------------------------------------------------------------------
 
 def encode_object(o: ObjectRecord, major: int = 1) -> bytes:
@@ -231,6 +232,10 @@ def encode_object(o: ObjectRecord, major: int = 1) -> bytes:
         raise PlnError(f"object name is {len(name)} bytes, at most 65535", code="BAD_OBJECT")
     m = None if o.transform is None else np.asarray(o.transform, dtype=np.float64).reshape(4, 4)
     flags = schema.OBJECT_HAS_TRANSFORM if m is not None else 0
+    if major >= 6:
+        return schema.Object6.build(dict(head=dict(parent=0 if o.parent is None else o.parent + 1, flags=flags,
+                                                   name_length=len(name)),
+                                         name=name, transform=None if m is None else _transform4(m), extra=b""))
     if major >= 3:
         head = dict(index=o.index, parent=0 if o.parent is None else o.parent + 1, flags=flags, name_length=len(name))
         if major >= 4:
@@ -275,7 +280,14 @@ def _transform_from4(t) -> np.ndarray:
 
 
 def decode_object(payload: bytes, expected_index: int, major: int = 1) -> ObjectRecord:
-    if major >= 3:
+    if major >= 6:
+        # An object record has no index: it is its position (spec §8).
+        head = _parse(schema.Object6Head, bytes(payload[:2 * schema.VARINT_MAX_BYTES + 1]), "object record")
+        if head.name_length > schema.OBJECT3_MAX_NAME:
+            raise FormatError(f"object name of {head.name_length} bytes, at most 65535", code="BAD_OBJECT")
+        r = _parse(schema.Object6, payload, "object record")
+        index, parent = expected_index, None if head.parent == 0 else head.parent - 1
+    elif major >= 3:
         # The head first: a name length over the cap is BAD_OBJECT before the name is looked for.
         head = _parse(schema.Object3Head, bytes(payload[:3 * schema.VARINT_MAX_BYTES + 1]), "OBJT")
         if head.name_length > schema.OBJECT3_MAX_NAME:
@@ -317,6 +329,8 @@ def encode_group(g: PartGroup, compress: bool, major: int = 1, brotli_allowed: b
         raise PlnError("shell groups need version 3.2", code="UNKNOWN_GROUP_KIND")
     if body is None:
         body = group_body(g, brotli_allowed, major) if major >= 2 else _body(g)
+    if major >= 6:
+        return schema.GroupHead6.build(dict(object=g.object, kind=int(g.kind))) + body
     method, stored = pack(body, compress, SHELL_TREE_LEVEL if g.kind in TREE_KINDS else 9,
                           brotli_allowed=brotli_allowed and major >= 4)
     if major >= 3:
@@ -389,7 +403,11 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
                  major: int = 1, budget: Budget | None = None) -> tuple[PartGroup, list[tuple[str, str]]]:
     """A part group of a version ``major``.``minor`` file, checked against the objects and planes
     defined so far; a kind that declares its output's counts charges them to ``budget`` (spec §12.4)."""
-    if major >= 3:
+    if major >= 6:
+        r = _parse(schema.GroupHead6, bytes(payload[:schema.LENGTH_VARINT_BYTES + 1]), "group record")
+        head = cs.Container(index=expected_index, object=r.object, kind=r.kind)
+        stored = memoryview(payload)[r.body_offset:]
+    elif major >= 3:
         # Only the head goes through construct (three varint32s and two bytes): the stored body stays a
         # view of the payload, which a large compressed body (spec §6) would otherwise hold twice more.
         prefix = bytes(payload[:GROUP_HEAD3_MAX])
@@ -411,7 +429,9 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
             raise FormatError(f"unknown part group kind {head.kind} in a version {major}.{minor} file",
                               code="UNKNOWN_GROUP_KIND")
         findings.append(("SKIPPED_GROUP_KIND", f"group {head.index} has kind {head.kind} of a newer minor version"))
-    body = unpack(head.compression, stored if major >= 3 else bytes(head.body), head.raw_size, limits, major)
+    # Version 6: the segment holding the record was decompressed whole (spec §4.5).
+    body = stored if major >= 6 else unpack(head.compression, stored if major >= 3 else bytes(head.body),
+                                            head.raw_size, limits, major)
     if major >= 2:
         group = _decode_compact(head, body, planes, limits, kinds, major,
                                 None if budget is None else budget.of(head.index))
@@ -639,6 +659,10 @@ def encode_colours(c: Colours, major: int = 1, count: int | None = None) -> byte
     """A cOLR payload; from version 4 on, a group in one colour stores it once (spec §10.1). ``count``:
     the group's references, where known (0: a group without references, which takes one colour)."""
     rgba = np.ascontiguousarray(c.rgba, dtype=np.uint8).reshape(-1, 4)
+    if major >= 6:
+        one = count == 0 or len(rgba) > 1 and (rgba == rgba[0]).all()
+        return (schema.ColoursHead6.build(dict(group=c.group, count=0 if count == 0 else len(rgba)))
+                + (rgba[0].tobytes() if one else rgba.tobytes()))
     if count == 0 or major >= 4 and len(rgba) > 1 and (rgba == rgba[0]).all():
         return schema.ColoursHead.build(dict(group=c.group, count=0 if count == 0 else len(rgba))) + rgba[0].tobytes()
     return schema.Colours.build(dict(group=c.group, count=len(rgba), rgba=rgba.tobytes()))
@@ -646,6 +670,8 @@ def encode_colours(c: Colours, major: int = 1, count: int | None = None) -> byte
 
 def decode_colours(payload: bytes, group_refs: dict[int, int], major: int = 1) -> Colours:
     """A cOLR chunk, checked against ``group_refs``: the colour count of each group read so far."""
+    if major >= 6:
+        return _decode_colours6(payload, group_refs)
     head = _parse(schema.ColoursHead, bytes(payload[:8]), "cOLR")
     uniform = major >= 4 and len(payload) == 12
     if not uniform:
@@ -658,6 +684,22 @@ def decode_colours(payload: bytes, group_refs: dict[int, int], major: int = 1) -
     rgba = np.frombuffer(bytes(payload[8:]), dtype=np.uint8).reshape(-1, 4)
     # A group without references takes its one colour (version 5), kept as one row.
     return Colours(group=head.group, rgba=np.repeat(rgba, max(head.count, 1), axis=0) if uniform else rgba.copy())
+
+
+def _decode_colours6(payload: bytes, group_refs: dict[int, int]) -> Colours:
+    """A colours record (spec §10.1, version 6): varint32 group and count, then one colour or count."""
+    head = _parse(schema.ColoursHead6, bytes(payload[:2 * schema.LENGTH_VARINT_BYTES]), "colours record")
+    rgba = bytes(payload[head.rgba_offset:])
+    uniform = len(rgba) == 4
+    if not uniform and len(rgba) < 4 * head.count:
+        raise FormatError(f"colours record ends inside its {head.count} colours", code="BAD_PAYLOAD")
+    if not uniform and len(rgba) > 4 * head.count:
+        raise FormatError(f"{len(rgba) - 4 * head.count} bytes after the colours", code="BAD_COLOURS")
+    if head.group not in group_refs or group_refs[head.group] != head.count or not (head.count or uniform):
+        raise FormatError(f"colours for group {head.group} do not match a preceding group's references (a group "
+                          "without references takes one colour)", code="BAD_COLOURS")
+    colours = np.frombuffer(rgba, dtype=np.uint8).reshape(-1, 4)
+    return Colours(group=head.group, rgba=np.repeat(colours, max(head.count, 1), axis=0) if uniform else colours.copy())
 
 
 # spec §10.3 Metadata ------------------------------------------------------------------------

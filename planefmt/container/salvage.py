@@ -7,6 +7,10 @@ on the next position where a known chunk type is followed by a length that
 fits and a matching CRC. Every object, plane block and part group that is
 intact and whose dependencies (its object, the planes it references) are
 intact is recovered; everything else is listed in ``losses``.
+
+Version 6 (spec §4.5): a damaged body segment loses all its records. Records carry no index there (an
+object's, a plane's or a group's is its position), so the records of later segments are placed by the
+file's iNDX where it is intact; without it they are lost too, and said so.
 """
 
 from __future__ import annotations
@@ -21,12 +25,13 @@ import numpy as np
 
 from ..errors import FormatError, PlnError
 from ..model import Header, ObjectRecord, PartGroup, Record, UnknownChunk
-from . import records, schema
+from . import records, schema, segments
 from .budget import Budget
 from .chunks import Limits, RawChunk, check_signature, is_ancillary, type_name, valid_type
 from .crc import crc32
 
-_KNOWN = (schema.PHDR, schema.OBJT, schema.PLNS, schema.GRUP, schema.COLR, schema.META, schema.INDX, schema.PEND)
+_KNOWN = (schema.PHDR, schema.OBJT, schema.PLNS, schema.GRUP, schema.COLR, schema.META, schema.INDX, schema.PEND,
+          schema.BODY)
 
 
 @dataclass(frozen=True)
@@ -78,6 +83,10 @@ class _Salvager:
         self.object_ok: set[int] = set()  # indices of the objects recovered
         self.groups = 0
         self.group_refs: dict[int, int] = {}
+        # Version 6: whether the positions of later records are unknown (a segment was lost), and the
+        # index's entries where it could be read (spec §10.2), which give them back.
+        self.unplaced = False
+        self.entries: list[segments.Entry] | None = None
 
     def lose(self, code: str, message: str, offset: int | None) -> None:
         self.out.losses.append(Loss(code, message, offset))
@@ -104,11 +113,13 @@ class _Salvager:
                 if after is not None and (after == len(self.data) or self._chunk_at(after) is not None):
                     # Framing is intact (the next chunk starts where the length says): only this one is lost.
                     self.lose("CRC_MISMATCH", f"chunk {type_name(self.data[pos:pos + 4])} lost: CRC mismatch", pos)
+                    self._lost_chunk()
                     pos = after
                     continue
                 nxt = self._resync(pos + 1)
                 self.lose("BAD_PAYLOAD",
                           f"damaged bytes {pos}..{(nxt if nxt is not None else len(self.data)) - 1} skipped", pos)
+                self._lost_chunk()
                 if nxt is None:
                     break
                 pos = nxt
@@ -181,9 +192,20 @@ class _Salvager:
         if t == schema.PHDR:
             if self.out.header is None:
                 self.out.header, _ = records.decode_header(chunk.payload)
+                if self.out.header.version[0] >= 6:
+                    self.entries = self._index6()
+                    start = records.decode_header6(chunk.payload)[2]
+                    if start < len(chunk.payload):
+                        self._take_segment(chunk, start)
             return
         if self.out.header is None:
             raise FormatError("no intact PHDR before this chunk", code="MISSING_HEADER")
+        if self.out.header.version[0] >= 6:
+            if t == schema.BODY:
+                self._take_segment(chunk, 0)
+                return
+            if t in schema.RECORD_CHUNKS:
+                raise FormatError(f"a {type_name(t)} chunk in a version 6 file", code="CHUNK_ORDER")
         if t == schema.OBJT:
             self._take_object(chunk)
         elif t == schema.PLNS:
@@ -202,8 +224,95 @@ class _Salvager:
         else:
             raise FormatError(f"unknown critical chunk {type_name(t)}", code="UNKNOWN_CRITICAL_CHUNK")
 
-    def _take_object(self, chunk: RawChunk) -> None:
-        index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
+    def _lost_chunk(self) -> None:
+        """Version 6: a lost chunk may have been a body segment, after which records are not placed."""
+        h = self.out.header
+        if h is not None and h.version[0] >= 6:
+            self.unplaced = True
+
+    def _index6(self) -> list[segments.Entry] | None:
+        """The entries of a version 6 file's iNDX, found through its PEND (spec §4.4), or None."""
+        end = self.data[-17:]
+        if len(end) < 17 or end[:4] != schema.PEND or end[4] != 8:
+            return None
+        at = int.from_bytes(end[5:13], "little")
+        chunk = self._chunk_at(at) if at < len(self.data) else None
+        if chunk is None or chunk.type != schema.INDX:
+            return None
+        try:
+            return segments.decode_index(chunk.payload)
+        except PlnError:
+            return None
+
+    def _take_segment(self, chunk: RawChunk, start: int) -> None:
+        """The records of a version 6 body segment: all lost where it is damaged (spec §4.5)."""
+        if self.unplaced and not self._place(chunk.offset):
+            raise FormatError("an earlier segment was lost and the file has no intact index: the indices of "
+                              "this segment's records are unknown", code="BAD_INDEX")
+        try:
+            raw = segments.segment_raw(memoryview(chunk.payload)[start:], self.limits)
+            views = list(segments.records(raw))
+        except PlnError:
+            self.unplaced = True
+            raise
+        header = self.out.header
+        for view in views:
+            t = schema.RECORD_TYPES.get(view.tag)
+            try:
+                if t == schema.OBJT:
+                    self._take_object(RawChunk(t, view.payload, chunk.offset), self.objects)
+                elif t == schema.PLNS:
+                    self._take_planes(RawChunk(t, view.payload, chunk.offset), len(self.lost_planes))
+                elif t == schema.GRUP:
+                    self._take_group(RawChunk(t, view.payload, chunk.offset), self.groups)
+                elif t == schema.COLR:
+                    self.out.records.append(records.decode_colours(view.payload, self.group_refs, 6))
+                elif t == schema.META:
+                    self.out.records.append(records.decode_metadata(view.payload))
+                elif view.tag >= schema.ANCILLARY_TAG:
+                    self.out.records.append(UnknownChunk(bytes([view.tag]), bytes(view.payload), view.offset))
+                else:
+                    raise FormatError(f"unknown critical record of tag {view.tag}", code="UNKNOWN_CRITICAL_CHUNK")
+            except PlnError as exc:
+                self.lose(exc.code, f"record {t.decode() if t else view.tag} at raw byte {view.offset} of the "
+                          f"{chunk.name} chunk lost: {exc.reason}", chunk.offset)
+                if t == schema.OBJT:
+                    self.objects += 1
+                elif t == schema.GRUP:
+                    self.groups += 1
+                elif t == schema.PLNS:
+                    try:
+                        count = records.leading_index(view.payload, header.version[0], 0)
+                        self._grow(len(self.lost_planes) + count, lost=True)
+                    except PlnError:
+                        self.unplaced = True
+
+    def _place(self, chunk_offset: int) -> bool:
+        """Version 6: the object, plane and group counts before the segment of the chunk at ``chunk_offset``,
+        from the index's first entry of each tag at or after it; False without an index."""
+        if self.entries is None:
+            return False
+        later = [e for e in self.entries if e[0] >= chunk_offset]
+        earlier = [e for e in self.entries if e[0] < chunk_offset]
+
+        def first(tag: int) -> int | None:
+            return next((e[3] for e in later if e[2] == tag), None)
+
+        objects = first(schema.TAG_OBJECT)
+        groups = first(schema.TAG_GROUP)
+        planes = first(schema.TAG_PLANES)
+        self.objects = objects if objects is not None else 1 + max(
+            (e[3] for e in earlier if e[2] == schema.TAG_OBJECT), default=-1)
+        self.groups = groups if groups is not None else 1 + max(
+            (e[3] for e in earlier if e[2] == schema.TAG_GROUP), default=-1)
+        if planes is not None and planes > len(self.lost_planes):
+            self._grow(planes, lost=True)
+        self.unplaced = False
+        return True
+
+    def _take_object(self, chunk: RawChunk, index: int | None = None) -> None:
+        if index is None:
+            index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
         if index < self.objects or index > self.limits.max_objects:
             raise FormatError(f"object index {index} out of sequence", code="BAD_OBJECT")
         self._lose_run("BAD_OBJECT", "object", self.objects, index, chunk.offset)
@@ -215,8 +324,9 @@ class _Salvager:
             self.lose("BAD_OBJECT", f"object {index} ({obj.name!r}) lost its parent; kept as a root", chunk.offset)
         self.out.records.append(obj)
 
-    def _take_planes(self, chunk: RawChunk) -> None:
-        first = records.leading_index(chunk.payload, self.out.header.version[0], 8)
+    def _take_planes(self, chunk: RawChunk, first: int | None = None) -> None:
+        if first is None:
+            first = records.leading_index(chunk.payload, self.out.header.version[0], 8)
         have = len(self.lost_planes)
         if first < have or first > self.limits.max_planes:
             raise FormatError(f"plane block at {first} overlaps or is out of range", code="PLANE_INDEX_MISMATCH")
@@ -233,8 +343,9 @@ class _Salvager:
         self.table = np.concatenate([self.table, np.full((extra, 3), np.nan)])
         self.lost_planes = np.concatenate([self.lost_planes, np.full(extra, lost)])
 
-    def _take_group(self, chunk: RawChunk) -> None:
-        index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
+    def _take_group(self, chunk: RawChunk, index: int | None = None) -> None:
+        if index is None:
+            index = records.leading_index(chunk.payload, self.out.header.version[0], 4)
         if index < self.groups:
             raise FormatError(f"group index {index} out of sequence", code="GROUP_INDEX_MISMATCH")
         self._lose_run("GROUP_INDEX_MISMATCH", "part group", self.groups, index, chunk.offset)

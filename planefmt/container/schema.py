@@ -1,4 +1,4 @@
-"""Construct declarations of the .pln container, versions 1 to 5, read beside spec/pln.md: each
+"""Construct declarations of the .pln container, versions 1 to 6, read beside spec/pln.md: each
 under the section it implements ("spec §x"), the fixed-size structures of versions 1 and 2 under its
 Appendix A.1.
 
@@ -9,6 +9,7 @@ floats are little-endian.
 """
 
 import construct as cs
+import numpy as np
 
 VARINT_MAX_BYTES = 10
 
@@ -79,7 +80,11 @@ PEND = b"PEND"
 COLR = b"cOLR"
 INDX = b"iNDX"
 META = b"mETA"
+#: Version 6: one body segment (spec §4.5).
+BODY = b"BODY"
 CRITICAL_TYPES = frozenset({PHDR, OBJT, PLNS, GRUP, PEND})
+#: The chunk types that are records of a body segment in version 6 (spec §4.2: CHUNK_ORDER there).
+RECORD_CHUNKS = frozenset({OBJT, PLNS, GRUP, COLR, META})
 
 # spec §5 Header (PHDR): the flags of every version; the 108-byte layout of versions 1 and 2 (Appendix A.1)
 FLAG_LOSSY = 0x0001
@@ -356,3 +361,129 @@ GroupHead3 = cs.Struct(
 
 # spec §4.4 End of version 3: empty (no index) or the index offset
 END3_SIZES = (0, END_SIZE)
+
+
+# spec §2.2 r32: a binary32 bit pattern with its 32 bits reversed, as a varint32 (version 6)
+def reverse32(value: int) -> int:
+    """``value``'s 32 bits in reverse order (bit 0 <-> bit 31)."""
+    return int(f"{value:032b}"[::-1], 2)
+
+
+class _R32(cs.Adapter):
+    def _decode(self, obj, context, path):
+        return float(np.array([reverse32(obj)], dtype="<u4").view("<f4")[0])
+
+    def _encode(self, obj, context, path):
+        if obj != obj:  # NaN: the quiet NaN of spec §5, whatever the payload of the value given
+            return reverse32(F32_NAN)
+        with np.errstate(over="ignore"):
+            bits = int(np.array([obj], dtype="<f4").view("<u4")[0])
+        return reverse32(bits)
+
+
+F32_NAN = 0x7FC00000
+R32 = _R32(Leb128(32))
+
+# spec §4.5 Body segment (version 6): compression, raw size, the data compressed per spec §6
+Segment = cs.Struct(
+    "compression" / cs.Int8ul,
+    "raw_size" / Varint32,
+    "data_offset" / cs.Tell,
+)
+#: A writer starts a new segment before a record that would take its raw size past this (spec §4.5).
+SEGMENT_RAW_BYTES = 1 << 20
+
+# spec §4.6 Records (version 6): tag, length, payload
+RecordHead = cs.Struct(
+    "tag" / cs.Int8ul,
+    "length" / Varint32,
+    "payload_offset" / cs.Tell,
+)
+TAG_OBJECT, TAG_PLANES, TAG_GROUP, TAG_COLOURS, TAG_METADATA = 1, 2, 3, 4, 5
+#: The chunk type of version 5 that each record of version 6 replaces.
+RECORD_TYPES = {TAG_OBJECT: OBJT, TAG_PLANES: PLNS, TAG_GROUP: GRUP, TAG_COLOURS: COLR, TAG_METADATA: META}
+RECORD_TAGS = {t: tag for tag, t in RECORD_TYPES.items()}
+#: Tags 128-255 are ancillary records (a reader skips those it does not know).
+ANCILLARY_TAG = 0x80
+
+# spec §5 Header of version 6: the version, header_size, then header_size bytes of fields
+FLAG_CODING_SHIFT = 3
+FLAG_CODING_MASK = 0b11
+WIDTH_BITS = 5
+Header6Fields = cs.Struct(
+    "flags" / cs.Int8ul,
+    "units" / cs.Int8ul,
+    "coding" / cs.Computed(lambda this: this.flags >> FLAG_CODING_SHIFT & FLAG_CODING_MASK),
+    "widths" / cs.If(lambda this: this.coding in CODINGS_WITH_RANGE, cs.Int16ul),
+    "h_range" / cs.If(lambda this: this.coding in CODINGS_WITH_RANGE, cs.Array(2, R32)),
+    "bbox" / cs.If(cs.this.flags & FLAG_BBOX_KNOWN, cs.Array(6, R32)),
+    "tolerance" / R32,
+    "error_bound" / R32,
+    "counts" / cs.If(cs.this.flags & FLAG_COUNTS_KNOWN, cs.Struct(
+        "plane_count" / Varint,
+        "object_count" / Varint32,
+        "group_count" / Varint32,
+    )),
+    "extra" / cs.GreedyBytes,
+)
+Header6 = cs.Struct(
+    "version_major" / cs.Int8ul,
+    "version_minor" / cs.Int8ul,
+    "header_size" / Varint32,
+    "fields" / cs.FixedSized(cs.this.header_size, Header6Fields),
+    "segment_offset" / cs.Tell,
+)
+
+
+def widths6(bits_nu: int, bits_phi: int, bits_h: int) -> int:
+    """The u16 ``widths`` of a version 6 header: each width less one, 5 bits each (spec §5)."""
+    return (bits_nu - 1) | (bits_phi - 1) << WIDTH_BITS | (bits_h - 1) << 2 * WIDTH_BITS
+
+
+def from_widths6(widths: int) -> tuple[int, int, int]:
+    mask = (1 << WIDTH_BITS) - 1
+    return tuple(1 + (widths >> WIDTH_BITS * i & mask) for i in range(3))
+
+
+# spec §7.1 Planes record (version 6): the count, then the raw triplet data
+PlaneRecordHead = cs.Struct(
+    "count" / Varint32,
+    "data_offset" / cs.Tell,
+)
+
+# spec §8 Object record (version 6): the object chunk of version 4 without its index
+Object6Head = cs.Struct(
+    "parent" / Varint32,
+    "flags" / cs.Int8ul,
+    "name_length" / Varint,
+)
+Object6 = cs.Struct(
+    "head" / Object6Head,
+    "name" / cs.Bytes(cs.this.head.name_length),
+    "transform" / cs.If(cs.this.head.flags & OBJECT_HAS_TRANSFORM, Transform4),
+    "extra" / cs.GreedyBytes,
+)
+
+# spec §9.1 Group record (version 6): the object, the kind, the body (uncompressed: its segment is)
+GroupHead6 = cs.Struct(
+    "object" / Varint32,
+    "kind" / cs.Int8ul,
+    "body_offset" / cs.Tell,
+)
+
+# spec §10.1 Colours record (version 6): group and count as varint32s
+ColoursHead6 = cs.Struct(
+    "group" / Varint32,
+    "count" / Varint32,
+    "rgba_offset" / cs.Tell,
+)
+
+# spec §10.2 Index of version 6: a count, then per record of tags 1 to 3 its chunk's offset (a difference
+# from the previous entry's), its offset in the segment's raw bytes, its tag and its ordinal
+IndexEntry6 = cs.Struct(
+    "chunk_offset" / Varint,
+    "raw_offset" / Varint,
+    "tag" / cs.Int8ul,
+    "ordinal" / Varint,
+)
+INDEX6_MIN_ENTRY = 4

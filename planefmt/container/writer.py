@@ -18,7 +18,7 @@ from typing import BinaryIO
 
 import numpy as np
 
-from . import records, schema, shellfields, shellwalk
+from . import headers, records, schema, segments, shellfields, shellwalk
 from .chunks import chunk_bytes, is_ancillary, valid_type
 from ..errors import PlnError
 from ..model import (TREE_KINDS, UP_AXIS, Colours, GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Record,
@@ -37,6 +37,9 @@ _NEW_FILE_MODE = 0o666 & ~_read_umask()
 BLOCK_PLANES = 1 << 16
 #: Bytes before the index from which ``index=None`` writes one (a few milliseconds of streaming read).
 INDEX_MIN_BYTES = 1 << 16
+#: Version 6: a file whose records are one segment of fewer raw bytes than this leaves out its bbox and
+#: counts (spec §5 "Small files"): 12 to 35 bytes that a reader gets by decoding.
+SMALL_SEGMENT_BYTES = 256
 
 
 class Writer:
@@ -51,11 +54,16 @@ class Writer:
     one when the file is :data:`INDEX_MIN_BYTES` or more before it. ``verify``: check that each
     shell group's body decodes to the shell given (spec §9.10, §9.11); the encoder turns it off only
     to measure the size of a candidate it may not write. ``brotli``: with ``compress``, in a version 4
-    file, each payload Brotli-compressed where that is smaller than deflate (spec §6); the encoder's size
-    trials turn it off (Brotli's densest quality takes about 1 s a megabyte). ``copies``: in a file whose
+    or 5 file, each payload Brotli-compressed where that is smaller than deflate (spec §6); the encoder's size
+    trials turn it off (Brotli's densest quality takes about 1 s a megabyte); a version 6 segment is
+    Brotli-compressed where that is smallest whatever it says. ``copies``: in a file whose
     version has copies (4.2, spec §9.15), a group whose kind, references, role bits and kind data are an
-    earlier group's is written as a copy of it. Use as a context manager: leaving the block by an exception
-    discards a path target's temporary file.
+    earlier group's is written as a copy of it. Version 6 (spec §4.5): records are buffered into body
+    segments of at most 1 MiB raw, the first written in PHDR once it is full or the file is closed (so
+    nothing is written before), each other one in a BODY chunk; a quantized h range is rounded outward to
+    float32 (spec §5), and a file of one segment under :data:`SMALL_SEGMENT_BYTES` raw bytes leaves out its
+    bbox and counts. Use as a context manager: leaving the block by an exception discards a path target's
+    temporary file.
     """
 
     def __init__(self, target: str | os.PathLike | BinaryIO, header: Header, *, compress: bool = False,
@@ -87,6 +95,10 @@ class Writer:
             self._fp = target
         self._major = header.version[0]
         self._version = tuple(header.version)
+        q = header.quantization
+        if self._major >= 6 and header.coding.quantized and q is not None:
+            header = dataclasses.replace(header, quantization=dataclasses.replace(
+                q, **dict(zip(("h_min", "h_max"), headers.f32_range(q.h_min, q.h_max)))))
         declared = (header.plane_count, header.object_count, header.group_count)
         # Version 3 counts are varints: written up front if the caller declares them, never patched.
         self._declared = declared if self._major >= 3 and None not in declared else None
@@ -101,7 +113,16 @@ class Writer:
         self._entries: list[tuple[int, bytes, int]] = []
         self._metadata: set[str] = set()
         self._closed = False
+        # Version 6: the records of the segment being filled, its raw size, and the index entries (raw
+        # offset, tag, ordinal) of its records; whether PHDR is written.
+        self._segment: list[bytes] = []
+        self._segment_size = 0
+        self._segment_entries: list[tuple[int, int, int]] = []
+        self._headed = self._major < 6
         try:
+            if self._major >= 6:
+                records.encode_header(self._header)  # a header that cannot be written fails here, not at close
+                return
             self._emit_raw(schema.SIGNATURE)
             self._emit(schema.PHDR, records.encode_header(self._header))
         except BaseException:
@@ -126,10 +147,46 @@ class Writer:
         self._pos += len(data)
 
     def _emit(self, ctype: bytes, payload: bytes, ordinal: int | None = None) -> None:
+        tag = schema.RECORD_TAGS.get(ctype)
+        if self._major >= 6 and tag is not None:
+            self._record(tag, payload, ordinal)
+            return
         if ordinal is not None:
             self._entries.append((self._pos, ctype, ordinal))
         # Version 5 frames every chunk after PHDR with a varint length (spec §4.1).
         self._emit_raw(chunk_bytes(ctype, payload, self._major >= 5 and ctype != schema.PHDR))
+
+    def _record(self, tag: int, payload: bytes, ordinal: int | None) -> None:
+        """Add a record to the segment being filled, starting a new one where it would pass 1 MiB (spec §4.5)."""
+        record = segments.record_bytes(tag, payload)
+        if self._segment_size and self._segment_size + len(record) > schema.SEGMENT_RAW_BYTES:
+            self._flush()
+        if ordinal is not None:
+            self._segment_entries.append((self._segment_size, tag, ordinal))
+        self._segment.append(record)
+        self._segment_size += len(record)
+
+    def _flush(self, last: bool = False) -> None:
+        """Write the segment being filled: in PHDR if it is the first (``last``: and the file's only one),
+        else as a BODY chunk."""
+        raw = b"".join(self._segment)
+        # Brotli is tried on a segment even in the encoder's size trials (``brotli`` off): one segment compressed
+        # whole ranks candidates far from their deflated sizes (measured at 3e-5: the bench corpus's
+        # basicTextured_flatten.usda, 37,322 bytes so, 55,236 with the trials' segments deflated).
+        segment = segments.segment_bytes(raw, self._compress) if raw else b""
+        if not self._headed:
+            header = self._header
+            if last and len(raw) < SMALL_SEGMENT_BYTES:
+                header = dataclasses.replace(header, bbox=None, plane_count=None, object_count=None, group_count=None)
+            self._emit_raw(schema.SIGNATURE)
+            chunk = self._pos
+            self._emit_raw(chunk_bytes(schema.PHDR, records.encode_header(header) + segment))
+            self._headed = True
+        elif raw:
+            chunk = self._pos
+            self._emit_raw(chunk_bytes(schema.BODY, segment, True))
+        self._entries.extend((chunk, offset, tag, ordinal) for offset, tag, ordinal in self._segment_entries)
+        self._segment, self._segment_size, self._segment_entries = [], 0, []
 
     def add_object(self, name: str, parent: int | None = None, transform: np.ndarray | None = None) -> int:
         """Start object ``name``; returns its index. ``transform``: 4x4 local -> parent."""
@@ -240,7 +297,7 @@ class Writer:
         ``Header.up_axis`` does)."""
         if key == UP_AXIS and self._major >= 5:
             raise PlnError("a version 5 file says its up axis in the header (Header.up_axis)", code="BAD_METADATA")
-        if self._entries:
+        if self._entries or self._segment_entries:
             raise PlnError("metadata is written before the first object, plane block and part group",
                            code="BAD_METADATA")
         if key in self._metadata:
@@ -249,10 +306,16 @@ class Writer:
         self._metadata.add(key)
 
     def add_chunk(self, ctype: bytes, payload: bytes) -> None:
-        """Write an ancillary chunk verbatim (e.g. one a reader did not know)."""
+        """Write an ancillary chunk verbatim (e.g. one a reader did not know); version 6: a one-byte ``ctype``
+        of 128 to 255 is an ancillary record (spec §4.6), and a chunk follows the records written before it."""
+        if self._major >= 6 and len(ctype) == 1 and ctype[0] >= schema.ANCILLARY_TAG:
+            self._record(ctype[0], payload, None)
+            return
         if not valid_type(ctype) or not is_ancillary(ctype) or ctype == schema.INDX:
             raise PlnError(f"only ancillary chunks other than iNDX can be written raw, not {ctype!r}",
                            code="BAD_CHUNK_TYPE")
+        if self._major >= 6:
+            self._flush()
         self._emit(ctype, payload)
 
     def write_record(self, record: Record) -> None:
@@ -279,13 +342,18 @@ class Writer:
         if self._closed:
             return
         try:
+            if self._major >= 6:
+                self._flush(last=not self._headed)
             index_offset = 0
             # Auto (None): an index only where random access saves reading much; in a small file
             # it is bytes for nothing (simple_pole.glb at 1e-6: 736 of 4,000 bytes).
             if self._index or (self._index is None and self._pos >= INDEX_MIN_BYTES):
                 index_offset = self._pos
-                entries = np.array(self._entries, dtype=schema.INDEX_ENTRY_DTYPE)
-                self._emit(schema.INDX, records.encode_index(entries))
+                if self._major >= 6:
+                    self._emit(schema.INDX, segments.encode_index(self._entries))
+                else:
+                    entries = np.array(self._entries, dtype=schema.INDEX_ENTRY_DTYPE)
+                    self._emit(schema.INDX, records.encode_index(entries))
             actual = (self._planes, self._objects, len(self._groups))
             if self._declared is not None and self._declared != actual:
                 raise PlnError(f"the header declares {self._declared[0]} planes, {self._declared[1]} objects, "

@@ -1,0 +1,131 @@
+"""Header helpers of every version and the version 6 header (spec §5): float32 rounding of stored values,
+r32 rounding, the compact header's fields; and the payload parser that turns construct's errors into
+``BAD_PAYLOAD``."""
+
+from __future__ import annotations
+
+import math
+
+import construct as cs
+import numpy as np
+
+from . import schema
+from ..errors import FormatError, PlnError
+from ..model import Coding, Header, Quantization, Units
+
+#: Major versions read, each with the newest minor version this reader knows.
+VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2, 6: 0}
+
+
+def _parse(struct: cs.Construct, payload: bytes, what: str):
+    try:
+        return struct.parse(payload)
+    except (cs.ConstructError, ValueError, OverflowError) as exc:
+        raise FormatError(f"{what} payload is malformed ({type(exc).__name__})", code="BAD_PAYLOAD") from None
+
+
+def _f32_toward(values: np.ndarray, direction: float, what: str) -> list[float]:
+    """Each value rounded to the nearest float32 on the side of ``direction`` (spec §5)."""
+    v = np.asarray(values, dtype=np.float64)
+    with np.errstate(over="ignore"):
+        f = v.astype(np.float32)
+    wrong = (f < v) if direction > 0 else (f > v)
+    f = np.where(wrong, np.nextafter(f, np.float32(direction)), f)
+    if not np.isfinite(f).all():
+        raise PlnError(f"{what} is beyond the float32 range", code="BAD_HEADER_VALUE")
+    return [float(x) for x in f]
+
+
+def _f32_up(value: float, name: str) -> float:
+    return value if math.isnan(value) else _f32_toward(np.array([value]), math.inf, f"{name} {value}")[0]
+
+
+#: Version 6 keeps 12 explicit mantissa bits of tolerance and error_bound (spec §5): at most 3 bytes each.
+R32_DROPPED_BITS = 11
+
+
+def r32_up(value: float, name: str) -> float:
+    """``value`` rounded up to the smallest binary32 value whose low 11 bits are zero (spec §5, version 6);
+    NaN stays NaN, 0 stays 0."""
+    if math.isnan(value):
+        return value
+    f = _f32_up(value, name)
+    bits = int(np.array([f], dtype="<f4").view("<u4")[0])
+    low = (1 << R32_DROPPED_BITS) - 1
+    if bits & low:
+        bits = (bits | low) + 1  # value >= 0: a larger pattern is a larger value
+    out = float(np.array([bits], dtype="<u4").view("<f4")[0])
+    if not math.isfinite(out):
+        raise PlnError(f"{name} {value} is beyond the float32 range", code="BAD_HEADER_VALUE")
+    return out
+
+
+def f32_range(h_min: float, h_max: float) -> tuple[float, float]:
+    """An h range as binary32 values holding [h_min, h_max] (spec §5, version 6: chosen before quantizing)."""
+    low = _f32_toward(np.array([h_min]), -math.inf, "h_min")[0]
+    high = _f32_toward(np.array([h_max]), math.inf, "h_max")[0]
+    return low, high
+
+
+def encode_header6(h: Header) -> bytes:
+    """A version 6 header (spec §5) without a segment: the writer appends its first one."""
+    q = h.quantization
+    flags = (schema.FLAG_LOSSY if h.lossy else 0) | int(h.coding) << schema.FLAG_CODING_SHIFT
+    counts = (h.plane_count, h.object_count, h.group_count)
+    if all(c is not None for c in counts):
+        flags |= schema.FLAG_COUNTS_KNOWN
+    if h.bbox is not None:
+        flags |= schema.FLAG_BBOX_KNOWN
+    if h.coding.quantized and f32_range(q.h_min, q.h_max) != (q.h_min, q.h_max):
+        raise PlnError(f"a version 6 h range is two float32 values, not [{q.h_min!r}, {q.h_max!r}]",
+                       code="BAD_HEADER_VALUE")
+    bbox = None if h.bbox is None else np.asarray(h.bbox, dtype=np.float64)
+    fields = schema.Header6Fields.build(dict(
+        flags=flags, units=int(h.units) | schema.UP_AXIS_CODES.index(h.up_axis) << schema.UP_AXIS_SHIFT,
+        widths=schema.widths6(q.bits_nu, q.bits_phi, q.bits_h) if h.coding.quantized else None,
+        h_range=[q.h_min, q.h_max] if h.coding.quantized else None,
+        bbox=None if bbox is None else [*_f32_toward(bbox[0], -math.inf, "a bounding box coordinate"),
+                                        *_f32_toward(bbox[1], math.inf, "a bounding box coordinate")],
+        tolerance=r32_up(h.tolerance, "tolerance"), error_bound=r32_up(h.error_bound, "error_bound"),
+        counts=dict(plane_count=counts[0], object_count=counts[1], group_count=counts[2])
+        if flags & schema.FLAG_COUNTS_KNOWN else None, extra=h.extra))
+    return bytes([h.version[0], h.version[1]]) + schema.Varint32.build(len(fields)) + fields
+
+
+def decode_header6(payload: bytes) -> tuple[Header, list[tuple[str, str]], int]:
+    """A version 6 header (spec §5, checks 3 to 8), its findings, and the offset of the first body segment
+    in the payload (its length where there is none)."""
+    major, minor = payload[0], payload[1]
+    r = _parse(schema.Header6, bytes(payload), "PHDR")
+    f = r.fields
+    findings = []
+    if minor > VERSIONS[major]:
+        findings.append(("NEWER_MINOR_VERSION", f"file is version {major}.{minor}; read as {major}.{VERSIONS[major]}"))
+    coding = Coding(f.coding)
+    q = None
+    if coding.quantized:
+        h_min, h_max = f.h_range
+        if not (math.isfinite(h_min) and math.isfinite(h_max) and h_min <= h_max):
+            raise FormatError(f"h range [{h_min}, {h_max}] is not finite or reversed", code="BAD_HEADER_VALUE")
+        q = Quantization(*schema.from_widths6(f.widths), h_min, h_max)
+    code, up = f.units & schema.UNITS_MASK, f.units >> schema.UP_AXIS_SHIFT & 3
+    if up >= len(schema.UP_AXIS_CODES):
+        raise FormatError(f"unknown up axis code {up}", code="BAD_HEADER_VALUE")
+    if code not in Units._value2member_map_:
+        raise FormatError(f"unknown units code {code}", code="BAD_HEADER_VALUE")
+    bbox = None
+    if f.flags & schema.FLAG_BBOX_KNOWN:
+        bbox = np.array([f.bbox[:3], f.bbox[3:]], dtype=np.float64)
+        if not np.isfinite(bbox).all() or (bbox[0] > bbox[1]).any():
+            raise FormatError("bounding box is not finite or min > max", code="BAD_HEADER_VALUE")
+    for name in ("tolerance", "error_bound"):
+        v = getattr(f, name)
+        if not (math.isnan(v) or (math.isfinite(v) and v >= 0)):
+            raise FormatError(f"{name} must be NaN or a finite value >= 0, not {v}", code="BAD_HEADER_VALUE")
+    c = f.counts
+    header = Header(
+        version=(major, minor), lossy=bool(f.flags & schema.FLAG_LOSSY), coding=coding, quantization=q,
+        units=Units(code), bbox=bbox, tolerance=f.tolerance, error_bound=f.error_bound,
+        plane_count=c.plane_count if c else None, object_count=c.object_count if c else None,
+        group_count=c.group_count if c else None, extra=bytes(f.extra), up_axis=schema.UP_AXIS_CODES[up])
+    return header, findings, r.segment_offset
