@@ -348,3 +348,61 @@ export function zeroPlanes(/** @type {number} */ first, /** @type {number} */ co
   out.set(stored, h.length);
   return out;
 }
+
+// ---------------------------------------------------------------------------------------------
+// Version 6: the compact header, body segments and records
+
+/** An r32 (version 6): the f32's bit pattern reversed, as a minimal varint. @param {number} v */
+export function r32(v) {
+  const bits = new DataView(Float32Array.of(v).buffer).getUint32(0, true);
+  let r = 0;
+  for (let i = 0; i < 32; i++) if (bits & (2 ** i)) r += 2 ** (31 - i);
+  return varint(r);
+}
+
+/**
+ * A version 6 PHDR payload up to the end of its header fields (no segment), header_size counting
+ * the fields given (or `size` where given, to damage it).
+ * @param {{minor?: number, lossy?: boolean, coding?: number, bits?: number[], hRange?: number[], units?: number,
+ *   bbox?: number[] | null, tolerance?: number, errorBound?: number, counts?: number[] | null, later?: number[], size?: number}} [h]
+ * @returns {number[]}
+ */
+export function header6({
+  minor = 0, lossy = false, coding = 0, bits = [1, 1, 1], hRange = [0, 0], units = 0, bbox = null,
+  tolerance = NaN, errorBound = NaN, counts = null, later = [], size,
+} = {}) {
+  const flags = (lossy ? 1 : 0) | (counts ? 2 : 0) | (bbox ? 4 : 0) | (coding << 3);
+  const fields = [flags, units];
+  if (coding >= 2) {
+    const w = (bits[0] - 1) | ((bits[1] - 1) << 5) | ((bits[2] - 1) << 10);
+    fields.push(w & 0xff, w >> 8, ...r32(hRange[0]), ...r32(hRange[1]));
+  }
+  if (bbox) fields.push(...bbox.flatMap(r32));
+  fields.push(...r32(tolerance), ...r32(errorBound));
+  if (counts) fields.push(...varints(counts));
+  fields.push(...later);
+  return [6, minor, ...varint(size ?? fields.length), ...fields];
+}
+
+/** A record (version 6): tag, length varint32, payload. @param {number} tag @param {ArrayLike<number>} payload */
+export const record = (tag, payload) => [tag, ...varint(payload.length), ...Array.from(payload)];
+
+/**
+ * A body segment (version 6): method, raw size, the records' bytes stored with the method (§6).
+ * @param {number[]} raw the records, one after another @param {number} [method]
+ */
+export function segment(raw, method = 0) {
+  const stored = packed(Uint8Array.from(raw), method);
+  return [method, ...varint(raw.length), ...stored];
+}
+
+/**
+ * A version 6 file: PHDR (the header, then the first segment if any), BODY chunks, other chunks
+ * (given as {type, payload}) where they stand, PEND.
+ * @param {number[]} header from header6
+ * @param {{first?: number[] | null, chunks?: {type: string, payload: ArrayLike<number>}[], end?: number[]}} parts
+ *   first: PHDR's segment; chunks: what follows PHDR, before PEND; end: PEND's payload
+ */
+export function file6(header, { first = null, chunks = [], end = [] } = {}) {
+  return assemble5([{ type: 'PHDR', payload: [...header, ...(first ?? [])] }, ...chunks, { type: 'PEND', payload: end }]);
+}
