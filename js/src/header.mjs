@@ -109,7 +109,7 @@ function parseFixed(payload) {
  */
 function parseHeader6(payload) {
   const c = new Cursor(payload, 2);
-  const size = c.varint();
+  const size = c.varint32();
   if (size > c.left) fail('BAD_PAYLOAD', `header_size ${size}, ${c.left} bytes left in PHDR`);
   const end = c.pos + size;
   // reads past header_size end inside the header: a header_size below what the flags call for

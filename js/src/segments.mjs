@@ -42,7 +42,10 @@ export function forEachRecord(raw, each) {
       if (length > c.left) fail('BAD_PAYLOAD', `a record of ${length} bytes, ${c.left} left in the segment`);
       each(tag, c.take(length), at);
     } catch (err) {
-      if (err instanceof PlnError) err.message += ` (record of tag ${tag} at byte ${at} of the segment's raw bytes)`;
+      if (err instanceof PlnError && !err.record) {
+        err.record = { tag, offset: at };
+        err.message += ` (record of tag ${tag} at byte ${at} of the segment's raw bytes)`;
+      }
       throw err;
     }
   }

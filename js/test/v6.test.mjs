@@ -104,8 +104,25 @@ test('the cube: one segment in PHDR, no BODY chunk, 12 triangles of volume 1; ev
   const g = json.geometry.groups[0];
   assert.equal(g.triangles, 12);
   assert.ok(Math.abs(g.volume - 1) < 1e-12 && Math.abs(g.area - 6) < 1e-12);
-  assert.deepEqual(json.geometry.world_bbox.map((/** @type {number[]} */ p) => p.map((v) => Math.round(v * 1e9) / 1e9)), [[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]]);
+  assert.deepEqual(json.geometry.world_bbox.map((/** @type {number[]} */ p) => p.map((v) => Math.round(v * 1e9) / 1e9 + 0)), [[-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]]);
   assert.deepEqual(json.findings, []);
+});
+
+test('spec §5\'s example header (the unit cube [0, 1]³, widths 2, 2, 1, h range [0, 1], metres, tolerance 0) reads as it says', () => {
+  const example = [0x06, 0x00, 0x09, 0x10, 0x01, 0x21, 0x00, 0x00, 0xfc, 0x03, 0x00, 0x00];
+  assert.deepEqual(header6({ coding: 2, bits: [2, 2, 1], hRange: [0, 1], units: 1, tolerance: 0, errorBound: 0 }), example);
+  const codes = [[0, 0, 1], [2, 0, 0], [1, 0, 1], [1, 2, 0], [1, 1, 1], [1, 3, 0]];
+  const bits = [0, 0, 0, 0];
+  codes.forEach(([n, p, h], i) => {
+    const v = n | (p << 2) | (h << 4);
+    for (let b = 0; b < 5; b++) if (v & (1 << b)) bits[(5 * i + b) >> 3] |= 1 << ((5 * i + b) & 7);
+  });
+  const bytes = file6(example, { first: segment([...objectRecord(), ...record(PLNS, [6, ...bits]), ...cubeGroup()]) });
+  const file = readNode(bytes);
+  assert.deepEqual([file.header.units, file.header.h_range, file.header.tolerance, file.header.error_bound], [1, [0, 1], 0, 0]);
+  const g = bothJson(bytes).geometry;
+  assert.deepEqual(g.world_bbox.map((/** @type {number[]} */ p) => p.map((v) => Math.round(v * 1e9) / 1e9 + 0)), [[0, 0, 0], [1, 1, 1]]);
+  assert.ok(Math.abs(g.groups[0].volume - 1) < 1e-12);
 });
 
 test('header fields: flags, units and up axis, bbox, tolerance, error bound, counts, each an r32 or varint', () => {
@@ -184,7 +201,7 @@ test('a scene of two objects: names, parent, transform, colours (one for all, on
   assert.deepEqual(json.colours[0], { group: 0, rgba: Array(6).fill([255, 0, 0, 255]) });
   assert.deepEqual(json.colours[1].rgba[5], [5, 10, 15, 255]);
   assert.deepEqual({ ...json.metadata }, { author: 'me' });
-  assert.deepEqual(json.geometry.world_bbox[1].map((/** @type {number} */ v) => Math.round(v * 1e9) / 1e9), [2.5, 0.5, 0.5]);
+  assert.deepEqual(json.geometry.world_bbox[1].map((/** @type {number} */ v) => Math.round(v * 1e9) / 1e9 + 0), [2.5, 0.5, 0.5]);
   const mesh = readNode(bytes).mesh();
   assert.equal(mesh.indices.length / 3, 24);
 });
@@ -257,6 +274,7 @@ test('records: a length past the segment, a segment ending inside a record head,
   const err = errorOf(cut);
   assert.deepEqual([err.code, err.chunk, err.offset], ['BAD_PAYLOAD', 'BODY', 8 + 12 + header6(QUANT).length]);
   assert.match(err.message, /record of tag 3 at byte 12 /);
+  assert.deepEqual(err.record, { tag: GRUP, offset: 12 });
   expectBoth(file6(header6(QUANT), { first: segment([...raw, GRUP]) }), 'BAD_PAYLOAD');
   expectBoth(file6(header6(QUANT), { first: segment([...raw, GRUP, 0x80]) }), 'BAD_PAYLOAD');
   // a record never spans two segments: the rest in the next segment does not help
