@@ -6,7 +6,9 @@ import crypto from 'node:crypto';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
 
-export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+/** The planefmt checkout whose .venv encodes and decodes: this repository, or PLANEFMT_ROOT (another
+ * worktree, e.g. one whose writer is newer than this one's). */
+export const ROOT = process.env.PLANEFMT_ROOT ?? path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 export const PYTHON = path.join(ROOT, '.venv/bin/python');
 const PLN = path.join(ROOT, '.venv/bin/pln');
 // as tests/corpus.py: PLN_CORPUS, or the repository's tests/corpus
