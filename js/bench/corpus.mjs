@@ -26,6 +26,22 @@ export function allFiles() {
 
 let version = '';
 
+/** @type {number[] | null} */
+let majors = null;
+
+/**
+ * The major versions `pln convert --major` writes (its help's choices), e.g. [3, 4, 5, 6]; empty
+ * without planefmt.
+ */
+export function encoderMajors() {
+  if (majors) return majors;
+  if (!available) return (majors = []);
+  const help = execFileSync(PLN, ['convert', '--help'], { encoding: 'utf8' });
+  const choices = /--major \{([\d,]+)\}/.exec(help);
+  majors = choices ? choices[1].split(',').map(Number) : [];
+  return majors;
+}
+
 /**
  * What the encoder is: a digest of planefmt's and the converters' sources, whose package version does
  * not change with every encoder change (a cache keyed on `pln --version` alone kept files of an older

@@ -1,6 +1,8 @@
-// The real corpus (tests/corpus, or PLN_CORPUS) encoded by planefmt's default encoder and
-// decoded here and by planefmt (planefmt_decode.py): the two decodings must agree within 1e-9 of
-// the bounding-box diagonal, vertex set against vertex set both ways, triangle count, and area.
+// The real corpus (tests/corpus, or PLN_CORPUS) encoded by planefmt's default encoder as version 5
+// and, where the encoder writes it, version 6 (`pln convert --major 5`, `--major 6`), and decoded
+// here and by planefmt (planefmt_decode.py): the two decodings must agree within 1e-9 of the
+// bounding-box diagonal, vertex set against vertex set both ways, triangle count, and area.
+// PLANEFMT_ROOT names the planefmt checkout whose .venv encodes and decodes (bench/corpus.mjs).
 // One file per category by default (under a minute on two busy cores); PLN_JS_CORPUS=all runs
 // every file. Encoded files are cached in the temporary directory, keyed by source and encoder.
 // Two more files encoded with the paper's scheme (trees and patches) check the union of trees
@@ -10,7 +12,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import { readPln } from '../src/node.mjs';
-import { available, allFiles, encoded } from '../bench/corpus.mjs';
+import { available, allFiles, encoded, encoderMajors } from '../bench/corpus.mjs';
 import { planefmtDecoding as reference } from './files.mjs';
 
 const SUBSET = [
@@ -89,14 +91,19 @@ function compare(file) {
 
 const files = process.env.PLN_JS_CORPUS === 'all' ? (available ? allFiles() : []) : SUBSET;
 
-for (const rel of files) {
-  test(`corpus ${rel}: this decoder and planefmt's agree within ${REL} of the diagonal`, { skip: !available && 'no .venv or corpus' }, (t) => {
-    const r = compare(encoded(rel));
-    t.diagnostic(`vertex sets ${(r.distance / r.D).toExponential(1)} of the diagonal apart, ${r.triangles[0]} triangles`);
-    assert.ok(r.distance <= r.tol, `vertex sets ${r.distance / r.D} of the diagonal apart`);
-    assert.equal(r.triangles[0], r.triangles[1], 'triangles');
-    assert.ok(Math.abs(r.area[0] - r.area[1]) <= REL * r.area[1], `areas ${r.area}`);
-  });
+for (const major of [5, 6]) {
+  const skip = !available ? 'no .venv or corpus' : !encoderMajors().includes(major) && `the encoder writes no version ${major}`;
+  for (const rel of files) {
+    test(`corpus ${rel} as version ${major}: this decoder and planefmt's agree within ${REL} of the diagonal`, { skip }, (t) => {
+      const file = encoded(rel, ['--major', String(major)]);
+      assert.equal(readPln(fs.readFileSync(file), { decode: false }).version[0], major);
+      const r = compare(file);
+      t.diagnostic(`${fs.statSync(file).size} bytes, vertex sets ${(r.distance / r.D).toExponential(1)} of the diagonal apart, ${r.triangles[0]} triangles`);
+      assert.ok(r.distance <= r.tol, `vertex sets ${r.distance / r.D} of the diagonal apart`);
+      assert.equal(r.triangles[0], r.triangles[1], 'triangles');
+      assert.ok(Math.abs(r.area[0] - r.area[1]) <= REL * r.area[1], `areas ${r.area}`);
+    });
+  }
 }
 
 const PAPER = ['nonconvex_watertight/round.stl', 'open/not_convex.obj'];
