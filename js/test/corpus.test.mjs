@@ -12,7 +12,9 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import { readPln } from '../src/node.mjs';
-import { available, allFiles, encoded, encoderMajors } from '../bench/corpus.mjs';
+import { execFileSync } from 'node:child_process';
+import { conformanceJson } from '../src/report.mjs';
+import { available, allFiles, encoded, encoderMajors, PYTHON, ROOT } from '../bench/corpus.mjs';
 import { planefmtDecoding as reference } from './files.mjs';
 
 const SUBSET = [
@@ -139,4 +141,33 @@ for (const rel of PAPER) {
     assert.ok(Math.abs(a.volume - b.volume) <= REL * Math.abs(b.volume), `volumes ${a.volume} ${b.volume}`);
     a.box.forEach((v, i) => assert.ok(Math.abs(v - b.box[i]) <= REL * D, `box ${a.box} ${b.box}`));
   });
+}
+
+/** planefmt's conformance report of a file (conformance/adapter.py of the planefmt checkout). @param {string} file */
+function planefmtReport(file) {
+  const out = execFileSync(PYTHON, ['-m', 'conformance.adapter', file], { cwd: ROOT, maxBuffer: 1 << 30 });
+  return JSON.parse(out.toString());
+}
+
+// The container as both readers report it (conformance/README.md's contract): the header, the plane
+// table (quantized values within 1e-12 of their range, §7.3's formula in another order), objects,
+// groups with their kind data, colours, metadata and findings, on version 6 files made by planefmt.
+{
+  const skip = !available ? 'no .venv or corpus' : !encoderMajors().includes(6) && 'the encoder writes no version 6';
+  for (const rel of SUBSET) {
+    test(`corpus ${rel} as version 6: the container reported as planefmt reports it`, { skip }, () => {
+      const file = encoded(rel, ['--major', '6']);
+      const want = planefmtReport(file);
+      const got = JSON.parse(JSON.stringify(conformanceJson(readPln(fs.readFileSync(file)))));
+      assert.deepEqual(got.header, want.header);
+      const [h0, h1] = want.header.h_range;
+      const tol = want.header.coding >= 2 ? [1e-12, 1e-12, 1e-12 * Math.max(1, Math.abs(h0), Math.abs(h1))] : [0, 0, 0];
+      assert.equal(got.planes.length, want.planes.length);
+      want.planes.forEach((/** @type {number[]} */ w, /** @type {number} */ i) => {
+        assert.ok(w.every((v, k) => Math.abs(got.planes[i][k] - v) <= tol[k]), `plane ${i}`);
+      });
+      for (const key of ['objects', 'groups', 'colours', 'metadata']) assert.deepEqual(got[key], want[key], key);
+      assert.deepEqual(got.findings.sort(), want.findings.sort());
+    });
+  }
 }
