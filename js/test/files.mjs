@@ -24,8 +24,8 @@ const HERE = path.dirname(fileURLToPath(import.meta.url));
 // ---------------------------------------------------------------------------------------------
 // The conformance suite
 
-/** The conformance suite (conformance/ of the repository). */
-export const SUITE = path.resolve(HERE, '../../conformance');
+/** The conformance suite (conformance/ of the repository, or PLN_CONFORMANCE: another worktree's). */
+export const SUITE = process.env.PLN_CONFORMANCE ?? path.resolve(HERE, '../../conformance');
 /** The linear-time tests' limit in ms: a hang guard far above normal, not a verdict on speed. Their
  *  reads of 12,000 to 200,000 triangles took 0.4 to 2.4 s on a loaded 2-core machine; quadratic work
  *  on 200,000 corners is some 10^10 steps. */

@@ -9,7 +9,7 @@ import { readPln as readNode, PlnError } from '../src/node.mjs';
 import { readPln as readBrowser } from '../src/browser.mjs';
 import { conformanceJson } from '../src/report.mjs';
 import {
-  varint, f32, common, header6, record, segment, file6, r32, expectBoth, outcome, assemble5,
+  varint, f32, common, header6, record, segment, file6, r32, expectBoth, outcome, assemble5, manifest, suiteFile, expectListed,
 } from './files.mjs';
 
 const OBJT = 1;
@@ -425,3 +425,10 @@ test('framing as version 5: varint chunk lengths after PHDR, a CRC per chunk, PE
   expectBoth(bytes.subarray(0, bytes.length - 9), 'TRUNCATED');
   assert.equal(readNode(bytes).chunks.at(-1)?.size, 9);
 });
+
+{
+  const cases = manifest().filter(([file]) => /_v6_0\.pln$|\/xv6_/.test(file));
+  test('the 6.0 conformance cases through both entries (node.mjs and browser.mjs)', { skip: cases.length === 0 && 'no 6.0 case in this suite' }, () => {
+    for (const [file, expected] of cases) expectListed(suiteFile(file), expected, file);
+  });
+}
