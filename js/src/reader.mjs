@@ -26,6 +26,9 @@ const RECORD_CHUNKS = new Set(['OBJT', 'PLNS', 'GRUP', 'cOLR', 'mETA']);
  * @property {{group: number, rgba: Uint8Array}[]} colours the colours of each coloured group, in the order of its
  *   first cOLR; a later cOLR of the same group replaces the earlier one (§10.1: the last applies)
  * @property {Record<string, string>} metadata every mETA chunk (a version 5 header's up axis is in header.up_axis)
+ * @property {{type: string, records: number, bytes: number}[]} records version 6: per record type ('OBJT', 'PLNS',
+ *   'GRUP', 'cOLR', 'mETA', or 'tag N' for an ancillary one), in the order first met, its records and their raw
+ *   bytes (tag and length included) in all; empty before version 6
  * @property {Set<string>} findings §12.3 codes
  * @property {Budget} budget the output charged so far (§12.4): the declared counts; a decoder adds the rest
  */
@@ -100,7 +103,7 @@ export function readContainer(bytes, options = {}) {
   const c = /** @type {Contents} */ (contents);
   return {
     header: c.header, chunks, planes: c.table.view(), objects: c.objects, groups: c.groups, colours: c.colours,
-    metadata: c.metadata, findings: c.findings, budget: c.budget,
+    metadata: c.metadata, findings: c.findings, budget: c.budget, records: c.records,
   };
 }
 
@@ -132,6 +135,10 @@ class Contents {
     /** the OBJT, PLNS and GRUP chunks or records read, for the index: raw is a record's offset in its segment
      * @type {{offset: number, raw: number, type: string, ordinal: number}[]} */
     this.listed = [];
+    /** @type {Container['records']} */
+    this.records = [];
+    /** where each record type is in `records` @type {Map<string, number>} */
+    this.recordAt = new Map();
   }
 
   /**
@@ -139,12 +146,25 @@ class Contents {
    * @param {Uint8Array} stored @param {number} offset the chunk's (PHDR or BODY)
    */
   segment(stored, offset) {
-    forEachRecord(segmentBytes(stored, this.limits, this.codecs), (tag, payload, raw) => {
+    forEachRecord(segmentBytes(stored, this.limits, this.codecs), (tag, payload, raw, size) => {
       const type = RECORDS[tag];
+      this.count(type ?? `tag ${tag}`, size);
       if (type) this.record(type, payload, { offset, raw });
       else if (tag >= 128) this.findings.add('UNKNOWN_ANCILLARY_CHUNK');
       else fail('UNKNOWN_CRITICAL_CHUNK', `record tag ${tag}`);
     });
+  }
+
+  /** @param {string} type @param {number} size a record's raw bytes */
+  count(type, size) {
+    const at = this.recordAt.get(type);
+    if (at === undefined) {
+      this.recordAt.set(type, this.records.length);
+      this.records.push({ type, records: 1, bytes: size });
+    } else {
+      this.records[at].records += 1;
+      this.records[at].bytes += size;
+    }
   }
 
   /**

@@ -29,7 +29,8 @@ export function segmentBytes(stored, limits, codecs) {
  * what is left of the segment is BAD_PAYLOAD; an error names the record and its offset in the raw
  * bytes (the caller names the chunk).
  * @param {Uint8Array} raw
- * @param {(tag: number, payload: Uint8Array, at: number) => void} each at: the record's offset in raw
+ * @param {(tag: number, payload: Uint8Array, at: number, size: number) => void} each at: the record's offset in
+ *   raw; size: its bytes there, tag and length included
  */
 export function forEachRecord(raw, each) {
   const c = new Cursor(raw);
@@ -40,7 +41,8 @@ export function forEachRecord(raw, each) {
       tag = c.u8();
       const length = c.varint32();
       if (length > c.left) fail('BAD_PAYLOAD', `a record of ${length} bytes, ${c.left} left in the segment`);
-      each(tag, c.take(length), at);
+      const size = c.pos + length - at;
+      each(tag, c.take(length), at, size);
     } catch (err) {
       if (err instanceof PlnError && !err.record) {
         err.record = { tag, offset: at };

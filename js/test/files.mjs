@@ -406,3 +406,33 @@ export function segment(raw, method = 0) {
 export function file6(header, { first = null, chunks = [], end = [] } = {}) {
   return assemble5([{ type: 'PHDR', payload: [...header, ...(first ?? [])] }, ...chunks, { type: 'PEND', payload: end }]);
 }
+
+/**
+ * The unit cube's six planes (h 0.5) as quantized codes at widths 2/2/1 (§7.3: ν step π/2, φ step
+ * π/2, h range [0.5, 0.5]): +z, −z, +x, −x, +y, −y.
+ */
+export const CUBE_CODES = [[0, 0, 0], [2, 0, 0], [1, 0, 0], [1, 2, 0], [1, 1, 0], [1, 3, 0]];
+/** The header fields of those codes (for header6). */
+export const QUANT6 = { coding: 2, bits: [2, 2, 1], hRange: [0.5, 0.5] };
+
+/** The codes packed at 5 bits a plane, least significant first (§2.1): 30 bits in 4 bytes. */
+export function cubeBits() {
+  const out = [0, 0, 0, 0];
+  CUBE_CODES.forEach(([n, p, h], i) => {
+    const v = n | (p << 2) | (h << 4);
+    for (let b = 0; b < 5; b++) if (v & (1 << b)) out[(5 * i + b) >> 3] |= 1 << ((5 * i + b) & 7);
+  });
+  return out;
+}
+
+/** The cube's planes record (tag 2). */
+export const planesRecord = () => record(2, [6, ...cubeBits()]);
+/** An object record (tag 1): parent (+1, 0 for a root), flags, name, transform (§8, version 4's coding). */
+export const objectRecord = (name = '', parent = 0, transform = /** @type {number[]} */ ([])) => {
+  const n = [...Buffer.from(name)];
+  return record(1, [parent, transform.length ? 1 : 0, ...varint(n.length), ...n, ...transform]);
+};
+/** The cube as one convex group (tag 3, kind 0) of planes 0 to 5 in `object`. */
+export const cubeGroup = (object = 0) => record(3, [...varint(object), 0, ...common([0, 1, 2, 3, 4, 5])]);
+/** A root object, the cube's planes and its group: 24 bytes of records. */
+export const cube6Records = () => [...objectRecord(), ...planesRecord(), ...cubeGroup()];

@@ -10,37 +10,12 @@ import { readPln as readBrowser } from '../src/browser.mjs';
 import { conformanceJson } from '../src/report.mjs';
 import {
   varint, f32, common, header6, record, segment, file6, r32, expectBoth, outcome, assemble5, manifest, suiteFile, expectListed,
+  QUANT6, CUBE_CODES, cubeBits, objectRecord, planesRecord, cubeGroup, cube6Records,
 } from './files.mjs';
 
-const OBJT = 1;
-const PLNS = 2;
-const GRUP = 3;
-const COLR = 4;
-const META = 5;
-
-/**
- * The unit cube's six planes (h 0.5) as quantized codes at widths 2/2/1 (§7.3: ν step π/2, φ step
- * π/2, h range [0.5, 0.5]): +z, −z, +x, −x, +y, −y; 30 bits in 4 bytes.
- */
-const CUBE_CODES = [[0, 0, 0], [2, 0, 0], [1, 0, 0], [1, 2, 0], [1, 1, 0], [1, 3, 0]];
-function cubeBits() {
-  const out = [0, 0, 0, 0];
-  CUBE_CODES.forEach(([n, p, h], i) => {
-    const v = n | (p << 2) | (h << 4);
-    for (let b = 0; b < 5; b++) if (v & (1 << b)) out[(5 * i + b) >> 3] |= 1 << ((5 * i + b) & 7);
-  });
-  return out;
-}
-const QUANT = { coding: 2, bits: [2, 2, 1], hRange: [0.5, 0.5] };
-const planesRecord = () => record(PLNS, [6, ...cubeBits()]);
-/** An object record: parent (+1, 0 for a root), flags, name, transform (§8, version 4's coding). */
-const objectRecord = (name = '', parent = 0, transform = /** @type {number[]} */ ([])) => {
-  const n = [...Buffer.from(name)];
-  return record(OBJT, [parent, transform.length ? 1 : 0, ...varint(n.length), ...n, ...transform]);
-};
-const cubeGroup = (object = 0) => record(GRUP, [...varint(object), 0, ...common([0, 1, 2, 3, 4, 5])]);
-const cubeRecords = () => [...objectRecord(), ...planesRecord(), ...cubeGroup()];
-/** The cube: header, one segment in PHDR, PEND. */
+const [OBJT, PLNS, GRUP, COLR, META] = [1, 2, 3, 4, 5];
+const QUANT = QUANT6;
+const cubeRecords = cube6Records;
 const cube = (h = {}, method = 0) => file6(header6({ ...QUANT, ...h }), { first: segment(cubeRecords(), method) });
 
 /** A translation by (x, 0, 0) as version 4's coded transform: codes 1 0 0 2 / 0 1 0 0 / 0 0 1 0, then x as f32. @param {number} x */
@@ -287,6 +262,11 @@ test('record tags: 1-5 known, 128-255 skipped as ancillary, 0 and 6-127 unknown 
   for (const tag of [128, 200, 255]) {
     const f = readNode(file6(header6(QUANT), { first: segment([...record(tag, [9, 9, 9]), ...cubeRecords(), ...record(tag, [])]) }));
     assert.deepEqual([...f.findings], ['UNKNOWN_ANCILLARY_CHUNK'], `tag ${tag}`);
+    // the raw bytes per record type, tag and length included: the skipped ones under their tag
+    assert.deepEqual(f.container.records, [
+      { type: `tag ${tag}`, records: 2, bytes: 5 + 2 }, { type: 'OBJT', records: 1, bytes: 5 },
+      { type: 'PLNS', records: 1, bytes: 7 }, { type: 'GRUP', records: 1, bytes: 12 },
+    ]);
     assert.equal(f.meshes[0]?.indices.length, 36);
   }
   for (const tag of [0, 6, 7, 64, 127]) {
