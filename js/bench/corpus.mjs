@@ -6,7 +6,9 @@ import crypto from 'node:crypto';
 import { execFileSync } from 'node:child_process';
 import { fileURLToPath } from 'node:url';
 
-export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
+/** The planefmt checkout whose .venv encodes and decodes: this repository, or PLANEFMT_ROOT (another
+ * worktree, e.g. one whose writer is newer than this one's). */
+export const ROOT = process.env.PLANEFMT_ROOT ?? path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 export const PYTHON = path.join(ROOT, '.venv/bin/python');
 const PLN = path.join(ROOT, '.venv/bin/pln');
 // as tests/corpus.py: PLN_CORPUS, or the repository's tests/corpus
@@ -23,6 +25,22 @@ export function allFiles() {
 }
 
 let version = '';
+
+/** @type {number[] | null} */
+let majors = null;
+
+/**
+ * The major versions `pln convert --major` writes (its help's choices), e.g. [3, 4, 5, 6]; empty
+ * without planefmt.
+ */
+export function encoderMajors() {
+  if (majors) return majors;
+  if (!available) return (majors = []);
+  const help = execFileSync(PLN, ['convert', '--help'], { encoding: 'utf8' });
+  const choices = /--major \{([\d,]+)\}/.exec(help);
+  majors = choices ? choices[1].split(',').map(Number) : [];
+  return majors;
+}
 
 /**
  * What the encoder is: a digest of planefmt's and the converters' sources, whose package version does

@@ -1,4 +1,4 @@
-/** Ancillary chunks: colours cOLR (spec §10.1), index iNDX (§10.2), metadata mETA (§10.3). */
+/** Ancillary chunks: colours cOLR (spec §10.1), index iNDX (§10.2; version 6's too), metadata mETA (§10.3). */
 import { fail } from './errors.mjs';
 import { Cursor } from './varint.mjs';
 
@@ -10,15 +10,18 @@ const KEYWORDS = { up_axis: ['Y', 'Z'] };
 /**
  * @param {Uint8Array} payload
  * @param {import('./groups.mjs').Group[]} groups read so far
- * @param {number} major the file's major version: from 4, a 12-byte payload is one colour for all
+ * @param {number} major the file's major version: from 4, a 12-byte payload is one colour for all; in 6,
+ *   group and count are varint32s and 4 bytes after them one colour for all
  * @returns {{group: number, rgba: Uint8Array}} 4 bytes per reference (a single colour repeated)
  */
 export function readColours(payload, groups, major) {
   const c = new Cursor(payload);
-  const group = c.u32();
-  const count = c.u32();
-  const uniform = major >= 4 && payload.length === 12;
-  const colours = c.take(uniform ? 4 : 4 * count);
+  const v6 = major >= 6;
+  const group = v6 ? c.varint32() : c.u32();
+  const count = v6 ? c.varint32() : c.u32();
+  const uniform = v6 ? c.left === 4 : major >= 4 && payload.length === 12;
+  // version 6: a copy, not a view, so that the segment it came from is not held (one segment at a time)
+  const colours = v6 ? c.take(uniform ? 4 : 4 * count).slice() : c.take(uniform ? 4 : 4 * count);
   if (c.left > 0) fail('BAD_COLOURS', `${c.left} bytes after the colours`);
   if (group >= groups.length) fail('BAD_COLOURS', `group ${group} not read yet`);
   if (count !== groups[group].refs.length) fail('BAD_COLOURS', `${count} colours for ${groups[group].refs.length} references`);
@@ -67,6 +70,39 @@ export function checkIndex(payload, offset, firstAfterHeader, listed) {
     if (at !== want.offset || type !== want.type || ordinal !== want.ordinal) fail('BAD_INDEX', `entry ${i} does not match the file`);
   }
 }
+
+/**
+ * Checks a version 6 iNDX payload against the records read before it: count, then per record of an
+ * object, planes or group its chunk's offset (a difference from the entry before), its offset in
+ * that segment's raw bytes, its tag and its ordinal.
+ * @param {Uint8Array} payload
+ * @param {number} offset of the iNDX chunk
+ * @param {{offset: number, raw: number, type: string, ordinal: number}[]} listed the records read
+ */
+export function checkIndex6(payload, offset, listed) {
+  const c = new Cursor(payload);
+  const count = c.varint();
+  // an entry takes 4 bytes at least: more entries than that end inside the payload
+  if (count > c.left / 4) fail('BAD_PAYLOAD', `${count} entries in ${c.left} bytes`);
+  const entries = [];
+  let at = 0;
+  for (let i = 0; i < count; i++) {
+    at += c.varint();
+    entries.push({ at, raw: c.varint(), tag: c.u8(), ordinal: c.varint() });
+  }
+  if (c.left > 0) fail('BAD_INDEX', `${c.left} bytes after the entries`);
+  if (count !== listed.length) fail('BAD_INDEX', `${count} entries for ${listed.length} records`);
+  entries.forEach(({ at: chunk, raw, tag, ordinal }, i) => {
+    if (chunk < 8 || chunk >= offset) fail('BAD_INDEX', `entry ${i}: chunk offset ${chunk}`);
+    const want = listed[i];
+    if (chunk !== want.offset || raw !== want.raw || RECORD_TYPES[tag] !== want.type || ordinal !== want.ordinal) {
+      fail('BAD_INDEX', `entry ${i} does not match the file`);
+    }
+  });
+}
+
+/** The records an iNDX of version 6 lists, by tag. @type {Record<number, string>} */
+const RECORD_TYPES = { 1: 'OBJT', 2: 'PLNS', 3: 'GRUP' };
 
 /**
  * @param {Uint8Array} payload

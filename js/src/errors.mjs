@@ -14,6 +14,8 @@ export class PlnError extends Error {
     this.chunk = null;
     /** @type {number|null} offset of that chunk's first byte */
     this.offset = null;
+    /** @type {{tag: number, offset: number} | null} version 6: the record of the chunk's body segment, its tag and its offset in the segment's raw bytes */
+    this.record = null;
   }
 }
 

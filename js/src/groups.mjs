@@ -21,8 +21,8 @@ import { readShellWalk } from './shellwalk.mjs';
  * @property {any} data the kind data: cells, tree, a Shell (kinds 5-10, 12 and 13), or {source} (kind 11)
  */
 
-/** The newest minor version this reader knows, per major (§5, §9.3): 5.2 (kind 13), 4.2 (kinds 10, 11), 3.4 (kind 8). */
-export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2, 5: 2 };
+/** The newest minor version this reader knows, per major (§5, §9.3): 6.0, 5.2 (kind 13), 4.2 (kinds 10, 11), 3.4 (kind 8). */
+export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2, 5: 2, 6: 0 };
 
 /**
  * Whether `kind` is a kind of the file's version (§9.3).
@@ -30,6 +30,7 @@ export const NEWEST_MINOR = { 1: 0, 2: 0, 3: 4, 4: 2, 5: 2 };
  */
 function kindOfVersion(kind, [major, minor]) {
   if (kind <= 4) return true;
+  if (major >= 6) return kind <= 13;
   // kinds 0-11 in 5.0, 0-12 in 5.1, 0-13 in 5.2 (and later minors); kinds 0-8 in 4.0, 0-9 in 4.1, 0-11 in 4.2 (and later minors)
   if (major >= 5) return kind <= (minor >= 2 ? 13 : minor >= 1 ? 12 : 11);
   if (major >= 4) return kind <= (minor >= 2 ? 11 : minor >= 1 ? 9 : 8);
@@ -37,18 +38,22 @@ function kindOfVersion(kind, [major, minor]) {
 }
 
 /**
- * Reads one GRUP payload.
- * @param {Uint8Array} payload
- * @param {object} ctx
- * @param {[number, number]} ctx.version
- * @param {number} ctx.groups groups read before
- * @param {Group[]} ctx.earlier the groups read before, in file order: the sources a copy (kind 11) may name
- * @param {number} ctx.objects objects read before
- * @param {number} ctx.planes planes defined before this chunk
- * @param {import('./compression.mjs').Limits} ctx.limits
- * @param {import('./compression.mjs').Codecs} ctx.codecs
- * @param {import('./budget.mjs').Budget} [ctx.budget] charged the counts a sealed or shell group declares,
+ * @typedef {object} GroupContext
+ * @property {[number, number]} version
+ * @property {number} groups groups read before
+ * @property {Group[]} earlier the groups read before, in file order: the sources a copy (kind 11) may name
+ * @property {number} objects objects read before
+ * @property {number} planes planes defined before this chunk
+ * @property {import('./compression.mjs').Limits} limits
+ * @property {import('./compression.mjs').Codecs} codecs
+ * @property {import('./budget.mjs').Budget} [budget] charged the counts a sealed or shell group declares,
  *   and a copy of one its source's, as they are read (§12.4)
+ */
+
+/**
+ * Reads one GRUP payload (versions 1 to 5).
+ * @param {Uint8Array} payload
+ * @param {GroupContext} ctx
  * @returns {Group}
  */
 export function readGroup(payload, ctx) {
@@ -76,18 +81,49 @@ export function readGroup(payload, ctx) {
   }
   if (index !== ctx.groups) fail('GROUP_INDEX_MISMATCH', `index ${index}, expected ${ctx.groups}`);
   if (object >= ctx.objects) fail('BAD_OBJECT_REFERENCE', `object ${object} not defined`);
-  let skipped = false;
-  if (!kindOfVersion(kind, ctx.version)) {
-    if (ctx.version[1] <= NEWEST_MINOR[/** @type {1|2|3|4|5} */ (major)]) {
-      fail('UNKNOWN_GROUP_KIND', `kind ${kind} in a ${ctx.version.join('.')} file`);
-    }
-    skipped = true;
-  }
+  const skipped = skips(kind, ctx.version);
   const body = decompress(method, rawSize, payload.subarray(c.pos), ctx.limits, ctx.codecs, major);
+  return readBody(body, index, object, kind, skipped, ctx);
+}
+
+/**
+ * Reads one group record of version 6: object, kind and the body, raw (its segment was decompressed).
+ * @param {Uint8Array} payload
+ * @param {GroupContext} ctx
+ * @returns {Group}
+ */
+export function readGroupRecord(payload, ctx) {
+  const c = new Cursor(payload);
+  const object = c.varint32();
+  const kind = c.u8();
+  if (object >= ctx.objects) fail('BAD_OBJECT_REFERENCE', `object ${object} not defined`);
+  return readBody(payload.subarray(c.pos), ctx.groups, object, kind, skips(kind, ctx.version), ctx);
+}
+
+/**
+ * Whether a group of `kind` is skipped (a kind of a newer minor version, §9.3), or UNKNOWN_GROUP_KIND.
+ * @param {number} kind @param {[number, number]} version
+ */
+function skips(kind, version) {
+  if (kindOfVersion(kind, version)) return false;
+  if (version[1] <= NEWEST_MINOR[/** @type {1|2|3|4|5|6} */ (version[0])]) {
+    fail('UNKNOWN_GROUP_KIND', `kind ${kind} in a ${version.join('.')} file`);
+  }
+  return true;
+}
+
+/**
+ * §9.2 onward: the common body and the kind data.
+ * @param {Uint8Array} body raw @param {number} index @param {number} object @param {number} kind
+ * @param {boolean} skipped @param {GroupContext} ctx
+ * @returns {Group}
+ */
+function readBody(body, index, object, kind, skipped, ctx) {
+  const major = ctx.version[0];
   const b = new Cursor(body);
   // version 5: a shell (kinds 6-10, 12 and 13) or a copy (11) may have no reference, and a kind this reader skips decides for itself (§9.2)
   const none = major >= 5 && (skipped || (kind >= 6 && kind <= 13));
-  const { refs, roles } = major === 1 ? readBodyV1(b, ctx) : readBody(b, ctx, none);
+  const { refs, roles } = major === 1 ? readCommonV1(b, ctx) : readCommon(b, ctx, none);
   const m = refs.length;
   let data = null;
   if (!skipped && kind === 11) {
@@ -148,7 +184,7 @@ function readCopy(b, index, refs, roles, earlier) {
  * @param {Cursor} b @param {{planes: number, limits: import('./compression.mjs').Limits}} ctx
  * @param {boolean} [none] m = 0 is allowed (version 5: shells, copies, skipped kinds)
  */
-function readBody(b, ctx, none = false) {
+function readCommon(b, ctx, none = false) {
   const m = b.varint();
   if (m > ctx.limits.refs) fail('LIMIT_EXCEEDED', `${m} references`);
   if (m === 0 && !none) fail('BAD_GROUP_STRUCTURE', 'no reference');
@@ -171,7 +207,7 @@ function readBody(b, ctx, none = false) {
  * A.1: u32 references in any order.
  * @param {Cursor} b @param {{planes: number, limits: import('./compression.mjs').Limits}} ctx
  */
-function readBodyV1(b, ctx) {
+function readCommonV1(b, ctx) {
   const m = b.u32();
   if (m > ctx.limits.refs) fail('LIMIT_EXCEEDED', `${m} references`);
   if (b.left < 4 * m + Math.ceil(m / 8)) fail('BAD_PAYLOAD', 'body ends inside the references or roles');

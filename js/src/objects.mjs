@@ -1,4 +1,4 @@
-/** Objects OBJT (spec §8; Appendix A for versions 1 to 3: fixed heads in 1 and 2, 16 × f64 transforms). */
+/** Objects OBJT and version 6's object records (spec §8; Appendix A for versions 1 to 3: fixed heads in 1 and 2, 16 × f64 transforms). */
 import { fail } from './errors.mjs';
 import { Cursor } from './varint.mjs';
 
@@ -34,7 +34,8 @@ export function readObject(payload, major, before, limits) {
     c.u8();
     nameLength = c.u16();
   } else {
-    index = c.varint32();
+    // version 6: an object's index is its position among the object records
+    index = major >= 6 ? before : c.varint32();
     const p = c.varint32();
     parent = p === 0 ? null : p - 1;
     flags = c.u8();

@@ -1,4 +1,4 @@
-/** Plane table blocks PLNS (spec §7) and the decoding of their triplets to (ν, φ, h). */
+/** Plane table blocks PLNS (spec §7), version 6's planes records, and the decoding of their triplets to (ν, φ, h). */
 import { fail } from './errors.mjs';
 import { Cursor, unzigzag } from './varint.mjs';
 import { decompress } from './compression.mjs';
@@ -62,16 +62,46 @@ export function readPlanes(payload, header, table, limits, codecs) {
   }
   if (first !== table.count) fail('PLANE_INDEX_MISMATCH', `block starts at ${first}, ${table.count} planes before it`);
   if (first + count > limits.planes) fail('LIMIT_EXCEEDED', `${first + count} planes`);
-  const { coding, bits } = header;
+  checkSize(rawSize, count, header);
+  const raw = decompress(method, rawSize, payload.subarray(c.pos), limits, codecs, header.version[0]);
+  decodeTriplets(raw, header, table, count);
+}
+
+/**
+ * Reads one planes record of version 6 (count, then the raw triplet data) into the table.
+ * @param {Uint8Array} payload
+ * @param {import('./header.mjs').Header} header
+ * @param {PlaneTable} table
+ * @param {import('./compression.mjs').Limits} limits
+ */
+export function readPlanesRecord(payload, header, table, limits) {
+  const c = new Cursor(payload);
+  const count = c.varint32();
+  if (table.count + count > limits.planes) fail('LIMIT_EXCEEDED', `${table.count + count} planes`);
+  checkSize(c.left, count, header);
+  decodeTriplets(payload.subarray(c.pos), header, table, count);
+}
+
+/**
+ * §7.1: the raw size `count` triplets of the header's coding take.
+ * @param {number} rawSize @param {number} count @param {import('./header.mjs').Header} header
+ */
+function checkSize(rawSize, count, { coding, bits }) {
   if (coding === 3) {
     if (rawSize < 3 * count || rawSize > 15 * count) fail('SIZE_MISMATCH', `raw size ${rawSize} for ${count} planes`);
   } else {
     const size = coding === 0 ? 12 * count : coding === 1 ? 24 * count : Math.ceil((count * (bits[0] + bits[1] + bits[2])) / 8);
     if (rawSize !== size) fail('SIZE_MISMATCH', `raw size ${rawSize} for ${count} planes`);
   }
-  const raw = decompress(method, rawSize, payload.subarray(c.pos), limits, codecs, header.version[0]);
+}
+
+/**
+ * @param {Uint8Array} raw @param {import('./header.mjs').Header} header @param {PlaneTable} table @param {number} count
+ */
+function decodeTriplets(raw, header, table, count) {
   const at = table.reserve(count);
   const out = table.data;
+  const { coding } = header;
   if (coding === 0 || coding === 1) readFloats(raw, coding, count, out, at);
   else if (coding === 2) readQuantized(raw, header, count, out, at);
   else readPredicted(raw, header, count, out, at);

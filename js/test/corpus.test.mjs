@@ -1,6 +1,8 @@
-// The real corpus (tests/corpus, or PLN_CORPUS) encoded by planefmt's default encoder and
-// decoded here and by planefmt (planefmt_decode.py): the two decodings must agree within 1e-9 of
-// the bounding-box diagonal, vertex set against vertex set both ways, triangle count, and area.
+// The real corpus (tests/corpus, or PLN_CORPUS) encoded by planefmt's default encoder as version 5
+// and, where the encoder writes it, version 6 (`pln convert --major 5`, `--major 6`), and decoded
+// here and by planefmt (planefmt_decode.py): the two decodings must agree within 1e-9 of the
+// bounding-box diagonal, vertex set against vertex set both ways, triangle count, and area.
+// PLANEFMT_ROOT names the planefmt checkout whose .venv encodes and decodes (bench/corpus.mjs).
 // One file per category by default (under a minute on two busy cores); PLN_JS_CORPUS=all runs
 // every file. Encoded files are cached in the temporary directory, keyed by source and encoder.
 // Two more files encoded with the paper's scheme (trees and patches) check the union of trees
@@ -10,7 +12,9 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import { readPln } from '../src/node.mjs';
-import { available, allFiles, encoded } from '../bench/corpus.mjs';
+import { execFileSync } from 'node:child_process';
+import { conformanceJson } from '../src/report.mjs';
+import { available, allFiles, encoded, encoderMajors, PYTHON, ROOT } from '../bench/corpus.mjs';
 import { planefmtDecoding as reference } from './files.mjs';
 
 const SUBSET = [
@@ -89,14 +93,19 @@ function compare(file) {
 
 const files = process.env.PLN_JS_CORPUS === 'all' ? (available ? allFiles() : []) : SUBSET;
 
-for (const rel of files) {
-  test(`corpus ${rel}: this decoder and planefmt's agree within ${REL} of the diagonal`, { skip: !available && 'no .venv or corpus' }, (t) => {
-    const r = compare(encoded(rel));
-    t.diagnostic(`vertex sets ${(r.distance / r.D).toExponential(1)} of the diagonal apart, ${r.triangles[0]} triangles`);
-    assert.ok(r.distance <= r.tol, `vertex sets ${r.distance / r.D} of the diagonal apart`);
-    assert.equal(r.triangles[0], r.triangles[1], 'triangles');
-    assert.ok(Math.abs(r.area[0] - r.area[1]) <= REL * r.area[1], `areas ${r.area}`);
-  });
+for (const major of [5, 6]) {
+  const skip = !available ? 'no .venv or corpus' : !encoderMajors().includes(major) && `the encoder writes no version ${major}`;
+  for (const rel of files) {
+    test(`corpus ${rel} as version ${major}: this decoder and planefmt's agree within ${REL} of the diagonal`, { skip }, (t) => {
+      const file = encoded(rel, ['--major', String(major)]);
+      assert.equal(readPln(fs.readFileSync(file), { decode: false }).version[0], major);
+      const r = compare(file);
+      t.diagnostic(`${fs.statSync(file).size} bytes, vertex sets ${(r.distance / r.D).toExponential(1)} of the diagonal apart, ${r.triangles[0]} triangles`);
+      assert.ok(r.distance <= r.tol, `vertex sets ${r.distance / r.D} of the diagonal apart`);
+      assert.equal(r.triangles[0], r.triangles[1], 'triangles');
+      assert.ok(Math.abs(r.area[0] - r.area[1]) <= REL * r.area[1], `areas ${r.area}`);
+    });
+  }
 }
 
 const PAPER = ['nonconvex_watertight/round.stl', 'open/not_convex.obj'];
@@ -132,4 +141,33 @@ for (const rel of PAPER) {
     assert.ok(Math.abs(a.volume - b.volume) <= REL * Math.abs(b.volume), `volumes ${a.volume} ${b.volume}`);
     a.box.forEach((v, i) => assert.ok(Math.abs(v - b.box[i]) <= REL * D, `box ${a.box} ${b.box}`));
   });
+}
+
+/** planefmt's conformance report of a file (conformance/adapter.py of the planefmt checkout). @param {string} file */
+function planefmtReport(file) {
+  const out = execFileSync(PYTHON, ['-m', 'conformance.adapter', file], { cwd: ROOT, maxBuffer: 1 << 30 });
+  return JSON.parse(out.toString());
+}
+
+// The container as both readers report it (conformance/README.md's contract): the header, the plane
+// table (quantized values within 1e-12 of their range, §7.3's formula in another order), objects,
+// groups with their kind data, colours, metadata and findings, on version 6 files made by planefmt.
+{
+  const skip = !available ? 'no .venv or corpus' : !encoderMajors().includes(6) && 'the encoder writes no version 6';
+  for (const rel of SUBSET) {
+    test(`corpus ${rel} as version 6: the container reported as planefmt reports it`, { skip }, () => {
+      const file = encoded(rel, ['--major', '6']);
+      const want = planefmtReport(file);
+      const got = JSON.parse(JSON.stringify(conformanceJson(readPln(fs.readFileSync(file)))));
+      assert.deepEqual(got.header, want.header);
+      const [h0, h1] = want.header.h_range;
+      const tol = want.header.coding >= 2 ? [1e-12, 1e-12, 1e-12 * Math.max(1, Math.abs(h0), Math.abs(h1))] : [0, 0, 0];
+      assert.equal(got.planes.length, want.planes.length);
+      want.planes.forEach((/** @type {number[]} */ w, /** @type {number} */ i) => {
+        assert.ok(w.every((v, k) => Math.abs(got.planes[i][k] - v) <= tol[k]), `plane ${i}`);
+      });
+      for (const key of ['objects', 'groups', 'colours', 'metadata']) assert.deepEqual(got[key], want[key], key);
+      assert.deepEqual(got.findings.sort(), want.findings.sort());
+    });
+  }
 }

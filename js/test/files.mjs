@@ -24,8 +24,8 @@ const HERE = path.dirname(fileURLToPath(import.meta.url));
 // ---------------------------------------------------------------------------------------------
 // The conformance suite
 
-/** The conformance suite (conformance/ of the repository). */
-export const SUITE = path.resolve(HERE, '../../conformance');
+/** The conformance suite (conformance/ of the repository, or PLN_CONFORMANCE: another worktree's). */
+export const SUITE = process.env.PLN_CONFORMANCE ?? path.resolve(HERE, '../../conformance');
 /** The linear-time tests' limit in ms: a hang guard far above normal, not a verdict on speed. Their
  *  reads of 12,000 to 200,000 triangles took 0.4 to 2.4 s on a loaded 2-core machine; quadratic work
  *  on 200,000 corners is some 10^10 steps. */
@@ -348,3 +348,91 @@ export function zeroPlanes(/** @type {number} */ first, /** @type {number} */ co
   out.set(stored, h.length);
   return out;
 }
+
+// ---------------------------------------------------------------------------------------------
+// Version 6: the compact header, body segments and records
+
+/** An r32 (version 6): the f32's bit pattern reversed, as a minimal varint. @param {number} v */
+export function r32(v) {
+  const bits = new DataView(Float32Array.of(v).buffer).getUint32(0, true);
+  let r = 0;
+  for (let i = 0; i < 32; i++) if (bits & (2 ** i)) r += 2 ** (31 - i);
+  return varint(r);
+}
+
+/**
+ * A version 6 PHDR payload up to the end of its header fields (no segment), header_size counting
+ * the fields given (or `size` where given, to damage it).
+ * @param {{minor?: number, lossy?: boolean, coding?: number, bits?: number[], hRange?: number[], units?: number,
+ *   bbox?: number[] | null, tolerance?: number, errorBound?: number, counts?: number[] | null, later?: number[], size?: number}} [h]
+ * @returns {number[]}
+ */
+export function header6({
+  minor = 0, lossy = false, coding = 0, bits = [1, 1, 1], hRange = [0, 0], units = 0, bbox = null,
+  tolerance = NaN, errorBound = NaN, counts = null, later = [], size,
+} = {}) {
+  const flags = (lossy ? 1 : 0) | (counts ? 2 : 0) | (bbox ? 4 : 0) | (coding << 3);
+  const fields = [flags, units];
+  if (coding >= 2) {
+    const w = (bits[0] - 1) | ((bits[1] - 1) << 5) | ((bits[2] - 1) << 10);
+    fields.push(w & 0xff, w >> 8, ...r32(hRange[0]), ...r32(hRange[1]));
+  }
+  if (bbox) fields.push(...bbox.flatMap(r32));
+  fields.push(...r32(tolerance), ...r32(errorBound));
+  if (counts) fields.push(...varints(counts));
+  fields.push(...later);
+  return [6, minor, ...varint(size ?? fields.length), ...fields];
+}
+
+/** A record (version 6): tag, length varint32, payload. @param {number} tag @param {ArrayLike<number>} payload */
+export const record = (tag, payload) => [tag, ...varint(payload.length), ...Array.from(payload)];
+
+/**
+ * A body segment (version 6): method, raw size, the records' bytes stored with the method (§6).
+ * @param {number[]} raw the records, one after another @param {number} [method]
+ */
+export function segment(raw, method = 0) {
+  const stored = packed(Uint8Array.from(raw), method);
+  return [method, ...varint(raw.length), ...stored];
+}
+
+/**
+ * A version 6 file: PHDR (the header, then the first segment if any), BODY chunks, other chunks
+ * (given as {type, payload}) where they stand, PEND.
+ * @param {number[]} header from header6
+ * @param {{first?: number[] | null, chunks?: {type: string, payload: ArrayLike<number>}[], end?: number[]}} parts
+ *   first: PHDR's segment; chunks: what follows PHDR, before PEND; end: PEND's payload
+ */
+export function file6(header, { first = null, chunks = [], end = [] } = {}) {
+  return assemble5([{ type: 'PHDR', payload: [...header, ...(first ?? [])] }, ...chunks, { type: 'PEND', payload: end }]);
+}
+
+/**
+ * The unit cube's six planes (h 0.5) as quantized codes at widths 2/2/1 (§7.3: ν step π/2, φ step
+ * π/2, h range [0.5, 0.5]): +z, −z, +x, −x, +y, −y.
+ */
+export const CUBE_CODES = [[0, 0, 0], [2, 0, 0], [1, 0, 0], [1, 2, 0], [1, 1, 0], [1, 3, 0]];
+/** The header fields of those codes (for header6). */
+export const QUANT6 = { coding: 2, bits: [2, 2, 1], hRange: [0.5, 0.5] };
+
+/** The codes packed at 5 bits a plane, least significant first (§2.1): 30 bits in 4 bytes. */
+export function cubeBits() {
+  const out = [0, 0, 0, 0];
+  CUBE_CODES.forEach(([n, p, h], i) => {
+    const v = n | (p << 2) | (h << 4);
+    for (let b = 0; b < 5; b++) if (v & (1 << b)) out[(5 * i + b) >> 3] |= 1 << ((5 * i + b) & 7);
+  });
+  return out;
+}
+
+/** The cube's planes record (tag 2). */
+export const planesRecord = () => record(2, [6, ...cubeBits()]);
+/** An object record (tag 1): parent (+1, 0 for a root), flags, name, transform (§8, version 4's coding). */
+export const objectRecord = (name = '', parent = 0, transform = /** @type {number[]} */ ([])) => {
+  const n = [...Buffer.from(name)];
+  return record(1, [parent, transform.length ? 1 : 0, ...varint(n.length), ...n, ...transform]);
+};
+/** The cube as one convex group (tag 3, kind 0) of planes 0 to 5 in `object`. */
+export const cubeGroup = (object = 0) => record(3, [...varint(object), 0, ...common([0, 1, 2, 3, 4, 5])]);
+/** A root object, the cube's planes and its group: 24 bytes of records. */
+export const cube6Records = () => [...objectRecord(), ...planesRecord(), ...cubeGroup()];

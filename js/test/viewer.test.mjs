@@ -16,6 +16,7 @@ import { available, encoded } from '../bench/corpus.mjs';
 import { serve } from '../viewer/serve.mjs';
 import { problem, launch } from '../viewer/chromium.mjs';
 import { decodePng } from '../viewer/png.mjs';
+import { file6, header6, segment, record, QUANT6, objectRecord, planesRecord, cubeGroup } from './files.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const BACKGROUND = [0x1e, 0x22, 0x28]; // viewer.mjs's BACKGROUND
@@ -49,6 +50,12 @@ before(async () => {
   tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'pln-viewer-'));
   extra['truncated.pln'] = path.join(tmp, 'truncated.pln');
   fs.writeFileSync(extra['truncated.pln'], bad);
+  // version 6: the object and planes in PHDR's segment (zlib), the group and its colours in a BODY (Brotli)
+  extra['v6.pln'] = path.join(tmp, 'v6.pln');
+  fs.writeFileSync(extra['v6.pln'], file6(header6(QUANT6), {
+    first: segment([...objectRecord('cube'), ...planesRecord()], 1),
+    chunks: [{ type: 'BODY', payload: segment([...cubeGroup(), ...record(4, [0, 6, 200, 120, 40, 255])], 2) }],
+  }));
   server = await serve({ extra });
   chrome = await launch({ width: 1000, height: 700 });
 });
@@ -179,6 +186,27 @@ test('viewer: version 5.0, the header\'s up axis Z turns the model +z up as mETA
   t.diagnostic(`v5_up_z.pln: canvas ${px.width}x${px.height}: ${(100 * px.off).toFixed(1)} % drawn, ${px.colours} colours`);
   assert.ok(px.off > 0.05, `${(100 * px.off).toFixed(1)} % of the canvas drawn`);
   assert.deepEqual(chrome.consoleErrors, []);
+});
+
+test('viewer: version 6.0, segments in PHDR (zlib) and BODY (Brotli); chunk bytes, and raw bytes per record type', { skip: why ?? false, timeout: 60000 }, async (t) => {
+  const stats = await open('v6.pln');
+  assert.equal(stats.version, '6.0');
+  const want = await checkPanel('v6.pln');
+  const cells = (/** @type {string} */ table) => chrome.page.$$eval(`${table} tbody tr`, (trs) => trs.map((tr) => [...tr.querySelectorAll('td')].map((td) => td.textContent)));
+  const chunks = await cells('#chunks');
+  assert.deepEqual(chunks.map((r) => r[0]).sort(), ['BODY', 'PEND', 'PHDR']);
+  assert.equal(chunks.reduce((sum, r) => sum + int(r[2]), 0), want.size - 8, `chunk bytes ${chunks}`);
+  assert.equal(await chrome.page.$eval('#records-wrap', (el) => /** @type {HTMLElement} */ (el).hidden), false);
+  // each record's tag and length and payload: object 2 + 7 (its name 'cube'), planes 2 + 5, group 2 + 10, colours 2 + 6
+  const records = (await cells('#records')).map((r) => [r[0], int(r[1]), int(r[2])]);
+  assert.deepEqual(records.sort(), [['GRUP', 1, 12], ['OBJT', 1, 9], ['PLNS', 1, 7], ['cOLR', 1, 8]]);
+  const px = await canvasPixels();
+  t.diagnostic(`v6.pln: canvas ${px.width}x${px.height}: ${(100 * px.off).toFixed(1)} % drawn, ${px.colours} colours`);
+  assert.ok(px.off > 0.05, `${(100 * px.off).toFixed(1)} % of the canvas drawn`);
+  assert.deepEqual(chrome.consoleErrors, []);
+  // a file before version 6 has no records: the table stays hidden
+  await open('v5_up_z.pln');
+  assert.equal(await chrome.page.$eval('#records-wrap', (el) => /** @type {HTMLElement} */ (el).hidden), true);
 });
 
 test('viewer: version 4.0, Brotli payloads decoded in the page (brotli-dec-wasm), coded transforms, one colour', { skip: why ?? false, timeout: 60000 }, async (t) => {

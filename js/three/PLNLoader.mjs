@@ -12,7 +12,7 @@
  * per triangle (sRGB in the file, linear in the attribute, as three.js expects). The material is a
  * MeshStandardMaterial with flat shading, both sides drawn, one per mesh (a viewer may recolour each part).
  *
- * userData of the returned group: `header`, `chunks`, `metadata` (mETA, and a version 5 header's up axis), `findings`, `groups`
+ * userData of the returned group: `header`, `chunks`, `records` (version 6), `metadata` (mETA, and a version 5 header's up axis), `findings`, `groups`
  * (per group in file order: {index, kind, kindName, object, references, triangles, source}, source
  * a copy's source group or null), `upAxis` ('Y', 'Z' or null: the header's in version 5, mETA's before) and `file` (readPln's result). A
  * mesh's userData: {groupIndex, kind, kindName, object, source}. A copy (kind 11, §9.15) is a mesh
@@ -94,6 +94,8 @@ export class PLNLoader extends Loader {
     root.userData = {
       header: file.header,
       chunks: file.chunks,
+      // version 6: raw bytes per record type in the body segments (the chunks are PHDR, BODY and PEND)
+      records: file.container.records,
       metadata: file.metadata,
       findings: [...file.findings],
       // a version 5 header's up axis, or mETA's up_axis before version 5 (readPln's metadata holds either, §10.3)

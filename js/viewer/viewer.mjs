@@ -106,7 +106,7 @@ let stats = null;
  * @param {string} name @param {number} size
  */
 function statsOf(root, name, size) {
-  const { header, chunks, groups, file, upAxis } = root.userData;
+  const { header, chunks, records, groups, file, upAxis } = root.userData;
   let vertices = 0;
   root.traverse((o) => { if (/** @type {THREE.Mesh} */ (o).isMesh) vertices += /** @type {THREE.Mesh} */ (o).geometry.getAttribute('position').count; });
   /** @type {Record<string, {chunks: number, bytes: number}>} */
@@ -138,6 +138,7 @@ function statsOf(root, name, size) {
     vertices,
     groupTable: groups.map((/** @type {any} */ g) => ({ index: g.index, kind: g.kind, kindName: g.kindName, references: g.references, triangles: g.triangles, source: g.source })),
     chunkBytes,
+    records,
   };
 }
 
@@ -175,6 +176,12 @@ function showStats(s, swatches) {
   const entries = Object.entries(s.chunkBytes).sort((a, b) => b[1].bytes - a[1].bytes);
   cBody.replaceChildren(...entries.map(([type, e]) => row([type, int(e.chunks), int(e.bytes), `${(100 * e.bytes / s.size).toFixed(1)} %`],
     [false, true, true, true])));
+  // version 6: the records inside the body segments, by raw (decompressed) bytes
+  const raw = s.records.reduce((/** @type {number} */ n, /** @type {any} */ r) => n + r.bytes, 0);
+  /** @type {HTMLElement} */ (document.querySelector('#records-wrap')).hidden = s.records.length === 0;
+  const rBody = /** @type {HTMLElement} */ (document.querySelector('#records tbody'));
+  rBody.replaceChildren(...[...s.records].sort((a, b) => b.bytes - a.bytes).map((/** @type {any} */ r) => row(
+    [r.type, int(r.records), int(r.bytes), `${(100 * r.bytes / raw).toFixed(1)} %`], [false, true, true, true])));
 }
 
 /** @param {string[]} cells @param {boolean[]} numeric @param {boolean} [html] */
