@@ -539,3 +539,85 @@ def zero_planes_block(first: int, count: int, method: int = 1) -> bytes:
     """§7.1: ``count`` float32 planes (0, 0, 0) from ``first`` on, compressed with ``method``."""
     raw = bytes(12 * count)
     return uv(first) + uv(count) + bytes([method]) + uv(len(raw)) + pack(raw, method)
+
+
+# --- version 6.0 (§2.2 r32, §4.5 body segments, §4.6 records, §5 compact header, §10.2 index) ----
+
+def r32(x: float) -> bytes:
+    """§2.2: the binary32 bit pattern of ``x``, its 32 bits reversed, as a varint32."""
+    bits = struct.unpack("<I", struct.pack("<f", x))[0]
+    return uv(int(format(bits, "032b")[::-1], 2))
+
+
+def phdr6(*, minor=0, flags=0, coding=0, units=1, bits=(1, 1, 1), h_range=None, bbox=None,
+          tolerance=math.nan, error_bound=math.nan, counts=None, later=b"") -> bytes:
+    """§5, version 6: version, header_size, then flags (the coding in bits 3-4), units, the widths
+    and h range (codings 2 and 3), the bbox (``bbox``: BBOX_KNOWN), tolerance and error bound, the
+    counts (``counts``: COUNTS_KNOWN), and ``later`` header bytes of a newer minor version."""
+    flags |= coding << 3 | (4 if bbox is not None else 0) | (2 if counts is not None else 0)
+    fields = bytes([flags, units])
+    if coding in (2, 3):
+        fields += struct.pack("<H", sum((b - 1) << (5 * k) for k, b in enumerate(bits)))
+        fields += r32(h_range[0]) + r32(h_range[1])
+    if bbox is not None:
+        fields += b"".join(r32(x) for x in bbox)
+    fields += r32(tolerance) + r32(error_bound)
+    if counts is not None:
+        fields += b"".join(uv(n) for n in counts)
+    fields += later
+    return bytes([6, minor]) + uv(len(fields)) + fields
+
+
+def record(tag: int, payload: bytes) -> bytes:
+    """§4.6: tag, length, payload."""
+    return bytes([tag]) + uv(len(payload)) + payload
+
+
+def segment(records, method: int = 0) -> bytes:
+    """§4.5: compression, raw size, the records' bytes stored (0), deflated (1) or Brotli'd (2)."""
+    raw = b"".join(records)
+    return bytes([method]) + uv(len(raw)) + pack(raw, method)
+
+
+def objt6(name: bytes = b"o", parent: int | None = None) -> bytes:
+    """§8 without index: a root object (or a child of ``parent``) without a transform."""
+    return uv(0 if parent is None else parent + 1) + b"\x00" + uv(len(name)) + name
+
+
+def plns6(planes, coding: int = 0) -> bytes:
+    """§7.1, a planes record's payload: count, then float32 (0) or float64 (1) triplets."""
+    return uv(len(planes)) + b"".join(struct.pack("<3f" if coding == 0 else "<3d", *p) for p in planes)
+
+
+def grup6(obj: int, kind: int, body: bytes) -> bytes:
+    """§9.1, a group record's payload: object, kind, the body (§9.2)."""
+    return uv(obj) + bytes([kind]) + body
+
+
+def colr6(group: int, count: int, rgba: bytes) -> bytes:
+    """§10.1, a colours record's payload: group, count (varint32 each), the colours."""
+    return uv(group) + uv(count) + rgba
+
+
+def v6_file(header: bytes, first=None, bodies=(), *, index=None, pend=None, chunks=()) -> bytes:
+    """A version 6 file: PHDR (``header`` and the segment ``first`` after it, if any), a BODY chunk
+    per segment of ``bodies``, other ``chunks`` (type, payload), an iNDX of payload ``index`` (PEND
+    then holds its offset unless ``pend`` says otherwise), PEND."""
+    out = SIGNATURE + u32_chunk(b"PHDR", header + (first or b""))
+    out += b"".join(varint_chunk(b"BODY", s) for s in bodies)
+    out += b"".join(varint_chunk(t, p) for t, p in chunks)
+    if index is not None:
+        if pend is None:
+            pend = struct.pack("<Q", len(out))
+        out += varint_chunk(b"iNDX", index)
+    return out + varint_chunk(b"PEND", b"" if pend is None else pend)
+
+
+def index6(entries) -> bytes:
+    """§10.2, version 6: count, then per entry (chunk offset, raw offset, tag, ordinal) the chunk
+    offset as a difference from the previous entry's, the raw offset, the tag, the ordinal."""
+    out, prev = uv(len(entries)), 0
+    for chunk, raw, tag, ordinal in entries:
+        out += uv(chunk - prev) + uv(raw) + bytes([tag]) + uv(ordinal)
+        prev = chunk
+    return out
