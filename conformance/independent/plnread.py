@@ -665,6 +665,7 @@ class Reader:
         self.group_kinds = []
         self.group_skipped = []
         self.colours = []
+        self.colour_slot = {}  # group -> its place in self.colours
         self.metadata = {}
         self.findings = []
         self.chunk_list = []  # (offset, type, ordinal) of OBJT, PLNS, GRUP
@@ -2099,7 +2100,13 @@ class Reader:
             rgba = [list(p[0:4]) for _ in range(max(count, 1))]
         else:
             rgba = [list(p[4 * i:4 + 4 * i]) for i in range(count)]
-        self.colours.append({"group": group, "rgba": rgba})
+        # pln.md §10.1: a later cOLR of a group replaces the one before; the
+        # group is listed once, where its first cOLR was
+        if group in self.colour_slot:
+            self.colours[self.colour_slot[group]]["rgba"] = rgba
+        else:
+            self.colour_slot[group] = len(self.colours)
+            self.colours.append({"group": group, "rgba": rgba})
 
     # -- pln.md §10.3 metadata ---------------------------------------------
 
