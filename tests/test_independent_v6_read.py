@@ -344,3 +344,18 @@ def test_index_checks():
     assert with_index(good, pend=struct.pack("<Q", 0)) == "BAD_INDEX"
     assert with_index(good, pend=struct.pack("<Q", 9)) == "BAD_INDEX"
     assert with_index(good, pend=b"\x00") == "BAD_PAYLOAD"
+
+
+def test_place_checks_in_the_order_of_section_12_1():
+    # after iNDX a PHDR is CHUNK_ORDER (before DUPLICATE_HEADER); a PHDR elsewhere DUPLICATE_HEADER
+    data = v6_file(f32_header(), None, index=index6([]))
+    pend_at = data.rindex(b"PEND")
+    assert read(data[:pend_at] + varint_chunk(b"PHDR", f32_header()) + data[pend_at:])["error"] == "CHUNK_ORDER"
+    got = read(v6_file(f32_header(), None, chunks=[(b"PHDR", f32_header())]))
+    assert got["error"] == "DUPLICATE_HEADER"
+    # an unknown critical chunk; a CRC error in a BODY chunk before its payload is looked at
+    assert read(v6_file(f32_header(), None, chunks=[(b"XBDY", b"")]))["error"] == "UNKNOWN_CRITICAL_CHUNK"
+    data = v6_file(f32_header(), None, [b""])
+    body_at = data.index(b"BODY")
+    bad = data[:body_at + 5] + b"\x00\x00\x00\x00" + data[body_at + 9:]
+    assert read(bad)["error"] == "CRC_MISMATCH"

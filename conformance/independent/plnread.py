@@ -754,18 +754,20 @@ class Reader:
                     if self.major >= SEGMENT_MAJOR and self.first_segment:
                         self.read_segment(self.first_segment, offset, name)
                     continue
-                if ctype == b"PHDR":
-                    raise PlnError("DUPLICATE_HEADER", "a second PHDR")
+                # pln.md §12.1 item 3.2: after iNDX, a chunk other than PEND
+                # (a PHDR too); in version 6 a chunk of a record's type; a second PHDR
                 if self.last_was_index and ctype != b"PEND":
                     raise PlnError("CHUNK_ORDER", "iNDX is not immediately followed by PEND (§4.3)")
+                if self.major >= SEGMENT_MAJOR and ctype in RECORD_CHUNKS:
+                    raise PlnError("CHUNK_ORDER", "a %s chunk in a version %d file: a record of a body segment"
+                                   % (name, self.major))
+                if ctype == b"PHDR":
+                    raise PlnError("DUPLICATE_HEADER", "a second PHDR")
                 if ctype == b"PEND":
                     self.read_end(payload)
                     if not self.at_eof():
                         raise PlnError("TRAILING_DATA", "bytes after PEND")
                     return
-                if self.major >= SEGMENT_MAJOR and ctype in RECORD_CHUNKS:
-                    raise PlnError("CHUNK_ORDER", "a %s chunk in a version %d file: a record of a body segment"
-                                   % (name, self.major))
                 if self.major >= SEGMENT_MAJOR and ctype == b"BODY":
                     self.read_segment(payload, offset, name)
                 elif ctype == b"OBJT":
