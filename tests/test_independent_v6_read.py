@@ -7,14 +7,26 @@ BODY chunks of every compression method, the index, and one file per check the v
 
 from __future__ import annotations
 
+import json
 import math
 import struct
 
 import pytest
 
-from spec_files import (SIGNATURE, colr6, group_body, grup6, index6, objt6, phdr, phdr6, plns6, plnread, r32,
-                        read_pipe, record, segment, u32_chunk, uv, v6_file, varint_chunk)
-from spec_files import read_read as read
+from spec_files import (SIGNATURE, colr6, group_body, grup6, index6, objt6, phdr, phdr6, plns6, plnread, plnspec,
+                        r32, read_pipe, read_read, read_spec, record, segment, u32_chunk, uv, v6_file, varint_chunk)
+
+
+def read(data: bytes) -> dict:
+    """plnread's answer, which plnspec, the other independent reader, must give too (its result or
+    its error code)."""
+    got = read_read(data)
+    other = read_spec(data)
+    if "error" in got:
+        assert other.get("error") == got["error"], (got, other)
+    else:
+        assert json.loads(json.dumps(other)) == got
+    return got
 
 PI = math.pi
 
@@ -71,6 +83,7 @@ def test_r32_examples_of_section_2_2():
     for value, text in examples.items():
         assert r32(value).hex() == text
         assert plnread.Cursor(bytes.fromhex(text), "t").r32() == value
+        assert plnspec.r32(plnspec.Cursor(bytes.fromhex(text)), "t") == value
     assert r32(math.nan).hex() == "fe07" and math.isnan(plnread.Cursor(b"\xfe\x07", "t").r32())
     # any f32 in at most 5 bytes, read back exactly
     for value in (f32(0.1), -f32(3.4e38), f32(1e-40), math.inf):
