@@ -8,7 +8,7 @@ the Python 3.11 standard library, and for the Brotli payloads of version
 4.0 (compression method 2) the PyPI package `brotli` (1.2 bounds the output
 of each call; with 1.1 the stored bytes are given one at a time), imported only when such a payload is met: files of versions 1.0 to 3.4, and
 4.0 files without Brotli payloads, need nothing else.  It reads versions
-1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2 and 5.0 to 5.2 (pln.md §13: files of major versions 1 to 5,
+1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 to 5.2 and 6.0 (pln.md §13: files of major versions 1 to 6,
 each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
 was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
@@ -104,6 +104,22 @@ corner explicit), not i0; otherwise the previous explicit corner, or none.
 Mode bit 0's parallelogram is kind 9's.  Reported as kind 9 is.  Kind 13 is a
 kind of 5.2 and later minors of major 5 (UNKNOWN_GROUP_KIND in a 5.0 or 5.1
 file), and like the other shells may have no references.
+
+Version 6.0 (pln.md §2.2, §4.2-§4.6, §5, §7.1, §8, §9.1, §10.1-§10.3 and
+§12.1, added from the 6.0 text before the 6.0 golden files existed) keeps
+version 5's framing and moves what followed the header into body segments:
+the PHDR payload is the version, header_size, the header fields (flags with
+the coding in bits 3-4, units, a u16 of widths and the h range for codings 2
+and 3, the bbox, tolerance and error bound as r32, each binary32's bits
+reversed as a varint32, the counts), then optionally the file's first body
+segment; each BODY chunk is one more.  A segment is compression, raw_size
+and data (pln.md §6, its checks and limits), its raw bytes a sequence of
+records (tag, length, payload) whose payloads are version 5's OBJT, PLNS,
+GRUP, cOLR and mETA payloads without their index, first, compression and
+raw_size fields, read by the same parsers; such a chunk in a version 6 file
+is CHUNK_ORDER.  The index lists each object, planes and group record by
+its chunk's offset (as differences), its offset in the segment's raw bytes,
+its tag and its ordinal.  One segment is held at a time.
 
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is

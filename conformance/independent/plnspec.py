@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 to 5.2), written from
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 to 5.2, 6.0), written from
 spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
 
     python conformance/independent/plnspec.py FILE
@@ -54,6 +54,12 @@ later, of the attached triangle whose code names it anew, where that corner is e
 the previous explicit corner); mode bit 0's parallelogram is kind 9's. Kind 13 is a kind of 5.2 and later
 minors of major 5 (UNKNOWN_GROUP_KIND in 5.0 and 5.1, skipped in major 3 and 4 files of a newer minor) and
 may have no references.
+
+Version 6.0 was added from the 6.0 text of §2.2 (r32), §4.2-§4.6 (BODY chunks, body segments and
+records), §5 (the compact header: header_size, the coding in flags, r32 values), §7.1, §8, §9.1,
+§10.1-§10.2 and §12.1: the records of every segment (the PHDR payload after the header fields, and
+each BODY chunk) are read by the parsers of the chunks they replace, without the fields version 6
+drops; such a chunk in a version 6 file is CHUNK_ORDER. Versions 1.0 to 5.2 are read as before.
 
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
 comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
