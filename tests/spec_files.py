@@ -621,3 +621,130 @@ def index6(entries) -> bytes:
         out += uv(chunk - prev) + uv(raw) + bytes([tag]) + uv(ordinal)
         prev = chunk
     return out
+
+
+def _v5_chunks(data: bytes):
+    """§4.1 (version 5): the chunks after the signature as (type, payload): PHDR's length a u32,
+    every later one a varint32."""
+    pos, first, out = 8, True, []
+    while pos < len(data):
+        ctype = data[pos:pos + 4]
+        pos += 4
+        if first:
+            length = struct.unpack_from("<I", data, pos)[0]
+            pos += 4
+            first = False
+        else:
+            length = shift = 0
+            while True:
+                b = data[pos]
+                pos += 1
+                length |= (b & 0x7F) << shift
+                shift += 7
+                if not b & 0x80:
+                    break
+        out.append((ctype, data[pos:pos + length]))
+        pos += length + 4
+    return out
+
+
+class _Payload:
+    """A version 5 payload read front to back, for v6_records."""
+
+    def __init__(self, data: bytes):
+        self.data, self.pos = data, 0
+
+    def take(self, n: int) -> bytes:
+        self.pos += n
+        return self.data[self.pos - n:self.pos]
+
+    def varint(self) -> int:
+        value = shift = 0
+        while True:
+            b = self.take(1)[0]
+            value |= (b & 0x7F) << shift
+            shift += 7
+            if not b & 0x80:
+                return value
+
+    def rest(self) -> bytes:
+        return self.take(len(self.data) - self.pos)
+
+
+def _unpack(method: int, stored: bytes) -> bytes:
+    if method == 2:
+        import brotli
+        return brotli.decompress(stored)
+    return zlib.decompress(stored) if method == 1 else stored
+
+
+def v6_records(v5: bytes):
+    """A valid version 5 file as version 6 parts (Appendix A.6 against §4.6 and §5): the keyword
+    arguments of phdr6 its header holds, and its records, each (tag, payload): an OBJT without its
+    index, a PLNS as count and raw data, a GRUP as object, kind and raw body, a cOLR with varint32
+    group and count, an mETA as it is; iNDX and unknown ancillary chunks are dropped."""
+    chunks = _v5_chunks(v5)
+    h = _Payload(chunks[0][1])
+    _, minor, flags, coding = h.take(4)
+    bits, units = tuple(h.take(3)), h.take(1)[0]
+    kw = {"minor": 0, "flags": flags & 1, "coding": coding, "units": units}
+    if coding >= 2:
+        kw["bits"], kw["h_range"] = bits, struct.unpack("<2d", h.take(16))
+    if flags & 4:
+        kw["bbox"] = struct.unpack("<6f", h.take(24))
+    kw["tolerance"], kw["error_bound"] = struct.unpack("<2f", h.take(8))
+    if flags & 2:
+        kw["counts"] = (h.varint(), h.varint(), h.varint())
+    records = []
+    for ctype, payload in chunks[1:]:
+        c = _Payload(payload)
+        if ctype == b"OBJT":
+            c.varint()
+            records.append((1, c.rest()))
+        elif ctype == b"PLNS":
+            c.varint()
+            count, method = c.varint(), c.take(1)[0]
+            c.varint()
+            records.append((2, uv(count) + _unpack(method, c.rest())))
+        elif ctype == b"GRUP":
+            c.varint()
+            obj, kind, method = c.varint(), *c.take(2)
+            c.varint()
+            records.append((3, uv(obj) + bytes([kind]) + _unpack(method, c.rest())))
+        elif ctype == b"cOLR":
+            group, count = struct.unpack("<II", c.take(8))
+            records.append((4, uv(group) + uv(count) + c.rest()))
+        elif ctype == b"mETA":
+            records.append((5, payload))
+    return kw, records
+
+
+def v6_layout(header: bytes, records, groups, methods, *, with_index=False) -> bytes:
+    """A version 6 file of ``records`` (tag, payload) cut into segments: ``groups`` the number of
+    records of each segment in turn (the first in PHDR), ``methods`` each segment's compression;
+    with an index of every record of tag 1, 2 or 3 (§10.2) if asked."""
+    segments, entries, at = [], [], 0
+    offset = 8 + 12 + len(header)  # where the first BODY chunk will start
+    counters = {1: 0, 2: 0, 3: 0}
+    for k, (n, method) in enumerate(zip(groups, methods)):
+        recs = records[at:at + n]
+        at += n
+        chunk = 8 if k == 0 else offset
+        raw = 0
+        for tag, payload in recs:
+            if tag in counters:
+                entries.append((chunk, raw, tag, counters[tag]))
+                counters[tag] += 1 if tag != 2 else _plane_count(payload)
+            raw += len(record(tag, payload))
+        seg = segment([record(t, p) for t, p in recs], method) if recs or k else b""
+        segments.append(seg)
+        if k == 0:
+            offset += len(seg)
+        else:
+            offset += len(varint_chunk(b"BODY", seg))
+    assert at == len(records)
+    return v6_file(header, segments[0], segments[1:], index=index6(entries) if with_index else None)
+
+
+def _plane_count(payload: bytes) -> int:
+    return _Payload(payload).varint()

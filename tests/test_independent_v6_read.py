@@ -14,7 +14,8 @@ import struct
 import pytest
 
 from spec_files import (SIGNATURE, colr6, group_body, grup6, index6, objt6, phdr, phdr6, plns6, plnread, plnspec,
-                        r32, read_pipe, read_read, read_spec, record, segment, u32_chunk, uv, v6_file, varint_chunk)
+                        r32, read_pipe, read_read, read_spec, record, segment, u32_chunk, uv, v6_file, v6_layout,
+                        v6_records, varint_chunk, SUITE)
 
 
 def read(data: bytes) -> dict:
@@ -372,3 +373,33 @@ def test_place_checks_in_the_order_of_section_12_1():
     body_at = data.index(b"BODY")
     bad = data[:body_at + 5] + b"\x00\x00\x00\x00" + data[body_at + 9:]
     assert read(bad)["error"] == "CRC_MISMATCH"
+
+
+# --- real meshes: the version 5 goldens' records, laid out as version 6 -----------------------------
+
+GOLDENS = sorted(p.name for p in SUITE.glob("valid/*_v5_[0-9].pln"))
+
+
+@pytest.mark.parametrize("name", GOLDENS)
+def test_v5_goldens_as_version_6_read_as_in_version_5(name):
+    """Each version 5 golden (meshes of tests/corpus and trimesh's primitives, written by planefmt) as
+    version 6 (spec_files.v6_records: the records §4.6 makes of its chunks): in PHDR's segment
+    alone, deflated; and a record a BODY chunk, Brotli'd, with an index. Both read as the version 5
+    file does, but for the header's version and the h range, now two binary32 values."""
+    v5 = (SUITE / "valid" / name).read_bytes()
+    want = read(v5)
+    kw, records = v6_records(v5)
+    header = phdr6(**kw)
+    exact_h = all(f32(h) == h for h in kw.get("h_range", ()))
+    layouts = [v6_layout(header, records, [len(records)], [1]),
+               v6_layout(header, records, [0] + [1] * len(records), [0] + [2] * len(records), with_index=True)]
+    for data in layouts:
+        got = read(data)
+        for key in ("objects", "groups", "colours", "metadata", "findings"):
+            assert got[key] == want[key], key
+        assert len(got["planes"]) == len(want["planes"])
+        if exact_h:
+            assert got["planes"] == want["planes"]
+        assert got["header"]["version"] == [6, 0]
+        for key in ("lossy", "coding", "bits", "units", "bbox", "tolerance", "error_bound", "counts"):
+            assert got["header"][key] == want["header"][key], key
