@@ -70,6 +70,7 @@ F32_PLANES = [[f32(x) for x in p] for p in ([0, 0, 0.5], [PI, 0, 0.5], [PI / 2, 
 
 
 def f32_header(**kw) -> bytes:
+    """§5: coding 0 (float32 planes), metre, tolerance and error bound NaN, unless ``kw`` says otherwise."""
     return phdr6(**kw)
 
 

@@ -187,9 +187,6 @@ KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b
 SEGMENT_MAJOR = 6
 RECORD_CHUNKS = (b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA")
 TAG_OBJECT, TAG_PLANES, TAG_GROUP, TAG_COLOURS, TAG_METADATA = 1, 2, 3, 4, 5
-TAG_NAMES = {TAG_OBJECT: "OBJT", TAG_PLANES: "PLNS", TAG_GROUP: "GRUP", TAG_COLOURS: "cOLR",
-             TAG_METADATA: "mETA"}
-INDEXED_TAGS = (TAG_OBJECT, TAG_PLANES, TAG_GROUP)
 FIRST_ANCILLARY_TAG = 128  # tags 128-255: ancillary records, skipped
 CODING_SHIFT, CODING_MASK = 3, 0b11  # version 6: the coding is bits 3-4 of flags
 WIDTH_BITS = 5  # version 6: each width - 1 in 5 bits of a u16
