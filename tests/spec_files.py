@@ -539,3 +539,212 @@ def zero_planes_block(first: int, count: int, method: int = 1) -> bytes:
     """§7.1: ``count`` float32 planes (0, 0, 0) from ``first`` on, compressed with ``method``."""
     raw = bytes(12 * count)
     return uv(first) + uv(count) + bytes([method]) + uv(len(raw)) + pack(raw, method)
+
+
+# --- version 6.0 (§2.2 r32, §4.5 body segments, §4.6 records, §5 compact header, §10.2 index) ----
+
+def r32(x: float) -> bytes:
+    """§2.2: the binary32 bit pattern of ``x``, its 32 bits reversed, as a varint32."""
+    bits = struct.unpack("<I", struct.pack("<f", x))[0]
+    return uv(int(format(bits, "032b")[::-1], 2))
+
+
+def phdr6(*, minor=0, flags=0, coding=0, units=1, bits=(1, 1, 1), h_range=None, bbox=None,
+          tolerance=math.nan, error_bound=math.nan, counts=None, later=b"") -> bytes:
+    """§5, version 6: version, header_size, then flags (the coding in bits 3-4), units, the widths
+    and h range (codings 2 and 3), the bbox (``bbox``: BBOX_KNOWN), tolerance and error bound, the
+    counts (``counts``: COUNTS_KNOWN), and ``later`` header bytes of a newer minor version."""
+    flags |= coding << 3 | (4 if bbox is not None else 0) | (2 if counts is not None else 0)
+    fields = bytes([flags, units])
+    if coding in (2, 3):
+        fields += struct.pack("<H", sum((b - 1) << (5 * k) for k, b in enumerate(bits)))
+        fields += r32(h_range[0]) + r32(h_range[1])
+    if bbox is not None:
+        fields += b"".join(r32(x) for x in bbox)
+    fields += r32(tolerance) + r32(error_bound)
+    if counts is not None:
+        fields += b"".join(uv(n) for n in counts)
+    fields += later
+    return bytes([6, minor]) + uv(len(fields)) + fields
+
+
+def record(tag: int, payload: bytes) -> bytes:
+    """§4.6: tag, length, payload."""
+    return bytes([tag]) + uv(len(payload)) + payload
+
+
+def segment(records, method: int = 0) -> bytes:
+    """§4.5: compression, raw size, the records' bytes stored (0), deflated (1) or Brotli'd (2)."""
+    raw = b"".join(records)
+    return bytes([method]) + uv(len(raw)) + pack(raw, method)
+
+
+def objt6(name: bytes = b"o", parent: int | None = None) -> bytes:
+    """§8 without index: a root object (or a child of ``parent``) without a transform."""
+    return uv(0 if parent is None else parent + 1) + b"\x00" + uv(len(name)) + name
+
+
+def plns6(planes, coding: int = 0) -> bytes:
+    """§7.1, a planes record's payload: count, then float32 (0) or float64 (1) triplets."""
+    return uv(len(planes)) + b"".join(struct.pack("<3f" if coding == 0 else "<3d", *p) for p in planes)
+
+
+def grup6(obj: int, kind: int, body: bytes) -> bytes:
+    """§9.1, a group record's payload: object, kind, the body (§9.2)."""
+    return uv(obj) + bytes([kind]) + body
+
+
+def colr6(group: int, count: int, rgba: bytes) -> bytes:
+    """§10.1, a colours record's payload: group, count (varint32 each), the colours."""
+    return uv(group) + uv(count) + rgba
+
+
+def v6_file(header: bytes, first=None, bodies=(), *, index=None, pend=None, chunks=()) -> bytes:
+    """A version 6 file: PHDR (``header`` and the segment ``first`` after it, if any), a BODY chunk
+    per segment of ``bodies``, other ``chunks`` (type, payload), an iNDX of payload ``index`` (PEND
+    then holds its offset unless ``pend`` says otherwise), PEND."""
+    out = SIGNATURE + u32_chunk(b"PHDR", header + (first or b""))
+    out += b"".join(varint_chunk(b"BODY", s) for s in bodies)
+    out += b"".join(varint_chunk(t, p) for t, p in chunks)
+    if index is not None:
+        if pend is None:
+            pend = struct.pack("<Q", len(out))
+        out += varint_chunk(b"iNDX", index)
+    return out + varint_chunk(b"PEND", b"" if pend is None else pend)
+
+
+def index6(entries) -> bytes:
+    """§10.2, version 6: count, then per entry (chunk offset, raw offset, tag, ordinal) the chunk
+    offset as a difference from the previous entry's, the raw offset, the tag, the ordinal."""
+    out, prev = uv(len(entries)), 0
+    for chunk, raw, tag, ordinal in entries:
+        out += uv(chunk - prev) + uv(raw) + bytes([tag]) + uv(ordinal)
+        prev = chunk
+    return out
+
+
+def _v5_chunks(data: bytes):
+    """§4.1 (version 5): the chunks after the signature as (type, payload): PHDR's length a u32,
+    every later one a varint32."""
+    pos, first, out = 8, True, []
+    while pos < len(data):
+        ctype = data[pos:pos + 4]
+        pos += 4
+        if first:
+            length = struct.unpack_from("<I", data, pos)[0]
+            pos += 4
+            first = False
+        else:
+            length = shift = 0
+            while True:
+                b = data[pos]
+                pos += 1
+                length |= (b & 0x7F) << shift
+                shift += 7
+                if not b & 0x80:
+                    break
+        out.append((ctype, data[pos:pos + length]))
+        pos += length + 4
+    return out
+
+
+class _Payload:
+    """A version 5 payload read front to back, for v6_records."""
+
+    def __init__(self, data: bytes):
+        self.data, self.pos = data, 0
+
+    def take(self, n: int) -> bytes:
+        self.pos += n
+        return self.data[self.pos - n:self.pos]
+
+    def varint(self) -> int:
+        value = shift = 0
+        while True:
+            b = self.take(1)[0]
+            value |= (b & 0x7F) << shift
+            shift += 7
+            if not b & 0x80:
+                return value
+
+    def rest(self) -> bytes:
+        return self.take(len(self.data) - self.pos)
+
+
+def _unpack(method: int, stored: bytes) -> bytes:
+    if method == 2:
+        import brotli
+        return brotli.decompress(stored)
+    return zlib.decompress(stored) if method == 1 else stored
+
+
+def v6_records(v5: bytes):
+    """A valid version 5 file as version 6 parts (Appendix A.6 against §4.6 and §5): the keyword
+    arguments of phdr6 its header holds, and its records, each (tag, payload): an OBJT without its
+    index, a PLNS as count and raw data, a GRUP as object, kind and raw body, a cOLR with varint32
+    group and count, an mETA as it is; iNDX and unknown ancillary chunks are dropped."""
+    chunks = _v5_chunks(v5)
+    h = _Payload(chunks[0][1])
+    _, minor, flags, coding = h.take(4)
+    bits, units = tuple(h.take(3)), h.take(1)[0]
+    kw = {"minor": 0, "flags": flags & 1, "coding": coding, "units": units}
+    if coding >= 2:
+        kw["bits"], kw["h_range"] = bits, struct.unpack("<2d", h.take(16))
+    if flags & 4:
+        kw["bbox"] = struct.unpack("<6f", h.take(24))
+    kw["tolerance"], kw["error_bound"] = struct.unpack("<2f", h.take(8))
+    if flags & 2:
+        kw["counts"] = (h.varint(), h.varint(), h.varint())
+    records = []
+    for ctype, payload in chunks[1:]:
+        c = _Payload(payload)
+        if ctype == b"OBJT":
+            c.varint()
+            records.append((1, c.rest()))
+        elif ctype == b"PLNS":
+            c.varint()
+            count, method = c.varint(), c.take(1)[0]
+            c.varint()
+            records.append((2, uv(count) + _unpack(method, c.rest())))
+        elif ctype == b"GRUP":
+            c.varint()
+            obj, kind, method = c.varint(), *c.take(2)
+            c.varint()
+            records.append((3, uv(obj) + bytes([kind]) + _unpack(method, c.rest())))
+        elif ctype == b"cOLR":
+            group, count = struct.unpack("<II", c.take(8))
+            records.append((4, uv(group) + uv(count) + c.rest()))
+        elif ctype == b"mETA":
+            records.append((5, payload))
+    return kw, records
+
+
+def v6_layout(header: bytes, records, groups, methods, *, with_index=False) -> bytes:
+    """A version 6 file of ``records`` (tag, payload) cut into segments: ``groups`` the number of
+    records of each segment in turn (the first in PHDR), ``methods`` each segment's compression;
+    with an index of every record of tag 1, 2 or 3 (§10.2) if asked."""
+    segments, entries, at = [], [], 0
+    offset = 8 + 12 + len(header)  # where the first BODY chunk will start
+    counters = {1: 0, 2: 0, 3: 0}
+    for k, (n, method) in enumerate(zip(groups, methods)):
+        recs = records[at:at + n]
+        at += n
+        chunk = 8 if k == 0 else offset
+        raw = 0
+        for tag, payload in recs:
+            if tag in counters:
+                entries.append((chunk, raw, tag, counters[tag]))
+                counters[tag] += 1 if tag != 2 else _plane_count(payload)
+            raw += len(record(tag, payload))
+        seg = segment([record(t, p) for t, p in recs], method) if recs or k else b""
+        segments.append(seg)
+        if k == 0:
+            offset += len(seg)
+        else:
+            offset += len(varint_chunk(b"BODY", seg))
+    assert at == len(records)
+    return v6_file(header, segments[0], segments[1:], index=index6(entries) if with_index else None)
+
+
+def _plane_count(payload: bytes) -> int:
+    return _Payload(payload).varint()

@@ -192,7 +192,7 @@ def test_header_checks():
     assert error(pln(CUBE_LIKE, header=phdr(coding=4))) == "UNSUPPORTED_CODING"
     assert error(pln(CUBE_LIKE, header=phdr(up=3))) == "BAD_HEADER_VALUE"
     assert error(pln(CUBE_LIKE, header=phdr(units=8))) == "BAD_HEADER_VALUE"
-    assert error(pln(CUBE_LIKE, header=phdr(major=6))) == "UNSUPPORTED_VERSION"
+    assert error(pln(CUBE_LIKE, header=phdr(major=7))) == "UNSUPPORTED_VERSION"  # 6 is read since 6.0
     # A.5: in a version 4 header units is the unit alone: 0x21 is above 7
     v4 = [(b"OBJT", objt(0)), (b"PLNS", plns([[0.0, 0.0, 1.0]], 0)), (b"GRUP", group(0, 0, [0], b""))]
     assert error(pln(v4, header=phdr(major=4, minor=2, units=1, up=2))) == "BAD_HEADER_VALUE"

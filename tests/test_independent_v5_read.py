@@ -82,3 +82,15 @@ def test_no_references_by_kind_and_version():
     old = (SIGNATURE + header(4, 2) + u32_chunk(b"OBJT", objt(0))
            + u32_chunk(b"GRUP", grup(0, 0, 6, PLANELESS_SHELL)) + u32_chunk(b"PEND", b""))
     assert read(old)["error"] == "BAD_GROUP_STRUCTURE"
+
+
+def test_a_later_colr_of_a_group_replaces_the_earlier_one():
+    # §10.1: the last cOLR of a group applies; the group is listed once, where its first cOLR was
+    planes = [(0.0, 0.0, 1.0)]
+    plns_payload = uv(0) + uv(1) + b"\x00" + uv(12) + struct.pack("<3f", *planes[0])
+    body = uv(1) + uv(0) + b"\x00"  # one reference, plane 0, no role bits
+    colr = lambda group, rgba: struct.pack("<II", group, 1) + bytes(rgba)  # noqa: E731
+    got = read(v5_file((b"PLNS", plns_payload), (b"OBJT", objt(0)), (b"GRUP", grup(0, 0, 0, body)),
+                       (b"GRUP", grup(1, 0, 0, body)), (b"cOLR", colr(0, [1, 2, 3, 4])),
+                       (b"cOLR", colr(1, [9, 9, 9, 9])), (b"cOLR", colr(0, [5, 6, 7, 8]))))
+    assert got["colours"] == [{"group": 0, "rgba": [[5, 6, 7, 8]]}, {"group": 1, "rgba": [[9, 9, 9, 9]]}]

@@ -8,7 +8,7 @@ the Python 3.11 standard library, and for the Brotli payloads of version
 4.0 (compression method 2) the PyPI package `brotli` (1.2 bounds the output
 of each call; with 1.1 the stored bytes are given one at a time), imported only when such a payload is met: files of versions 1.0 to 3.4, and
 4.0 files without Brotli payloads, need nothing else.  It reads versions
-1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2 and 5.0 to 5.2 (pln.md §13: files of major versions 1 to 5,
+1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 to 5.2 and 6.0 (pln.md §13: files of major versions 1 to 6,
 each as its own version defines it).  Its version 3.1 part, the sealed groups of pln-3 §8.8,
 was added later by a session that had seen planefmt's version 3.1 code; its
 version 3.2 part, the shells of pln-3 §8.9, by one that read only the spec
@@ -105,6 +105,22 @@ Mode bit 0's parallelogram is kind 9's.  Reported as kind 9 is.  Kind 13 is a
 kind of 5.2 and later minors of major 5 (UNKNOWN_GROUP_KIND in a 5.0 or 5.1
 file), and like the other shells may have no references.
 
+Version 6.0 (pln.md §2.2, §4.2-§4.6, §5, §7.1, §8, §9.1, §10.1-§10.3 and
+§12.1, added from the 6.0 text before the 6.0 golden files existed) keeps
+version 5's framing and moves what followed the header into body segments:
+the PHDR payload is the version, header_size, the header fields (flags with
+the coding in bits 3-4, units, a u16 of widths and the h range for codings 2
+and 3, the bbox, tolerance and error bound as r32, each binary32's bits
+reversed as a varint32, the counts), then optionally the file's first body
+segment; each BODY chunk is one more.  A segment is compression, raw_size
+and data (pln.md §6, its checks and limits), its raw bytes a sequence of
+records (tag, length, payload) whose payloads are version 5's OBJT, PLNS,
+GRUP, cOLR and mETA payloads without their index, first, compression and
+raw_size fields, read by the same parsers; such a chunk in a version 6 file
+is CHUNK_ORDER.  The index lists each object, planes and group record by
+its chunk's offset (as differences), its offset in the segment's raw bytes,
+its tag and its ordinal.  One segment is held at a time.
+
 This reader reads its input front to back (it works on pipes) and never
 seeks, so it does no random access: MISSING_END (pln-1 §4.4, pln-3 §4.4) is
 a code it never raises; a file whose last chunk is not PEND is TRUNCATED or
@@ -145,7 +161,7 @@ SIGNATURE = bytes([0x89, 0x50, 0x4C, 0x4E, 0x0D, 0x0A, 0x1A, 0x0A])  # §3
 # the versions this reader implements: major -> highest minor it knows
 # (1.0, 2.0, 3.4, 4.2 and 5.2, as pln.md §9.3 says, not §5's 1 for major 5:
 # SPEC_NOTES 62; pln.md §13: a reader of 5.2 reads major versions 1 to 5)
-READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2}
+READER_VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2, 6: 0}
 
 MAX_CHUNK_LENGTH = 2**31 - 1  # §4.1, format maximum
 # pln.md §4.1, version 5: every chunk after PHDR has its length as a minimal
@@ -164,6 +180,16 @@ LIMIT_OBJECTS = 2**24
 READ_BLOCK = 1 << 20  # payloads are read in bounded blocks (§4.1)
 
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
+
+# version 6: the records of the body segments (PHDR's tail and BODY chunks)
+# replace the OBJT, PLNS, GRUP, cOLR and mETA chunks; such a chunk in a
+# version 6 file is CHUNK_ORDER
+SEGMENT_MAJOR = 6
+RECORD_CHUNKS = (b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA")
+TAG_OBJECT, TAG_PLANES, TAG_GROUP, TAG_COLOURS, TAG_METADATA = 1, 2, 3, 4, 5
+FIRST_ANCILLARY_TAG = 128  # tags 128-255: ancillary records, skipped
+CODING_SHIFT, CODING_MASK = 3, 0b11  # version 6: the coding is bits 3-4 of flags
+WIDTH_BITS = 5  # version 6: each width - 1 in 5 bits of a u16
 
 # pln.md §10.3: a keyword is 1-79 bytes of 0x21-0x7E; the values of the keywords it defines
 META_KEYWORD_MAX = 79
@@ -362,6 +388,18 @@ class Cursor:
             raise PlnError("BAD_PAYLOAD",
                            "%s: %s is a varint32 of %d, not below 2^32" % (self.what, what or "field", v))
         return v
+
+    def r32(self, what=None):
+        """Version 6: an r32, a binary32 whose bit pattern, its 32 bits
+        reversed (bit 0 <-> bit 31), is a minimal varint32; widened to
+        binary64 exactly.  A bad varint is BAD_PAYLOAD."""
+        v = self.varint32(what)
+        return struct.unpack("<f", struct.pack("<I", reverse32(v)))[0]
+
+
+def reverse32(v):
+    """The 32 bits of v in reverse order (bit 0 <-> bit 31)."""
+    return int(format(v, "032b")[::-1], 2)
 
 
 def unzigzag(u):
@@ -640,12 +678,14 @@ class Reader:
         self.group_kinds = []
         self.group_skipped = []
         self.colours = []
+        self.colour_slot = {}  # group -> its place in self.colours
         self.metadata = {}
         self.findings = []
         self.chunk_list = []  # (offset, type, ordinal) of OBJT, PLNS, GRUP
         self.index_offset = None  # offset of the iNDX chunk, if seen
         self.after_header = None  # offset of the chunk after PHDR (pln-3 §8.6)
         self.last_was_index = False
+        self.first_segment = b""  # version 6: the body segment in PHDR's payload, if any
 
     # -- input -------------------------------------------------------------
 
@@ -724,22 +764,31 @@ class Reader:
                         raise PlnError("MISSING_HEADER", "first chunk is not PHDR")
                     self.read_header(payload)
                     first = False
+                    if self.major >= SEGMENT_MAJOR and self.first_segment:
+                        self.read_segment(self.first_segment, offset, name)
                     continue
-                if ctype == b"PHDR":
-                    raise PlnError("DUPLICATE_HEADER", "a second PHDR")
+                # pln.md §12.1 item 3.2: after iNDX, a chunk other than PEND
+                # (a PHDR too); in version 6 a chunk of a record's type; a second PHDR
                 if self.last_was_index and ctype != b"PEND":
                     raise PlnError("CHUNK_ORDER", "iNDX is not immediately followed by PEND (§4.3)")
+                if self.major >= SEGMENT_MAJOR and ctype in RECORD_CHUNKS:
+                    raise PlnError("CHUNK_ORDER", "a %s chunk in a version %d file: a record of a body segment"
+                                   % (name, self.major))
+                if ctype == b"PHDR":
+                    raise PlnError("DUPLICATE_HEADER", "a second PHDR")
                 if ctype == b"PEND":
                     self.read_end(payload)
                     if not self.at_eof():
                         raise PlnError("TRAILING_DATA", "bytes after PEND")
                     return
-                if ctype == b"OBJT":
-                    self.read_object(payload, offset)
+                if self.major >= SEGMENT_MAJOR and ctype == b"BODY":
+                    self.read_segment(payload, offset, name)
+                elif ctype == b"OBJT":
+                    self.read_object(payload, (offset, b"OBJT"))
                 elif ctype == b"PLNS":
-                    self.read_planes(payload, offset)
+                    self.read_planes(payload, (offset, b"PLNS"))
                 elif ctype == b"GRUP":
-                    self.read_group(payload, offset)
+                    self.read_group(payload, (offset, b"GRUP"))
                 elif ctype == b"cOLR":
                     self.read_colours(payload)
                 elif ctype == b"mETA":
@@ -754,6 +803,49 @@ class Reader:
                 if e.chunk is None:
                     e.chunk, e.offset = name, offset
                 raise
+
+    def read_segment(self, p, offset, name):
+        """Version 6: a body segment (PHDR's bytes after the header, or a BODY
+        chunk's payload): compression (u8), raw_size (varint32), the data,
+        decompressed as §6 says with its limits; its raw bytes a sequence of
+        whole records, each tag (u8), length (varint32, at most the bytes
+        left in the segment), payload.  A segment that ends inside a record
+        is BAD_PAYLOAD.  Errors name the chunk, its offset and the record's
+        offset in the raw bytes."""
+        c = Cursor(p, "%s body segment" % name)
+        method = c.u8("compression")
+        raw_size = c.varint32("raw_size")
+        raw = decompress(method, raw_size, c.rest(), "%s body segment" % name, self.major)
+        r = Cursor(raw, "%s body segment (raw)" % name)
+        while r.remaining():
+            at = r.pos
+            try:
+                tag = r.u8("record tag")
+                length = r.varint32("record length")
+                if length > r.remaining():
+                    raise PlnError("BAD_PAYLOAD", "record length %d, %d bytes left in the segment"
+                                   % (length, r.remaining()))
+                self.read_record(tag, r.take(length), (offset, at, tag))
+            except PlnError as e:
+                e.message = "record at raw offset %d: %s" % (at, e.message)
+                raise
+
+    def read_record(self, tag, p, entry):
+        """Version 6: a record, read by the parser of the chunk it replaces."""
+        if tag == TAG_OBJECT:
+            self.read_object(p, entry)
+        elif tag == TAG_PLANES:
+            self.read_planes(p, entry)
+        elif tag == TAG_GROUP:
+            self.read_group(p, entry)
+        elif tag == TAG_COLOURS:
+            self.read_colours(p)
+        elif tag == TAG_METADATA:
+            self.read_metadata(p)
+        elif tag >= FIRST_ANCILLARY_TAG:
+            self.finding("UNKNOWN_ANCILLARY_CHUNK")
+        else:
+            raise PlnError("UNKNOWN_CRITICAL_CHUNK", "record tag %d" % tag)
 
     def read_varint_head(self, offset):
         """pln.md §4.1, version 5: the 4-byte type, then the length as a
@@ -814,7 +906,9 @@ class Reader:
         # (pln-2 §5), the compact one of pln-3 §5 for 3 to 5 (pln.md §5;
         # version 5's flags a u8, Appendix A.5); every field is read
         # (BAD_PAYLOAD) before any value is checked
-        if len(p) >= 1 and p[0] >= 3:
+        if len(p) >= 1 and p[0] >= SEGMENT_MAJOR:
+            fields = self.parse_header_v6(p)
+        elif len(p) >= 1 and p[0] >= 3:
             fields = self.parse_header_v3(p)
         else:
             fields = self.parse_header_v1(p)
@@ -934,16 +1028,62 @@ class Reader:
         return (major, minor, flags, coding, bn, bp, bh, units, h_min, h_max,
                 bbox_min, bbox_max, tolerance, error_bound, plane_count, object_count, group_count)
 
+    def parse_header_v6(self, p):
+        """Version 6: version_major, version_minor (u8 each), header_size
+        (varint32: the bytes of the fields that follow, up to and including
+        the counts), then in those bytes flags (u8: bits 0-2 as before, bits
+        3-4 the coding), units (u8), for codings 2 and 3 the widths (u16:
+        each width - 1 in 5 bits, nu, phi, h from bit 0) and h_min, h_max,
+        with BBOX_KNOWN the bbox, then tolerance and error_bound (every
+        value an r32), with COUNTS_KNOWN the three counts.  A header_size
+        past the payload's end, fields that do not fit in header_size, and
+        a bad varint or r32 are BAD_PAYLOAD; header bytes after the fields
+        are a newer minor's and ignored.  The payload's bytes after the
+        header are the file's first body segment (kept in self.first_segment)."""
+        c = Cursor(p, "PHDR")
+        major, minor = c.u8("version_major"), c.u8("version_minor")
+        size = c.varint32("header_size")
+        if size > c.remaining():
+            raise PlnError("BAD_PAYLOAD", "PHDR: header_size %d, %d bytes follow it" % (size, c.remaining()))
+        h = Cursor(c.take(size), "PHDR header fields (header_size %d)" % size)
+        flags = h.u8("flags")
+        units = h.u8("units")
+        coding = (flags >> CODING_SHIFT) & CODING_MASK
+        bn = bp = bh = 0
+        h_min = h_max = 0.0
+        mask = (1 << WIDTH_BITS) - 1
+        if coding in (CODING_QUANTIZED, CODING_PREDICTED):
+            widths = h.u16("widths")
+            bn, bp, bh = [((widths >> (WIDTH_BITS * k)) & mask) + 1 for k in range(3)]
+            h_min, h_max = h.r32("h_min"), h.r32("h_max")
+        bbox_min = bbox_max = None
+        if flags & FLAG_BBOX_KNOWN:
+            bbox = [h.r32("bbox value %d" % k) for k in range(6)]
+            bbox_min, bbox_max = bbox[:3], bbox[3:]
+        tolerance, error_bound = h.r32("tolerance"), h.r32("error_bound")
+        plane_count = object_count = group_count = 0
+        if flags & FLAG_COUNTS_KNOWN:
+            plane_count = h.varint("plane_count")
+            object_count = h.varint32("object_count")
+            group_count = h.varint32("group_count")
+        self.first_segment = c.rest()
+        return (major, minor, flags, coding, bn, bp, bh, units, h_min, h_max,
+                bbox_min, bbox_max, tolerance, error_bound, plane_count, object_count, group_count)
+
     # -- §8.1 objects ------------------------------------------------------
 
-    def read_object(self, p, offset):
+    def read_object(self, p, entry):
         # pln.md §8 checks, in its order: the object limit; the head
         # (BAD_PAYLOAD); name_length; the name and the transform (BAD_PAYLOAD);
         # then index, parent, UTF-8 and the transform's values (BAD_OBJECT)
         if len(self.objects) + 1 > LIMIT_OBJECTS:
             raise PlnError("LIMIT_EXCEEDED", "more than %d objects" % LIMIT_OBJECTS)
         c = Cursor(p, "OBJT")
-        if self.major >= 3:
+        if self.major >= SEGMENT_MAJOR:
+            # version 6: no index, an object's index is its place among the object records
+            index = len(self.objects)
+            parent, flags, name_len = self.read_object_head_v3(c, with_index=False)[1:]
+        elif self.major >= 3:
             index, parent, flags, name_len = self.read_object_head_v3(c)
         else:
             head = c.take(12, "OBJT head")
@@ -979,7 +1119,7 @@ class Reader:
             "parent": None if parent == NO_PARENT else parent,
             "transform": transform,
         })
-        self.chunk_list.append((offset, b"OBJT", index))
+        self.chunk_list.append(entry + (index,))
 
     def read_transform_v4(self, c):
         """pln.md §8, version 4: codes, a 3-byte bit string (§2.1, least
@@ -1003,11 +1143,12 @@ class Reader:
                 m.append(c.f64s(1, "transform value %d (f64)" % i)[0])
         return m + [0.0, 0.0, 0.0, 1.0]
 
-    def read_object_head_v3(self, c):
+    def read_object_head_v3(self, c, with_index=True):
         """pln-3 §8.1: index, parent (varint32, 0 for a root, else the parent's
         index + 1), flags (u8), name_length (varint); returned with the parent
-        in the numbering of §8.1 (NO_PARENT for a root)."""
-        index = c.varint32("object index")
+        in the numbering of §8.1 (NO_PARENT for a root).  Version 6: no
+        index (returned as None)."""
+        index = c.varint32("object index") if with_index else None
         parent = c.varint32("parent")
         flags = c.u8("flags")
         name_len = c.varint("name_length")
@@ -1015,8 +1156,14 @@ class Reader:
 
     # -- §7 plane table ----------------------------------------------------
 
-    def read_planes(self, p, offset):
-        if self.major >= 3:
+    def read_planes(self, p, entry):
+        if self.major >= SEGMENT_MAJOR:
+            # version 6: count, then the raw triplet data, its size the rest of the record
+            c = Cursor(p, "PLNS")
+            count = c.varint32("count")
+            first, method, stored = len(self.planes), 0, c.rest()
+            raw_size = len(stored)
+        elif self.major >= 3:
             first, count, method, raw_size, stored = self.read_planes_head_v3(p)
         else:
             if len(p) < 20:
@@ -1055,7 +1202,7 @@ class Reader:
             self.add_quantized_planes(data, count, base)
         else:
             self.add_predicted_planes(data, count, base)
-        self.chunk_list.append((offset, b"PLNS", first))
+        self.chunk_list.append(entry + (first,))
 
     def read_planes_head_v3(self, p):
         """pln-3 §7: first (varint), count (varint32), compression (u8),
@@ -1156,8 +1303,15 @@ class Reader:
 
     # -- §8.2 part groups --------------------------------------------------
 
-    def read_group(self, p, offset):
-        if self.major >= 3:
+    def read_group(self, p, entry):
+        if self.major >= SEGMENT_MAJOR:
+            # version 6: object, kind, then the body, stored (the segment is compressed)
+            c = Cursor(p, "GRUP")
+            obj = c.varint32("object")
+            kind = c.u8("kind")
+            index, method, stored = len(self.groups), 0, c.rest()
+            raw_size = len(stored)
+        elif self.major >= 3:
             index, obj, kind, method, raw_size, stored = self.read_group_head_v3(p)
         else:
             if len(p) < 16:
@@ -1213,7 +1367,7 @@ class Reader:
         self.group_refcounts.append(m)
         self.group_kinds.append(kind)
         self.group_skipped.append(skipped)
-        self.chunk_list.append((offset, b"GRUP", index))
+        self.chunk_list.append(entry + (index,))
 
     def read_copy(self, c, index, refs, bounding):
         """pln.md §9.15, kind 11: one varint s, the index of the source group,
@@ -1926,20 +2080,28 @@ class Reader:
         # pln.md §10.1, checks in its order: a payload that ends inside the
         # head or the colours (BAD_PAYLOAD); bytes after them, a group not
         # read yet, a count other than its ref_count (BAD_COLOURS)
-        if len(p) < 8:
-            raise PlnError("BAD_PAYLOAD", "cOLR payload of %d bytes, under 8" % len(p))
-        group, count = u32(p, 0), u32(p, 4)
-        # version 4: a payload of exactly 12 bytes is one colour for every
-        # reference, whatever the count; in 1.0 to 3.4 (Appendix A) always
-        # count x 4 bytes, so 12 bytes with a count above 1 end inside them
-        one_colour = self.major >= 4 and len(p) == 12
+        if self.major >= SEGMENT_MAJOR:
+            # version 6: group and count are varint32s
+            c = Cursor(p, "cOLR")
+            group, count = c.varint32("group"), c.varint32("count")
+            p = c.rest()
+        else:
+            if len(p) < 8:
+                raise PlnError("BAD_PAYLOAD", "cOLR payload of %d bytes, under 8" % len(p))
+            group, count = u32(p, 0), u32(p, 4)
+            p = p[8:]
+        # version 4: a payload of exactly 12 bytes (version 6: 4 bytes after
+        # the head) is one colour for every reference, whatever the count; in
+        # 1.0 to 3.4 (Appendix A) always count x 4 bytes, so 12 bytes with a
+        # count above 1 end inside them
+        one_colour = self.major >= 4 and len(p) == 4
         if not one_colour:
-            if len(p) < 8 + 4 * count:
-                raise PlnError("BAD_PAYLOAD", "cOLR payload of %d bytes ends inside %d colours"
+            if len(p) < 4 * count:
+                raise PlnError("BAD_PAYLOAD", "cOLR: %d bytes after the head end inside %d colours"
                                % (len(p), count))
-            if len(p) > 8 + 4 * count:
+            if len(p) > 4 * count:
                 raise PlnError("BAD_COLOURS", "%d bytes after the %d colours"
-                               % (len(p) - 8 - 4 * count, count))
+                               % (len(p) - 4 * count, count))
         if group >= len(self.groups):
             raise PlnError("BAD_COLOURS", "colours for group %d, %d defined" % (group, len(self.groups)))
         if count != self.group_refcounts[group]:
@@ -1950,10 +2112,16 @@ class Reader:
             raise PlnError("BAD_COLOURS", "a cOLR of count 0 without its one colour, for group %d" % group)
         if one_colour:
             # reported as the per-reference form would be (SPEC_NOTES 28); count 0: the one colour
-            rgba = [list(p[8:12]) for _ in range(max(count, 1))]
+            rgba = [list(p[0:4]) for _ in range(max(count, 1))]
         else:
-            rgba = [list(p[8 + 4 * i:12 + 4 * i]) for i in range(count)]
-        self.colours.append({"group": group, "rgba": rgba})
+            rgba = [list(p[4 * i:4 + 4 * i]) for i in range(count)]
+        # pln.md §10.1: a later cOLR of a group replaces the one before; the
+        # group is listed once, where its first cOLR was
+        if group in self.colour_slot:
+            self.colours[self.colour_slot[group]]["rgba"] = rgba
+        else:
+            self.colour_slot[group] = len(self.colours)
+            self.colours.append({"group": group, "rgba": rgba})
 
     # -- pln.md §10.3 metadata ---------------------------------------------
 
@@ -1985,6 +2153,9 @@ class Reader:
     def read_index(self, p, offset):
         if self.index_offset is not None:
             raise PlnError("CHUNK_ORDER", "a second iNDX (§4.3)")
+        if self.major >= SEGMENT_MAJOR:
+            self.read_index_v6(p, offset)
+            return
         if len(p) < 4:
             raise PlnError("BAD_PAYLOAD", "iNDX payload of %d bytes, under 4" % len(p))
         count = u32(p, 0)
@@ -2011,6 +2182,39 @@ class Reader:
         for i, (e, actual) in enumerate(zip(entries, self.chunk_list)):
             if e != actual:
                 raise PlnError("BAD_INDEX", "entry %d is %r, the chunk is %r" % (i, e, actual))
+        self.index_offset = offset
+        self.last_was_index = True
+
+    def read_index_v6(self, p, offset):
+        """Version 6: count (varint), then per record of tag 1, 2 or 3 in
+        file order: chunk_offset (varint, the offset of the PHDR or BODY
+        chunk whose segment holds the record, as a difference from the
+        previous entry's, the first from 0), raw_offset (varint, the
+        record's offset in that segment's raw bytes), tag (u8), ordinal
+        (varint).  A payload that ends inside them, or a bad varint:
+        BAD_PAYLOAD; bytes after them, or any entry other than the record
+        this reader read there: BAD_INDEX."""
+        c = Cursor(p, "iNDX")
+        count = c.varint("count")
+        # each entry takes at least 4 bytes: a count the payload cannot hold is not allocated for
+        if count > c.remaining() // 4:
+            raise PlnError("BAD_PAYLOAD", "iNDX count %d, %d bytes of entries" % (count, c.remaining()))
+        entries = []
+        chunk_offset = 0
+        for i in range(count):
+            chunk_offset += c.varint("entry %d chunk_offset" % i)
+            raw_offset = c.varint("entry %d raw_offset" % i)
+            tag = c.u8("entry %d tag" % i)
+            ordinal = c.varint("entry %d ordinal" % i)
+            entries.append((chunk_offset, raw_offset, tag, ordinal))
+        if c.remaining():
+            raise PlnError("BAD_INDEX", "%d bytes after the %d iNDX entries" % (c.remaining(), count))
+        if len(entries) != len(self.chunk_list):
+            raise PlnError("BAD_INDEX", "%d entries for %d object, planes and group records"
+                           % (len(entries), len(self.chunk_list)))
+        for i, (e, actual) in enumerate(zip(entries, self.chunk_list)):
+            if e != actual:
+                raise PlnError("BAD_INDEX", "entry %d is %r, the record is %r" % (i, e, actual))
         self.index_offset = offset
         self.last_was_index = True
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 to 5.2), written from
+"""A container-level reader of .pln files (versions 1.0, 2.0, 3.0 to 3.4, 4.0 to 4.2, 5.0 to 5.2, 6.0), written from
 spec/pln.md alone (no planefmt, no construct, none of the other readers or spec documents).
 
     python conformance/independent/plnspec.py FILE
@@ -55,6 +55,12 @@ the previous explicit corner); mode bit 0's parallelogram is kind 9's. Kind 13 i
 minors of major 5 (UNKNOWN_GROUP_KIND in 5.0 and 5.1, skipped in major 3 and 4 files of a newer minor) and
 may have no references.
 
+Version 6.0 was added from the 6.0 text of §2.2 (r32), §4.2-§4.6 (BODY chunks, body segments and
+records), §5 (the compact header: header_size, the coding in flags, r32 values), §7.1, §8, §9.1,
+§10.1-§10.2 and §12.1: the records of every segment (the PHDR payload after the header fields, and
+each BODY chunk) are read by the parsers of the chunks they replace, without the fields version 6
+drops; such a chunk in a version 6 file is CHUNK_ORDER. Versions 1.0 to 5.2 are read as before.
+
 Section numbers (§) are those of spec/pln.md. Where the spec left a choice to this reader, the
 comment says "SPEC_NOTES n", the item of conformance/independent/SPEC_NOTES.md that records it.
 """
@@ -82,8 +88,11 @@ OBJECT_LIMIT = 1 << 24
 KNOWN_CHUNKS = {b"PHDR", b"OBJT", b"PLNS", b"GRUP", b"cOLR", b"mETA", b"iNDX", b"PEND"}
 # §10.3: the values of the keywords the spec defines
 META_VALUES = {"up_axis": ("Y", "Z")}
-NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.2, 5.2" (SPEC_NOTES 62, 66)
-UP_AXES = {1: "Y", 2: "Z"}  # §5, version 5: bits 4-5 of units (0 not said, 3 BAD_HEADER_VALUE)
+NEWEST_MINOR = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2, 6: 0}  # §9.3: "for this document: 1.0, 2.0, 3.4, 4.2, 5.2" (SPEC_NOTES 62, 66)
+UP_AXES = {1: "Y", 2: "Z"}
+# §4.2, §4.6: version 6's records, which replace the chunks of versions 1 to 5 (such a chunk in a
+# version 6 file is CHUNK_ORDER), by tag; tags 128-255 are ancillary
+RECORD_TYPES = {1: b"OBJT", 2: b"PLNS", 3: b"GRUP", 4: b"cOLR", 5: b"mETA"}  # §5, version 5: bits 4-5 of units (0 not said, 3 BAD_HEADER_VALUE)
 
 # §7.2: the f32 and f64 values nearest to pi and 2 pi.
 PI_F32 = np.frombuffer(struct.pack("<I", 0x40490FDB), "<f4")[0]
@@ -170,6 +179,12 @@ class Cursor:
 
     def varints(self, n: int, what: str) -> list[int]:
         return [self.varint(what) for _ in range(n)]
+
+
+def r32(c: Cursor, what: str) -> float:
+    """§2.2: a varint32 whose 32 bits, reversed, are a binary32 value (widened exactly)."""
+    v = c.varint32(what)
+    return struct.unpack("<f", struct.pack("<I", int(f"{v:032b}"[::-1], 2)))[0]
 
 
 def unzigzag(z: int) -> int:
@@ -363,6 +378,7 @@ class Reader:
         self.h_range = (0.0, 0.0)
         self.counts: dict | None = None
         self.phdr_length = 0
+        self.rest = b""  # version 6: the PHDR payload after the header fields, the first body segment
         self.planes: list[list[float]] = []
         self.objects: list[dict] = []
         self.groups: list[dict] = []
@@ -424,20 +440,27 @@ class Reader:
                 fail("MISSING_HEADER", repr(ctype))
             if after_index and ctype != b"PEND":
                 fail("CHUNK_ORDER", f"{ctype!r} after iNDX")
+            v6 = self.header is not None and self.major >= 6
+            if v6 and ctype in RECORD_TYPES.values():
+                fail("CHUNK_ORDER", f"{ctype!r}: a record of a body segment in version 6")
             if ctype == b"PHDR" and self.header is not None:
                 fail("DUPLICATE_HEADER")
-            if ctype not in KNOWN_CHUNKS and not ctype[0] & 0x20:
+            if (ctype not in KNOWN_CHUNKS and not (v6 and ctype == b"BODY")) and not ctype[0] & 0x20:
                 fail("UNKNOWN_CRITICAL_CHUNK", repr(ctype))
             # payload
             if ctype == b"PHDR":
                 self.phdr(payload)
                 self.phdr_length = length
+                if self.major >= 6 and self.rest:
+                    self.segment(self.rest, offset)
+            elif ctype == b"BODY":
+                self.segment(payload, offset)
             elif ctype == b"OBJT":
-                self.objt(payload, offset)
+                self.objt(payload, (offset, b"OBJT"))
             elif ctype == b"PLNS":
-                self.plns(payload, offset)
+                self.plns(payload, (offset, b"PLNS"))
             elif ctype == b"GRUP":
-                self.grup(payload, offset)
+                self.grup(payload, (offset, b"GRUP"))
             elif ctype == b"cOLR":
                 self.colr(payload)
             elif ctype == b"mETA":
@@ -490,10 +513,12 @@ class Reader:
         if len(p) < 2:
             fail("BAD_PAYLOAD", "PHDR under 2 bytes")
         major, minor = p[0], p[1]
-        if major not in (1, 2, 3, 4, 5):
+        if major not in (1, 2, 3, 4, 5, 6):
             fail("UNSUPPORTED_VERSION", f"{major}.{minor}")
         self.major, self.minor = major, minor
-        if major >= 5:
+        if major >= 6:
+            self.phdr_v6(p)
+        elif major >= 5:
             self.phdr_v5(p)
         elif major >= 3:  # A.5 (4) and A.3 (3): the same layout
             self.phdr_v3(p)
@@ -501,6 +526,68 @@ class Reader:
             self.phdr_v1(p)
         if minor > NEWEST_MINOR[major]:
             self.finding("NEWER_MINOR_VERSION")
+
+    def phdr_v6(self, p: bytes):
+        """§5, version 6: header_size, then within it flags (the coding in bits 3-4), units, the
+        widths (u16, each less one in 5 bits) and h range (two r32) of codings 2 and 3, the bbox
+        (six r32) with BBOX_KNOWN, tolerance and error bound (r32), the counts with COUNTS_KNOWN;
+        what header_size holds past them is skipped, and the payload after it is the first body
+        segment (self.rest), read after the header's checks (§5 step 9)."""
+        c = Cursor(p, 2)
+        size = c.varint32("header_size")
+        if size > c.left():
+            fail("BAD_PAYLOAD", f"header_size {size}, {c.left()} bytes after it")
+        h = Cursor(p, c.pos, c.pos + size)  # the header fields: reading past them is BAD_PAYLOAD
+        self.rest = p[c.pos + size:]
+        flags = h.u8("flags")
+        units = h.u8("units")
+        coding = flags >> 3 & 3
+        bits, h_range = (0, 0, 0), None
+        if coding >= 2:
+            widths = h.u16("widths")
+            bits = tuple((widths >> shift & 31) + 1 for shift in (0, 5, 10))
+            h_range = (r32(h, "h_min"), r32(h, "h_max"))
+        bbox = [r32(h, "bbox") for _ in range(6)] if flags & 4 else None
+        tolerance = r32(h, "tolerance")
+        error_bound = r32(h, "error_bound")
+        counts = None
+        if flags & 2:
+            counts = {"planes": h.varint("plane_count"), "objects": h.varint32("object_count"),
+                      "groups": h.varint32("group_count")}
+        self.header_checks(flags, coding, bits, units, h_range, bbox, tolerance, error_bound, counts)
+
+    # §4.5, §4.6 (version 6)
+    def segment(self, p: bytes, offset: int):
+        """A body segment: compression, raw size, the data (§6, its checks and limits); its raw
+        bytes whole records, each tag, length (at most the bytes left), payload, read by the
+        section of its tag. Ancillary tags (128-255) are skipped; others unknown, critical."""
+        c = Cursor(p)
+        method = c.u8("the segment's compression")
+        raw_size = c.varint32("the segment's raw size")
+        raw = decompress(method, raw_size, p[c.pos:], self.major)
+        r = Cursor(raw)
+        while r.left():
+            at = r.pos
+            tag = r.u8("a record's tag")
+            length = r.varint32("a record's length")
+            if length > r.left():
+                fail("BAD_PAYLOAD", f"record at {at} of {length} bytes, {r.left()} left in the segment")
+            payload = r.take(length)
+            kind = RECORD_TYPES.get(tag)
+            if kind is None:
+                if tag < 128:
+                    fail("UNKNOWN_CRITICAL_CHUNK", f"record tag {tag} at {at}")
+                self.finding("UNKNOWN_ANCILLARY_CHUNK")
+            elif kind == b"OBJT":
+                self.objt(payload, (offset, at, tag))
+            elif kind == b"PLNS":
+                self.plns(payload, (offset, at, tag))
+            elif kind == b"GRUP":
+                self.grup(payload, (offset, at, tag))
+            elif kind == b"cOLR":
+                self.colr(payload)
+            else:
+                self.meta(payload)
 
     def phdr_v5(self, p: bytes):
         """§5, version 5: an 8-byte fixed part, flags a u8, the up axis in bits 4-5 of units."""
@@ -597,9 +684,12 @@ class Reader:
         }
 
     # §7
-    def plns(self, p: bytes, offset: int):
+    def plns(self, p: bytes, key: tuple):
         c = Cursor(p)
-        if self.major >= 3:
+        if self.major >= 6:  # §7.1: count and the raw data, its size the rest of the record
+            count = c.varint32("count")
+            first, method, raw_size = len(self.planes), 0, c.left()
+        elif self.major >= 3:
             first = c.varint("first")
             count = c.varint32("count")
             method = c.u8("compression")
@@ -632,7 +722,7 @@ class Reader:
             planes = self.quantized_planes(raw, count)
         else:
             planes = self.predicted_planes(raw, count)
-        self.chunks.append((offset, b"PLNS", first))
+        self.chunks.append(key + (first,))
         self.planes.extend(planes)
 
     @staticmethod
@@ -707,12 +797,13 @@ class Reader:
         return self.dequantize(qn, qp, qh)
 
     # §8 and A.1
-    def objt(self, p: bytes, offset: int):
+    def objt(self, p: bytes, key: tuple):
         if len(self.objects) >= OBJECT_LIMIT:
             fail("LIMIT_EXCEEDED", "objects")
         c = Cursor(p)
         if self.major >= 3:
-            index = c.varint32("index")
+            # §8, version 6: no index; an object's is its place among the object records
+            index = len(self.objects) if self.major >= 6 else c.varint32("index")
             parent = c.varint32("parent")
             flags = c.u8("flags")
             name_length = c.varint("name_length")
@@ -741,7 +832,7 @@ class Reader:
             # A.3: the last row is checked in 1.0 to 3.4; in 4.0 it is not stored (always 0 0 0 1)
             if not all(math.isfinite(v) for v in transform) or transform[12:] != [0.0, 0.0, 0.0, 1.0]:
                 fail("BAD_OBJECT", f"transform {transform}")
-        self.chunks.append((offset, b"OBJT", index))
+        self.chunks.append(key + (index,))
         self.objects.append({"name": name, "parent": parent, "transform": transform})
 
     @staticmethod
@@ -767,6 +858,8 @@ class Reader:
 
     # §9
     def kinds(self) -> set[int]:
+        if self.major >= 6:
+            return set(range(14))  # §9.3: kinds 0-13 in 6.0
         if self.major >= 5:
             # §9.3: kinds 0-11 in 5.0, 0-12 in 5.1, 0-13 in 5.2 (and later)
             return set(range(12 + (self.minor >= 1) + (self.minor >= 2)))
@@ -777,9 +870,13 @@ class Reader:
             return set(range(5 + min(self.minor, 4)))  # §9.3: 3.1 adds kind 5, 3.2 kind 6, 3.3 kind 7, 3.4 kind 8
         return set(range(5))
 
-    def grup(self, p: bytes, offset: int):
+    def grup(self, p: bytes, key: tuple):
         c = Cursor(p)
-        if self.major >= 3:
+        if self.major >= 6:  # §9.1: object, kind, the body (stored: the segment is compressed)
+            obj = c.varint32("object")
+            kind = c.u8("kind")
+            index, method, raw_size = len(self.groups), 0, c.left()
+        elif self.major >= 3:
             index = c.varint32("index")
             obj = c.varint32("object")
             kind = c.u8("kind")
@@ -830,7 +927,7 @@ class Reader:
             group["source"], skipped = self.copy(b, index, refs, roles)
             if skipped:
                 self.finding("SKIPPED_GROUP_KIND")
-        self.chunks.append((offset, b"GRUP", index))
+        self.chunks.append(key + (index,))
         self.groups.append(group)
         self.group_refs.append(len(refs))
         self.group_roles.append(roles)
@@ -1474,8 +1571,11 @@ class Reader:
     # §10.1
     def colr(self, p: bytes):
         c = Cursor(p)
-        group, count = c.u32("the cOLR head"), c.u32("the cOLR head")
-        one = self.major >= 4 and len(p) == 12  # version 4: one colour every reference takes
+        if self.major >= 6:  # §10.1: group and count varint32
+            group, count = c.varint32("the colours' group"), c.varint32("the colours' count")
+        else:
+            group, count = c.u32("the cOLR head"), c.u32("the cOLR head")
+        one = self.major >= 4 and c.left() == 4  # version 4: one colour every reference takes
         if one:
             rgba = c.take(4, "the colour")
         else:  # A: in 1.0 to 3.4 always count x 4 bytes
@@ -1492,7 +1592,13 @@ class Reader:
             colours = [list(rgba) for _ in range(max(count, 1))]
         else:
             colours = [list(rgba[4 * i:4 * i + 4]) for i in range(count)]
-        self.colours.append({"group": group, "rgba": colours})
+        # §10.1: the last cOLR of a group applies, listed where the group's first was
+        for entry in self.colours:
+            if entry["group"] == group:
+                entry["rgba"] = colours
+                break
+        else:
+            self.colours.append({"group": group, "rgba": colours})
 
     # §10.3 (added with that section, from its text)
     def meta(self, p: bytes):
@@ -1519,6 +1625,9 @@ class Reader:
     # §10.2
     def indx(self, p: bytes, offset: int):
         c = Cursor(p)
+        if self.major >= 6:
+            self.indx_v6(c)
+            return
         count = c.u32("the index count")
         raw = c.take(16 * count, "the index entries")
         if c.left():
@@ -1536,6 +1645,22 @@ class Reader:
                 fail("BAD_INDEX", f"type {ctype!r}")
         if [tuple(e) for e in entries] != self.chunks:
             fail("BAD_INDEX", "entries do not match the chunks read")
+
+    def indx_v6(self, c: Cursor):
+        """§10.2, version 6: count, then per record of tag 1-3 its chunk's offset (summed from
+        differences), its raw offset, its tag and its ordinal, which must be what was read."""
+        count = c.varint("the index count")
+        if 4 * count > c.left():
+            fail("BAD_PAYLOAD", f"index count {count}, {c.left()} bytes of entries")
+        entries, chunk = [], 0
+        for _ in range(count):
+            chunk += c.varint("an entry's chunk offset")
+            entries.append((chunk, c.varint("an entry's raw offset"), c.u8("an entry's tag"),
+                            c.varint("an entry's ordinal")))
+        if c.left():
+            fail("BAD_INDEX", "bytes after the entries")
+        if entries != self.chunks:
+            fail("BAD_INDEX", "entries do not match the records read")
 
     # §4.4 and A.1
     def pend(self, p: bytes):
