@@ -21,9 +21,8 @@ from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, TREE_KINDS, UP_A
                     GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
 from .shellfields import _decode_shell, _decode_shell_tree
 from .shellwalk import WALK_KINDS, decode_shell_walk, shell_kind_data
+from .versions import VERSIONS
 
-#: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2}
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3), 5: (0, 1, 2, 3)}
 KNOWN_KINDS = frozenset(int(k) for k in GroupKind)
