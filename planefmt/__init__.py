@@ -12,7 +12,8 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from .codec import decode_mesh, decode_scene, encode_mesh, encode_scene, salvage_scene
-    from .container.chunks import Limits, chunk_bytes
+    from .container.chunks import chunk_bytes
+    from .container.limits import Limits
     from .errors import (CODES, ChecksumError, ConversionError, FormatError, GeometryError, LimitError,
                          PlnError, PlnWarning, SkippedGroupsWarning, TruncatedError, VersionError)
     from .model import (UP_AXES, UP_AXIS, Coding, Colours, GroupKind, Header, Mesh, Metadata, Node,
@@ -26,7 +27,8 @@ __version__ = "0.1.0"
 #: planefmt and must not pay for numpy and construct (container, model), nor the codec's scipy (which a
 #: reader that only walks the container, ``pln info``, does not need either).
 _HOMES = {
-    **dict.fromkeys(("Limits", "chunk_bytes"), "container.chunks"),
+    "Limits": "container.limits",
+    "chunk_bytes": "container.chunks",
     **dict.fromkeys(("CODES", "ChecksumError", "ConversionError", "FormatError", "GeometryError", "LimitError",
                      "PlnError", "PlnWarning", "SkippedGroupsWarning", "TruncatedError", "VersionError"), "errors"),
     **dict.fromkeys(("UP_AXES", "UP_AXIS", "Coding", "Colours", "GroupKind", "Header", "Mesh", "Metadata", "Node",

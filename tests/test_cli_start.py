@@ -1,7 +1,7 @@
 """Issue 55: a command imports only what it uses. ``pln --version``, ``pln info`` and ``pln validate
 --no-geometry`` load neither the converters' trimesh nor usd-core (pxr), nor the codec and its scipy;
-``pln --version`` not even numpy. Checked by the modules a fresh interpreter holds after ``main()``, not
-by time."""
+``pln --version`` not even numpy or construct. Checked by the modules a fresh interpreter holds after
+``main()``, not by time."""
 
 from __future__ import annotations
 
@@ -53,8 +53,8 @@ def pln_files(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     return files
 
 
-def test_version_imports_no_numpy_and_no_converter(tmp_path: Path) -> None:
-    assert loaded(tmp_path, "--version") & {*CONVERTERS, *GEOMETRY, "numpy"} == set()
+def test_version_imports_no_numpy_no_construct_and_no_converter(tmp_path: Path) -> None:
+    assert loaded(tmp_path, "--version") & {*CONVERTERS, *GEOMETRY, "numpy", "construct"} == set()
 
 
 @pytest.mark.parametrize("command", [["info"], ["info", "--json"], ["info", "--salvage"],
