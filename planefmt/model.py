@@ -17,8 +17,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from enum import IntEnum
+from typing import TYPE_CHECKING
 
-import numpy as np
+if TYPE_CHECKING:  # numpy in annotations and one method only: the command line's parsers (``pln --version``)
+    import numpy as np  # use the model's names without loading it
 
 
 class Coding(IntEnum):
@@ -77,6 +79,9 @@ class GroupKind(IntEnum):
 #: of their gate (§9.17).
 TREE_KINDS = (GroupKind.SHELL_TREE, GroupKind.SHELL_TREE_PARALLELOGRAM, GroupKind.SHELL_WALK,
               GroupKind.SHELL_WALK_MULTI, GroupKind.SHELL_WALK_REFLECT, GroupKind.SHELL_WALK_LATER)
+#: The kinds of shell groups, which the encoder chooses between by size once their corners are known
+#: (:data:`planefmt.codec.choosing.SHELL_LAYOUTS`).
+SHELL_KINDS = (GroupKind.SHELL, *TREE_KINDS)
 
 
 #: BSP tree leaf tokens in version 1.0's numbering (spec Appendix A.1), which the model uses for every
@@ -132,6 +137,8 @@ class Header:
     @property
     def diagonal(self) -> float:
         """Length of the bounding-box diagonal in model units (NaN if no bbox)."""
+        import numpy as np
+
         if self.bbox is None:
             return math.nan
         return float(np.linalg.norm(self.bbox[1] - self.bbox[0]))

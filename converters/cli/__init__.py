@@ -24,7 +24,7 @@ EXIT_OK, EXIT_FINDINGS, EXIT_BAD_INPUT = 0, 1, 2
 def version_line() -> str:
     """``pln --version``: the package's version and the format versions its reader knows."""
     from planefmt import __version__
-    from planefmt.container.records import VERSIONS
+    from planefmt.container.versions import VERSIONS
 
     newest = f"{max(VERSIONS)}.{VERSIONS[max(VERSIONS)]}"
     return f"pln {__version__} (planefmt; reads .pln {min(VERSIONS)}.0-{newest}, writes {newest})"
@@ -85,8 +85,9 @@ def _hint(exc: Exception, args: argparse.Namespace) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    # The subcommands import numpy, trimesh and planefmt (about 0.3 s): a Ctrl-C or SIGTERM then
-    # ends the command as one later would, not with an import traceback or an aborted extension.
+    # Building the parser imports every subcommand's module and planefmt's errors, model and chunk framing
+    # (their own numpy, trimesh or codec only when they run): a Ctrl-C or SIGTERM then ends the command as
+    # one later would, not with an import traceback or an aborted extension.
     try:
         with interrupts.handled():
             parser = build_parser()

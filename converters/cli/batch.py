@@ -18,20 +18,28 @@ from __future__ import annotations
 import argparse
 import contextlib
 import os
-import secrets
 import shutil
 import sys
 import time
+from typing import TYPE_CHECKING
 
 from planefmt.errors import PlnError
 
-from . import engines, ledger, remote, sources
+from . import ledger, remote
 from .progress import RunBar
+
+# The engines (subprocess, threads) and the sources (pathlib) are imported by a batch run only: every
+# command builds the parser of ``pln convert``, whose options this module adds, ``pln --version`` too.
+if TYPE_CHECKING:
+    from . import sources
 
 
 def run(args: argparse.Namespace, opts: dict) -> int:
+    import secrets
+
     from planefmt_converters import registry
 
+    from . import engines, sources
     from .convert import _refuse_conflicts, refuse_protected
 
     on_dask = args.engine == "dask" or (args.engine is None and args.scheduler is not None)

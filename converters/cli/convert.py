@@ -25,7 +25,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from planefmt.container.chunks import Limits
+from planefmt.container.limits import Limits
 from planefmt.errors import GeometryError, PlnError
 from planefmt_converters import interrupts
 from planefmt_converters.cli import limits

@@ -11,14 +11,17 @@ import json
 import math
 import sys
 from collections import Counter
+from typing import TYPE_CHECKING
 
 from planefmt import errors
-from planefmt.codec import SHELL_KINDS
-from planefmt.container import reader, salvage
-from planefmt.container.chunks import Limits
-from planefmt.model import GroupKind, Metadata, ObjectRecord, PartGroup, PlaneBlock
+from planefmt.model import SHELL_KINDS, GroupKind, Metadata, ObjectRecord, PartGroup, PlaneBlock
 
 from . import limits
+
+# The reader and salvage (numpy, construct) are imported where a file is read: every command builds this
+# module's parser, ``pln --version`` too.
+if TYPE_CHECKING:
+    from planefmt.container.chunks import Limits
 
 #: Kinds this version of planefmt names; a newer minor version's kind is shown by number.
 KINDS = frozenset(int(k) for k in GroupKind)
@@ -77,6 +80,8 @@ class _Summary:
 
 def describe_salvaged(source: str, caps: Limits | None = None) -> dict:
     """Like :func:`describe` for a damaged file: what salvage recovered, and the losses."""
+    from planefmt.container import salvage
+
     got = salvage.salvage(sys.stdin.buffer if source == "-" else source, limits=caps)
     summary = _Summary()
     for rec in got.records:
@@ -91,6 +96,8 @@ def describe_salvaged(source: str, caps: Limits | None = None) -> dict:
 def describe(source: str, caps: Limits | None = None) -> dict:
     """Everything ``pln info`` shows, as plain JSON-ready data (memory bounded by one chunk and ``caps``,
     the reader's limits of spec §12.4)."""
+    from planefmt.container import reader
+
     summary = _Summary()
     with reader.open(source, retain_planes=False, limits=caps) as r:
         for rec in r:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import argparse
 
-from planefmt.container.chunks import Limits
+from planefmt.container.limits import Limits
 
 #: Each option and the :class:`Limits` field it sets.
 OPTIONS = {"--max-triangles": "max_triangles", "--max-vertices": "max_vertices", "--max-planes": "max_planes"}

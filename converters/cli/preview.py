@@ -12,8 +12,6 @@ from __future__ import annotations
 import argparse
 import sys
 
-import numpy as np
-
 from planefmt.errors import PlnError
 from planefmt.model import UP_AXES
 
@@ -37,6 +35,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
     from planefmt import codec
     from planefmt.container import reader
     from planefmt.geometry.planes import transform_points

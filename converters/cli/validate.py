@@ -6,9 +6,6 @@ import argparse
 import json
 import sys
 
-from planefmt.codec import validate
-from planefmt.container.validate import has_errors
-
 from . import limits
 
 
@@ -22,7 +19,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    findings = validate(args.file, geometry=not args.no_geometry, limits=limits.limits_of(args))
+    from planefmt.container.validate import has_errors
+
+    if args.no_geometry:  # the container's checks alone (the codec's with geometry=False): scipy not imported
+        from planefmt.container.validate import validate
+    else:
+        from planefmt.codec import validate
+    findings = validate(args.file, limits=limits.limits_of(args))
     ok = not has_errors(findings)
     if args.json:
         json.dump({"file": args.file, "valid": ok, "findings": [f.as_dict() for f in findings]}, sys.stdout,

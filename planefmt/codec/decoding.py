@@ -26,7 +26,7 @@ from ..groups.patches import decode_patch_groups, first_references, repeat_faces
 from ..groups.sealed import decode_sealed
 from ..groups.shells import Shell, decode_shell
 from ..groups.solids import decode_bsp_group
-from ..model import TREE_KINDS, Coding, GroupKind, Header, Mesh, Quantization
+from ..model import SHELL_KINDS, Coding, GroupKind, Header, Mesh, Quantization
 
 
 class GroupLike(Protocol):
@@ -177,9 +177,6 @@ DECODERS: dict[int, Callable[[np.ndarray, GroupLike, object, "PlaneError"], Deco
     GroupKind.SHELL_WALK_REFLECT: decode_shell_group,
     GroupKind.SHELL_WALK_LATER: decode_shell_group,
 }
-#: The kinds of shell groups, which the encoder chooses between by size once their corners are known
-#: (:data:`planefmt.codec.choosing.SHELL_LAYOUTS`).
-SHELL_KINDS = (GroupKind.SHELL, *TREE_KINDS)
 
 
 @dataclass(frozen=True)

@@ -12,9 +12,8 @@ import numpy as np
 from . import schema
 from ..errors import FormatError, PlnError
 from ..model import Coding, Header, Quantization, Units
+from .versions import VERSIONS
 
-#: Major versions read, each with the newest minor version this reader knows.
-VERSIONS = {1: 0, 2: 0, 3: 4, 4: 2, 5: 2, 6: 0}
 
 
 def _parse(struct: cs.Construct, payload: bytes, what: str):

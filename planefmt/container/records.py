@@ -13,7 +13,7 @@ import construct as cs
 import numpy as np
 
 from . import quantize, schema, varint
-from .headers import VERSIONS, _f32_toward, _f32_up, _parse, decode_header6, encode_header6
+from .headers import _f32_toward, _f32_up, _parse, decode_header6, encode_header6
 from .budget import Budget, Charge
 from .chunks import Limits
 from .compression import SHELL_TREE_LEVEL, pack, unpack
@@ -22,6 +22,7 @@ from ..model import (BSP_IN, BSP_MAX_SPLIT, BSP_OUT, NO_PARENT, TREE_KINDS, UP_A
                     GroupKind, Header, Metadata, ObjectRecord, PartGroup, PlaneBlock, Quantization, Units)
 from .shellfields import _decode_shell, _decode_shell_tree
 from .shellwalk import WALK_KINDS, decode_shell_walk, shell_kind_data
+from .versions import VERSIONS
 
 #: Triplet codings each major version allows (spec §5, §7.4; Appendix A.1).
 CODINGS = {1: (0, 1, 2), 2: (0, 1, 2, 3), 3: (0, 1, 2, 3), 4: (0, 1, 2, 3), 5: (0, 1, 2, 3), 6: (0, 1, 2, 3)}
