@@ -207,11 +207,7 @@ def assembled(case: ValidCase, header: Header) -> bytes:
             layout.append((schema.PLNS, records.encode_planes(planes, op.triplets, header, case.compress)))
             planes += len(op.triplets)
         elif isinstance(op, Group):
-            rec = PartGroup(groups, op.obj, op.kind, np.array(op.refs, dtype=np.uint32), _role_bits(op),
-                            cells=_cells(op), tree=_tree(op), extra=op.extra, vertex_planes=_vertex_planes(op),
-                            facets=_facets(op), shell=op.shell)
-            if groups in copied:
-                rec = PartGroup(groups, op.obj, int(GroupKind.COPY), rec.refs, rec.bounding, source=copied[groups])
+            rec = _group_record(op, groups, copied)
             layout.append((schema.GRUP, records.encode_group(rec, case.compress, header.version[0])))
             groups += 1
         elif isinstance(op, Colour):
@@ -224,6 +220,16 @@ def assembled(case: ValidCase, header: Header) -> bytes:
     if case.edit is not None:
         layout = case.edit(layout)
     return frame(finish(layout, case.index, header.version[0]))
+
+
+def _group_record(op: Group, index: int, copied: dict[int, int]) -> PartGroup:
+    """Group ``index`` of a case as its record: a copy (kind 11) of its source where the case copies it."""
+    rec = PartGroup(index, op.obj, op.kind, np.array(op.refs, dtype=np.uint32), _role_bits(op),
+                    cells=_cells(op), tree=_tree(op), extra=op.extra, vertex_planes=_vertex_planes(op),
+                    facets=_facets(op), shell=op.shell)
+    if index in copied:
+        return PartGroup(index, op.obj, int(GroupKind.COPY), rec.refs, rec.bounding, source=copied[index])
+    return rec
 
 
 def items_v6(case: ValidCase, header: Header) -> list[tuple]:
@@ -240,11 +246,7 @@ def items_v6(case: ValidCase, header: Header) -> list[tuple]:
             items.append((schema.TAG_PLANES, records.encode_planes(planes, op.triplets, header, case.compress)))
             planes += len(op.triplets)
         elif isinstance(op, Group):
-            rec = PartGroup(groups, op.obj, op.kind, np.array(op.refs, dtype=np.uint32), _role_bits(op),
-                            cells=_cells(op), tree=_tree(op), extra=op.extra, vertex_planes=_vertex_planes(op),
-                            facets=_facets(op), shell=op.shell)
-            if groups in copied:
-                rec = PartGroup(groups, op.obj, int(GroupKind.COPY), rec.refs, rec.bounding, source=copied[groups])
+            rec = _group_record(op, groups, copied)
             items.append((schema.TAG_GROUP, records.encode_group(rec, case.compress, 6)))
             groups += 1
         elif isinstance(op, Colour):

@@ -481,12 +481,7 @@ class Reader:
         if not 0 <= k < len(groups):
             raise PlnError(f"no part group {k}; the file has {len(groups)}", code="BAD_INDEX", file=self.name)
         pos = groups[k]
-        # A shallow copy shares the file but starts from an empty plane table and object list.
-        sub = copy.copy(self)
-        sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
-        sub._payloads, sub._offsets, sub._sources = {}, {}, {}
-        sub.budget = Budget(self.limits)  # one group's output, not the file's
-        sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
+        sub = self._fresh()
         stream = ChunkStream(self._fp, file=self.name, limits=self.limits, compact=self._compact)
         for i in np.flatnonzero(np.isin(types[: pos + 1], [schema.OBJT, schema.PLNS])).tolist() + [int(pos)]:
             offset = int(entries["offset"][i])
@@ -501,6 +496,16 @@ class Reader:
         return record
 
 
+    def _fresh(self) -> "Reader":
+        """A shallow copy that shares the file but starts from an empty plane table and object list, its
+        budget one group's output, not the file's."""
+        sub = copy.copy(self)
+        sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
+        sub._payloads, sub._offsets, sub._sources = {}, {}, {}
+        sub.budget = Budget(self.limits)
+        sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
+        return sub
+
     def _group6(self, k: int, entries: list[segments.Entry]) -> PartGroup:
         """Group ``k`` of a version 6 file through its index: the object and planes records before it and
         its own, each segment they are in read and decompressed once."""
@@ -508,11 +513,7 @@ class Reader:
         if not 0 <= k < len(groups):
             raise PlnError(f"no part group {k}; the file has {len(groups)}", code="BAD_INDEX", file=self.name)
         pos = groups[k]
-        sub = copy.copy(self)
-        sub.objects, sub._table, sub._plane_count, sub._group_refs = [], np.empty((0, 3)), 0, {}
-        sub._payloads, sub._offsets, sub._sources = {}, {}, {}
-        sub.budget = Budget(self.limits)
-        sub.findings, sub.retain_planes, sub.index_offset, sub._listed = [], True, None, []
+        sub = self._fresh()
         sub.record_stats, sub.record_counts = Counter(), Counter()
         wanted = [i for i in range(pos) if entries[i][2] in (schema.TAG_OBJECT, schema.TAG_PLANES)] + [pos]
         record = None
