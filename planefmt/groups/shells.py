@@ -204,14 +204,15 @@ def encode_shell(plan: ShellPlan, omega: np.ndarray, h: np.ndarray, budget: floa
         if span / step >= MAX_GRID:
             raise GeometryError(f"a shell spans {span:g} model units, more than {MAX_GRID:.3g} steps of "
                                 f"{step:g} (the budget)", code="DEGENERATE_GEOMETRY")
+        joined = []
         for shift in _SHIFTS:
             origin = _f32_down(q.min(axis=0) - shift * step)
-            grid = _apart(q, np.rint((q - origin) / step).astype(np.int64), origin, step, budget)
-            if _distinct(grid):
+            grid, distinct = _apart(q, np.rint((q - origin) / step).astype(np.int64), origin, step, budget)
+            if distinct:
                 break
+            joined.append((origin, grid))
         else:
-            origin = _f32_down(q.min(axis=0))
-            grid = _apart(q, np.rint((q - origin) / step).astype(np.int64), origin, step, budget)
+            origin, grid = joined[0]
     return Shell(explicit=explicit, vertex_planes=triple[named], grid=grid, origin=origin, step=step,
                  facets=plan.facets)
 
@@ -230,18 +231,20 @@ _SHIFTS = np.array([[0.0, 0.0, 0.0], [0.5, 0.0, 0.0], [0.0, 0.5, 0.0], [0.0, 0.0
                     [0.5, 0.25, 0.75], [0.25, 0.5, 0.25]])
 
 
-def _distinct(grid: np.ndarray) -> bool:
-    return len(np.unique(np.ascontiguousarray(grid).view(np.dtype((np.void, 24))).reshape(-1))) == len(grid)
+def _rows(grid: np.ndarray) -> np.ndarray:
+    """Each row of an (n, 3) int64 ``grid`` as one 24-byte value, for sorting and searching whole rows."""
+    return np.ascontiguousarray(grid).view(np.dtype((np.void, 24))).reshape(-1)
 
 
 #: Rounds of :func:`_apart`: each settles the corners that wanted distinct free points.
 _APART_ROUNDS = 8
 
 
-def _apart(points: np.ndarray, grid: np.ndarray, origin: np.ndarray, step: float, budget: float) -> np.ndarray:
+def _apart(points: np.ndarray, grid: np.ndarray, origin: np.ndarray, step: float,
+           budget: float) -> tuple[np.ndarray, bool]:
     """``grid`` (the nearest grid point of each of ``points``) with corners that round onto one point
     moved apart: all but the nearest of them to a free neighbouring point within ``budget`` of their
-    source, where there is one.
+    source, where there is one; and whether every corner then has a point of its own.
 
     Distinct corners on one point are joined by every reader that welds by position, which the encoder
     refuses (a closed source must stay closed so welded); it used to refuse the whole grid and retry at
@@ -250,23 +253,23 @@ def _apart(points: np.ndarray, grid: np.ndarray, origin: np.ndarray, step: float
     than the tolerance asks. Moved corners stay within the budget, so the bound holds as before; where
     no free point is near enough, the corners stay joined and the caller's check still sees them.
     """
-    rows = lambda g: np.ascontiguousarray(g).view(np.dtype((np.void, 24))).reshape(-1)  # noqa: E731
     grid = grid.copy()
-    for _ in range(_APART_ROUNDS):
-        _, first, inverse, count = np.unique(rows(grid), return_index=True, return_inverse=True, return_counts=True)
-        inverse = inverse.reshape(-1)
+    for rounds in range(_APART_ROUNDS + 1):
+        taken, inverse, count = np.unique(_rows(grid), return_inverse=True, return_counts=True)
         if (count == 1).all():
+            return grid, True
+        if rounds == _APART_ROUNDS:
             break
+        inverse = inverse.reshape(-1)
         # Of the corners on one point, the nearest keeps it.
         gap = np.linalg.norm(origin + step * grid - points, axis=1)
         order = np.lexsort((gap, inverse))
         keeps = np.zeros(len(grid), dtype=bool)
         keeps[order[np.r_[True, inverse[order][1:] != inverse[order][:-1]]]] = True
         movers = np.flatnonzero(~keeps)
-        taken = np.sort(rows(grid))
         cand = grid[movers, None, :] + _NEIGHBOURS[None, :, :]
         near = np.linalg.norm(origin + step * cand - points[movers, None, :], axis=2) <= budget
-        flat = rows(cand.reshape(-1, 3))
+        flat = _rows(cand.reshape(-1, 3))
         at = np.minimum(np.searchsorted(taken, flat), len(taken) - 1)
         free = (taken[at] != flat).reshape(near.shape)
         ok = near & free
@@ -276,9 +279,9 @@ def _apart(points: np.ndarray, grid: np.ndarray, origin: np.ndarray, step: float
         pick = np.argmax(ok, axis=1)
         movers, chosen = movers[has], cand[np.flatnonzero(has), pick[has]]
         # Two movers that chose one point: the first takes it, the other tries again next round.
-        _, once = np.unique(rows(chosen), return_index=True)
+        _, once = np.unique(_rows(chosen), return_index=True)
         grid[movers[once]] = chosen[once]
-    return grid
+    return grid, False
 
 
 def _f32_down(x):
