@@ -763,6 +763,16 @@ PATCH_REPEATED_OPS = (Obj("open box"),
 PATCH_REPEATED_MANY_OPS = PATCH_REPEATED_OPS[:2] + (
     Group(0, GroupKind.PSEUDO_CONVEX, (0,) * 12 + (1, 2, 3, 4, 5), bounding=(16,)),)
 
+#: copies_v4_2's scene, written again as version 6.0 (copies_v6_0): a shell walk cube and a convex cube,
+#: each placed twice, the shell walk's copy with a colour of its own.
+COPIES_SCENE = (Obj("walk"), Planes(CUBE), Group(0, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
+                Obj("walk twin", None, translation(2.0, 0.0, 0.0)),
+                Group(1, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
+                Colour(1, np.tile(np.array([[200, 30, 30, 255]], dtype=np.uint8), (6, 1))),
+                Obj("solid", None, translation(0.0, 3.0, 0.0)), Group(2, GroupKind.CONVEX, tuple(range(6))),
+                Obj("solid twin", None, translation(2.0, 3.0, 0.0)), Group(3, GroupKind.CONVEX, tuple(range(6))))
+
+
 CASES = [
     ValidCase("cube_float32", "the unit cube of spec/pln-1.md §12, float32, metres, with index: the 401 bytes "
               "printed there",
@@ -995,12 +1005,7 @@ CASES = [
     ValidCase("copies_v4_2", "version 4.2: a shell walk cube and a convex cube, each placed twice: the second of "
               "each a copy (kind 11) of the first, in an object translated by (2, 0, 0), the shell walk's copy with "
               "a colour of its own", V42_CUBE,
-              (Obj("walk"), Planes(CUBE), Group(0, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
-               Obj("walk twin", None, translation(2.0, 0.0, 0.0)),
-               Group(1, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
-               Colour(1, np.tile(np.array([[200, 30, 30, 255]], dtype=np.uint8), (6, 1))),
-               Obj("solid", None, translation(0.0, 3.0, 0.0)), Group(2, GroupKind.CONVEX, tuple(range(6))),
-               Obj("solid twin", None, translation(2.0, 3.0, 0.0)), Group(3, GroupKind.CONVEX, tuple(range(6)))),
+              COPIES_SCENE,
               decoded_bbox=True),
     ValidCase("walk_planeless_v5_0", "version 5.0: the icosphere of shell_walk_sphere_v4_1 as a shell walk without "
               "references (spec §9.2: m = 0) in a file without planes (coding 0, no PLNS), its grid in f32 (origin 0, "
@@ -1175,11 +1180,6 @@ CASES = [
     ValidCase("copies_v6_0", "version 6.0: the scene of copies_v4_2 (a shell walk cube and a convex cube, each "
               "placed twice, the second of each a copy, kind 11, of the first) with an index, uncompressed",
               V60_CUBE,
-              (Obj("walk"), Planes(CUBE), Group(0, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
-               Obj("walk twin", None, translation(2.0, 0.0, 0.0)),
-               Group(1, GroupKind.SHELL_WALK, tuple(range(6)), shell=TREE_CUBE),
-               Colour(1, np.tile(np.array([[200, 30, 30, 255]], dtype=np.uint8), (6, 1))),
-               Obj("solid", None, translation(0.0, 3.0, 0.0)), Group(2, GroupKind.CONVEX, tuple(range(6))),
-               Obj("solid twin", None, translation(2.0, 3.0, 0.0)), Group(3, GroupKind.CONVEX, tuple(range(6)))),
+              COPIES_SCENE,
               decoded_bbox=True),
 ]
