@@ -11,7 +11,7 @@ import numpy as np
 import planefmt
 from planefmt.model import Coding, GroupKind, Header
 
-from corpus import CORPUS
+from corpus import CORPUS, ROOT
 
 PLN = [sys.executable, "-m", "planefmt_converters.cli"]
 
@@ -112,3 +112,17 @@ def _address_space(limit: int):
     def cap() -> None:
         resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
     return cap
+
+
+def test_info_aligns_record_and_chunk_columns_around_an_unknown_tag():
+    """A record of an unknown tag is named "tag 200", longer than a chunk's four letters: every row of
+    the chunk and record tables puts its counts in the same columns (conformance's segments_v6_0 holds
+    one, beside an unknown ancillary chunk)."""
+    path = ROOT / "conformance" / "valid" / "segments_v6_0.pln"
+    p = subprocess.run([*PLN, "info", str(path)], capture_output=True, text=True)
+    assert p.returncode == 0, p.stderr
+    lines = p.stdout.splitlines()
+    rows = lines[lines.index("chunks:") + 1:]
+    rows = [r for r in rows if r.startswith("  ")]
+    assert any(r.lstrip().startswith("tag 200") for r in rows) and any("bOGU" in r for r in rows)
+    assert len({r.index(" x ") for r in rows}) == 1, "\n".join(rows)

@@ -214,12 +214,14 @@ def render(info: dict) -> str:
         per = "-" if src["bytes_per_triangle"] is None else f"{src['bytes_per_triangle']:.2f}"
         lines.append(f"source:      {src['file']}: {src['triangles']} triangles, {per} bytes per triangle")
     lines.append("chunks:")
+    # an unknown record is named "tag N": pad every name to the widest so the columns stay aligned
+    width = max(map(len, [*info["chunks"], *info.get("records", {})]), default=4)
     for name, c in sorted(info["chunks"].items(), key=lambda kv: -kv[1]["bytes"]):
-        lines.append(f"  {name}  {c['count']:>8} x  {c['bytes']:>12} bytes")
+        lines.append(f"  {name:<{width}}  {c['count']:>8} x  {c['bytes']:>12} bytes")
     if info.get("records"):
         lines.append("records (in body segments, raw bytes):")
         for name, c in sorted(info["records"].items(), key=lambda kv: -kv[1]["bytes"]):
-            lines.append(f"  {name}  {c['count']:>8} x  {c['bytes']:>12} bytes")
+            lines.append(f"  {name:<{width}}  {c['count']:>8} x  {c['bytes']:>12} bytes")
     for f in info["findings"]:
         lines.append(f"{f['severity']}: {f['code']}: {f['message']}")
     for loss in info.get("losses", []):
