@@ -104,15 +104,16 @@ def _geometry(groups: list[planefmt.PartGroup], objects: list[planefmt.ObjectRec
             "vertices": len(used), "triangles": len(d.triangles),
             "area": float(np.linalg.norm(cross, axis=1).sum() / 2), "area_vector": (cross.sum(axis=0) / 2).tolist(),
             "volume": float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6) if g.kind in SOLID_KINDS else None,
-            "bbox": [v.min(axis=0).tolist(), v.max(axis=0).tolist()],
+            # a group planefmt decodes to no triangle (a hostile file can hold one) has no bbox
+            "bbox": [v.min(axis=0).tolist(), v.max(axis=0).tolist()] if len(v) else None,
         })
         m = worlds[g.object]
         corners.append(v @ m[:3, :3].T + m[:3, 3])
     if not complete:
         return None
     world = None
-    if corners:
-        p = np.concatenate(corners)
+    p = np.concatenate(corners) if corners else np.empty((0, 3))
+    if len(p):
         world = [p.min(axis=0).tolist(), p.max(axis=0).tolist()]
     return {"world_bbox": world, "groups": summaries}
 

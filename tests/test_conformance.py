@@ -4,6 +4,7 @@ spec/pln-1.md §12 and spec/pln-3.md §12)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import re
@@ -300,3 +301,22 @@ def test_independent_reader_written_from_the_spec_passes_the_suite():
                            cwd=ROOT, timeout=3600)
         assert p.returncode == 0, p.stdout[-2000:]
         assert p.stdout.splitlines()[-1] == f"{len(CASES)} passed, 0 failed"
+
+
+def test_adapter_describes_a_group_that_decodes_to_no_triangle(monkeypatch):
+    """A group planefmt decodes to no triangle (hostile files reach this; the mutation differential
+    found four) is summarised with no bbox instead of a ValueError from the min of nothing, and adds
+    nothing to the world bbox."""
+    from planefmt import codec
+
+    real = codec.decode_group
+
+    def empty(planes, group, label, error):
+        d = real(planes, group, label, error)
+        return dataclasses.replace(d, triangles=d.triangles[:0], triangle_ref=d.triangle_ref[:0])
+
+    monkeypatch.setattr(codec, "decode_group", empty)
+    summary = adapter.describe(str(SUITE / "valid" / "cube_v6_0.pln"))["geometry"]
+    assert summary["world_bbox"] is None
+    assert summary["groups"] == [{"vertices": 0, "triangles": 0, "area": 0.0, "area_vector": [0.0, 0.0, 0.0],
+                                  "volume": 0.0, "bbox": None}]
