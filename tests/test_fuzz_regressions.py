@@ -66,6 +66,8 @@ def test_short_fuzzing_run(tmp_path):
     # A shell that forks it (no exec: the command is not the last) gives it a fresh count.
     # timeout: a hang guard far above normal (the run takes under a minute), not a verdict on speed.
     p = subprocess.run(["sh", "-c", '"$@"; exit $?', "sh", *fuzzer], capture_output=True, text=True, timeout=3600)
-    tail = "\n".join(p.stderr.splitlines()[-25:])
+    # Enough lines for a whole Python stack (innermost frame first) and what a library printed above
+    # it: a run that once exited inside halfspace.intersect was cut below its innermost frames.
+    tail = "\n".join(p.stderr.splitlines()[-100:])
     assert p.returncode == 0, f"fuzzer found a crash; input saved under {tmp_path}:\n{tail}"
     assert "Done" in p.stderr and f"Done {runs} runs" in p.stderr, tail
