@@ -215,9 +215,10 @@ def dumps(obj, indent: int = 0) -> str:
 Item = tuple
 
 
-def split() -> Item:
-    """Marks where a new body segment starts (a BODY chunk)."""
-    return (schema.BODY, b"")
+def split(empty: bool = False) -> Item:
+    """Marks where a new body segment starts (a BODY chunk); ``empty``: a BODY chunk whose segment holds
+    no record comes first (spec §4.5 allows one; a writer never needs it)."""
+    return (schema.BODY, b"empty" if empty else b"")
 
 
 def forced_segment(raw: bytes, method: int) -> bytes:
@@ -269,6 +270,9 @@ def assemble_v6(header: Header, items: list[Item], *, index: bool = False, compr
     for item in items:
         if item[0] == schema.BODY:
             flush()
+            if item[1]:
+                out.extend(chunk_bytes(schema.BODY, forced_segment(b"", methods[written] if methods else 0), True))
+                written += 1
         elif isinstance(item[0], bytes):
             flush()
             out.extend(chunk_bytes(item[0], item[1], True))

@@ -81,7 +81,10 @@ class Chunk:
 
 @dataclass(frozen=True)
 class Segment:
-    """Version 6: a new body segment starts here, in a BODY chunk (spec §4.5; assembled cases only)."""
+    """Version 6: a new body segment starts here, in a BODY chunk (spec §4.5; assembled cases only);
+    ``empty``: after a segment of no record."""
+
+    empty: bool = False
 
 
 @dataclass(frozen=True)
@@ -255,7 +258,7 @@ def items_v6(case: ValidCase, header: Header) -> list[tuple]:
         elif isinstance(op, Meta):
             items.append((schema.TAG_METADATA, records.encode_metadata(Metadata(op.key, op.value))))
         elif isinstance(op, Segment):
-            items.append(split())
+            items.append(split(op.empty))
         else:
             items.append((op.type[0], op.payload) if len(op.type) == 1 else (op.type, op.payload))
     return items
@@ -1168,6 +1171,12 @@ CASES = [
                Chunk(bytes([200]), b"a record to skip"), Group(2, GroupKind.CONVEX, tuple(range(6)))),
               compress=True, decoded_bbox=True, assembled_only=True, methods=(2, 1, 0),
               findings=("UNKNOWN_ANCILLARY_CHUNK",)),
+    ValidCase("empty_segment_v6_0", "version 6.0: a BODY segment of no record (raw size 0, stored with deflate) "
+              "between two that hold the cube and its twin, which a reader accepts as an empty sequence of records "
+              "(spec §4.5)", V60_CUBE,
+              (Obj("cube"), Planes(CUBE), Group(0, GroupKind.CONVEX, tuple(range(6))), Segment(empty=True),
+               Obj("cube twin", None, translation(2.0, 0.0, 0.0)), Group(1, GroupKind.CONVEX, tuple(range(6)))),
+              compress=True, decoded_bbox=True, assembled_only=True, methods=(0, 1, 0)),
     ValidCase("index_v6_0", "version 6.0: the scene of scene_transforms_v4_0 (transforms entry by entry, one colour "
               "for a group, one per reference for another) written by planefmt.Writer with an index: one segment in "
               "PHDR, iNDX entries whose chunk offsets are all 8 (differences 0 after the first)", V60_CUBE,
