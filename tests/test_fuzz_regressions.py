@@ -71,3 +71,32 @@ def test_short_fuzzing_run(tmp_path):
     tail = "\n".join(p.stderr.splitlines()[-100:])
     assert p.returncode == 0, f"fuzzer found a crash; input saved under {tmp_path}:\n{tail}"
     assert "Done" in p.stderr and f"Done {runs} runs" in p.stderr, tail
+
+
+def test_a_run_stretched_by_load_is_not_cut_short(tmp_path):
+    """The run has no wall-clock limit (-timeout=0), however long one input takes on a loaded machine:
+    the fuzzer is stopped for 2.5 s (SIGSTOP) while it runs its seeds, and then finishes. atheris took
+    -timeout=0 as 0 s and ended such a run with "fuzz target exited", which the suite's run hit now and
+    then under load."""
+    pytest.importorskip("atheris")
+    import signal
+
+    corpus = tmp_path / "corpus"
+    subprocess.run([sys.executable, str(ROOT / "fuzz" / "seeds.py"), str(corpus)], check=True)
+    fuzzer = [sys.executable, str(ROOT / "fuzz" / "fuzz_pln.py"), "-runs=1", "-seed=1", "-timeout=0",
+              "-max_len=4096", f"-artifact_prefix={tmp_path}/", str(corpus)]
+    p = subprocess.Popen(["sh", "-c", '"$@"; exit $?', "sh", *fuzzer], stderr=subprocess.PIPE, text=True,
+                         start_new_session=True)
+    lines = []
+    for line in p.stderr:
+        lines.append(line)
+        if line.startswith("INFO: seed corpus:"):  # from here on it runs one seed after another
+            break
+    time.sleep(0.5)
+    os.killpg(p.pid, signal.SIGSTOP)
+    time.sleep(2.5)
+    os.killpg(p.pid, signal.SIGCONT)
+    lines += p.stderr.read().splitlines(keepends=True)
+    tail = "".join(lines[-40:])
+    assert p.wait(timeout=600) == 0, tail
+    assert "fuzz target exited" not in tail and "Done" in tail, tail
