@@ -12,7 +12,7 @@ For each file of ``tests/corpus`` (or the paths given) and each tolerance of ``-
    and USDZ (in this process, through the CLI's ``main``), the error bound it prints kept ("error at most B of the diagonal": the bound ``pln info``
    reports for the .pln file, plus float32 rounding for a float32 output, issue 50 item 5);
 3. each output reloaded through the project's readers (trimesh for OBJ, PLY and glTF, pxr for USD) and
-   compared with the source. The .pln file's own decoding (flattened) is measured against the source
+   compared with the source (glTF's in metres and Y up, as written). The .pln file's own decoding (flattened) is measured against the source
    once: the certified two-sided Hausdorff distance must be at most the error bound recorded in its
    header. An output with the decoding's triangles and vertex order is then within that bound plus its
    largest vertex displacement from the decoding (corresponding vertices at most d apart put every point
@@ -250,7 +250,8 @@ def check(path: str, timeout: float, work: str, tolerance: float = DEFAULT_TOLER
     """The row of one file at one tolerance, its failures and the .pln file's bytes (None if not written)."""
     import planefmt
     from planefmt.geometry.hausdorff import hausdorff
-    from planefmt_converters.assemble import flatten, reoriented
+    from planefmt.model import Units
+    from planefmt_converters.assemble import flatten, in_metres, reoriented
 
     source = source or _source(path)
     read = source["read"]
@@ -274,7 +275,6 @@ def check(path: str, timeout: float, work: str, tolerance: float = DEFAULT_TOLER
     # The header's bound is relative to the decoded scene's diagonal (spec §5); two certified measures of
     # one distance differ by their rounding margins (planefmt.geometry.hausdorff: 64 eps of the magnitude).
     box = float(np.linalg.norm(np.ptp(dec.vertices[np.unique(dec.faces)], axis=0)))
-    rounding = FLOAT32_ROUNDING * float(np.abs(v).max())
     margin = 128.0 * np.finfo(np.float64).eps * (float(np.abs(v).max()) + diag)
     limit = max(bound * box + margin, MEASURE_FLOOR * diag)
     floored = limit > bound * box + margin
@@ -293,34 +293,40 @@ def check(path: str, timeout: float, work: str, tolerance: float = DEFAULT_TOLER
         if why is None:
             again, dropped = _read(out)
             back = flatten(again)
-            # A format with an up axis of its own (glTF: Y) holds the decoding turned into it.
+            # A format with units and an up axis of its own (glTF: metres, Y up) holds the decoding
+            # scaled and turned into them: distances there are ``k`` times the source's.
+            metres = in_metres if again.units == Units.METRE else (lambda scene: scene)
             dec, src = (flatten(decoded), source["mesh"]) if again.up_axis is None else (
-                flatten(reoriented(decoded, again.up_axis)), flatten(reoriented(read, again.up_axis)))
+                flatten(reoriented(metres(decoded), again.up_axis)),
+                flatten(reoriented(metres(read), again.up_axis)))
+            k = (float(np.linalg.norm(np.ptp(dec.vertices[np.unique(dec.faces)], axis=0))) / box) if box > 0 else 1.0
+            near = FLOAT32_ROUNDING * float(np.abs(src.vertices).max())
             if back.vertices.shape == dec.vertices.shape and np.array_equal(back.faces, dec.faces):
                 moved = float(np.linalg.norm(back.vertices - dec.vertices, axis=1).max(initial=0.0))
-                if moved > rounding:
-                    why = f"vertices moved {moved / diag:.2g} of the diagonal from the decoding"
+                if moved > near:
+                    why = f"vertices moved {moved / (k * diag):.2g} of the diagonal from the decoding"
             else:
                 # Re-indexed (welded or split vertices): its distance from the decoding, certified.
-                q = hausdorff(back.vertices, back.faces, dec.vertices, dec.faces, target=rounding,
+                q = hausdorff(back.vertices, back.faces, dec.vertices, dec.faces, target=near,
                               max_pieces=DECODING_PIECES)
                 moved = q.upper
-                if not (q.certified and q.upper <= rounding):
+                if not (q.certified and q.upper <= near):
                     moved = np.inf
                     # Not shown within float32 rounding of the decoding: then held to what the header
                     # promises, the requested tolerance, against the source itself.
-                    allowed = max(header_tolerance, MEASURE_FLOOR) * box
+                    allowed = max(header_tolerance, MEASURE_FLOOR) * k * box
                     s = hausdorff(back.vertices, back.faces, src.vertices, src.faces, target=allowed,
                                   max_pieces=DECODING_PIECES)
                     if s.certified and s.upper <= allowed:
                         loose.append(ext)
                     else:
-                        why = (f"{q.lower / diag:.2g}..{q.upper / diag:.2g} of the diagonal from the decoding, "
-                               f"over float32 rounding {rounding / diag:.2g}, and {s.lower / diag:.2g}.."
-                               f"{s.upper / diag:.2g} from the source, over the tolerance {header_tolerance:g}")
+                        d = k * diag
+                        why = (f"{q.lower / d:.2g}..{q.upper / d:.2g} of the diagonal from the decoding, "
+                               f"over float32 rounding {near / d:.2g}, and {s.lower / d:.2g}.."
+                               f"{s.upper / d:.2g} from the source, over the tolerance {header_tolerance:g}")
             if why is None and ext in SCENES and [n.name for n in again.nodes if n.mesh is not None] != names:
                 why = "node names differ"
-            why = why or _within_bound(_printed_bound(said), moved, decoding, box, back, src)
+            why = why or _within_bound(_printed_bound(said), moved, k * decoding, k * box, back, src)
             why = why or _issue35(out, back, dropped, source, work, reencode)
         cells.append(("ok*" if ext in loose else "ok") if why is None else f"FAIL: {why}")
         if why is not None:
