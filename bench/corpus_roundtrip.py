@@ -43,8 +43,8 @@ one (issue 50 item 7).
 Draco-14's error (``d14``): the certified Hausdorff distance of DracoPy's 14-bit decoding from the
 welded source over its diagonal, as ``bench/at_draco.py`` measures it (at least 1e-12, the measure's
 resolution), read from ``--draco-cache``
-(``bench/draco-errors.json``, keyed by the path relative to ``--bench-corpus`` or else to the
-repository, and the bits), measured and added there where missing or of another DracoPy version.
+(``bench/draco-errors.json``, keyed by the path relative to the bench corpus, ``../shared/bench-corpus``,
+or else to the repository, and the bits), measured and added there where missing or of another DracoPy version.
 
 A row per file and tolerance: the .pln bytes and encode seconds, whether the source is closed (as read;
 ``closed+`` once welded too), then ``ok`` or what failed per format (``re.pln``: the .pln file
@@ -114,8 +114,12 @@ def label(path: str) -> str:
 
 
 def _draco_key(path: str) -> str:
-    name = label(path)
-    return (name[len("bench:"):] if name.startswith("bench:") else name) + f"@{DRACO_BITS}"
+    """The cache's key of ``path``: relative to the bench corpus (as ``bench/at_draco.py`` keys it), else to
+    the repository (``tests/corpus/...``), and the bits."""
+    full = os.path.abspath(path)
+    bench = os.path.abspath(BENCH_CORPUS)
+    rel = os.path.relpath(full, bench if full.startswith(bench + os.sep) else ROOT)
+    return f"{rel}@{DRACO_BITS}"
 
 
 def draco_error(path: str, cache_path: str) -> float:
