@@ -93,7 +93,7 @@ def _read(path: str | os.PathLike[str], binary: bool) -> tuple[Scene, list[str]]
     scene, dropped = read_scene(path, "glb" if binary else "gltf", "binary glTF" if binary else "glTF",
                                 units=Units.METRE, up_axis=GLTF_UP_AXIS, reversed_siblings=True,
                                 resolver=None if binary else _uri_resolver(path), primitives=True,
-                                unnamed=_unnamed_nodes(tree))
+                                renamed=_node_names(tree))
     counts = [note for note in dropped if note[:1].isdigit()]
     return scene, listed([note for note in dropped if note not in counts] + _dropped_kinds(tree)) + counts
 
@@ -171,20 +171,26 @@ def _uses_texture(value: Any) -> bool:
                for key, item in value.items())
 
 
-def _unnamed_nodes(tree: dict[str, Any]) -> frozenset[str]:
-    """The names trimesh gives the nodes of ``tree`` that have none: node ``i``'s index, ``"i"``,
-    where no earlier node took it (trimesh makes a taken name unique, which is left as it is)."""
-    taken: set[str] = set()
-    made: set[str] = set()
+def _node_names(tree: dict[str, Any]) -> dict[str, str]:
+    """The file's name of each node of ``tree`` whose name trimesh made up or changed: ``""`` for a node
+    without one (trimesh names it by its index), the repeated name for a node named as an earlier one
+    (trimesh makes it unique: the second ``Cube`` becomes ``Cube_1``). trimesh's own naming replayed."""
+    from trimesh.util import unique_name
+
+    taken: dict[str, int] = {}
+    counts: dict[str, int] = {}
+    renamed: dict[str, str] = {}
     nodes = tree.get("nodes")
     for i, node in enumerate(nodes if isinstance(nodes, list) else []):
-        name = node.get("name") if isinstance(node, dict) else None
-        if isinstance(name, str):
-            taken.add(name)
-        elif str(i) not in taken:
-            taken.add(str(i))
-            made.add(str(i))
-    return frozenset(made)
+        given = node.get("name", str(i)) if isinstance(node, dict) else str(i)
+        label = unique_name(given, taken, counts=counts)
+        taken[label] = i
+        own = node.get("name") if isinstance(node, dict) else None
+        if not isinstance(own, str):
+            renamed[label] = ""
+        elif label != own:
+            renamed[label] = own
+    return renamed
 
 
 def _uri_resolver(path: str | os.PathLike[str]) -> Any:

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import replace
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
@@ -50,7 +50,7 @@ _PRIMITIVE_FRAME = re.compile(r"_[0-9a-f]{6}")
 def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
                units: Units = Units.UNSPECIFIED, up_axis: str | None = None,
                reversed_siblings: bool = False, resolver: Any = None,
-               primitives: bool = False, unnamed: frozenset[str] = frozenset()) -> tuple[Scene, list[str]]:
+               primitives: bool = False, renamed: Mapping[str, str] | None = None) -> tuple[Scene, list[str]]:
     """Read ``path`` as ``file_type`` through trimesh into ``(scene, dropped)``.
 
     ``what`` names the format in messages ("binary glTF"); ``units`` and
@@ -59,7 +59,7 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
     triangle. ``reversed_siblings``: trimesh's graph lists each node's
     children in reverse file order (see :func:`scene_from_trimesh`). ``resolver``:
     how trimesh finds the files ``path`` refers to (default: by name beside it). ``primitives``,
-    ``unnamed``: see :func:`scene_from_trimesh`.
+    ``renamed``: see :func:`scene_from_trimesh`.
     """
     tm = require_trimesh(what)
     file = os.fspath(path)
@@ -71,7 +71,7 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
         raise  # not a property of the file
     except Exception as exc:  # noqa: BLE001 - trimesh raises anything on bad input
         raise ConversionError(f"cannot read as {what}: {describe(exc)}", file=file) from exc
-    scene, dropped = scene_from_trimesh(loaded, units, file, reversed_siblings, primitives, unnamed)
+    scene, dropped = scene_from_trimesh(loaded, units, file, reversed_siblings, primitives, renamed)
     scene = replace(scene, up_axis=up_axis)
     if not any(node.mesh is not None for node in scene.nodes):
         raise ConversionError(f"no triangle mesh found in this {what} file", file=file)
@@ -80,7 +80,7 @@ def read_scene(path: str | os.PathLike[str], file_type: str, what: str,
 
 def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
                        reversed_siblings: bool = False, primitives: bool = False,
-                       unnamed: frozenset[str] = frozenset()) -> tuple[Scene, list[str]]:
+                       renamed: Mapping[str, str] | None = None) -> tuple[Scene, list[str]]:
     """Walk a trimesh scene graph into model nodes (depth first, parents first).
 
     Every graph node except trimesh's synthetic base frame becomes a node,
@@ -91,9 +91,10 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
     reverses the file's sibling order (the round-trip tests watch this). With ``primitives`` (glTF),
     the frames trimesh makes for the primitives of a mesh of several, named after their node and a
     random suffix (``d8_6cf88e``), are named ``<node>_<k>`` in order instead: a file converts to the
-    same bytes every time. A node is unnamed ("") where trimesh made its name up: the frames in
-    ``unnamed`` (a glTF node without a name, which trimesh names by its index) and a file's only
-    node, which trimesh names after the file.
+    same bytes every time. ``renamed`` maps the frames trimesh named otherwise than the file to the
+    file's names: "" for a glTF node without a name, which trimesh names by its index, the repeated
+    name of a glTF node named as an earlier one, which trimesh makes unique. A file's only node, which
+    trimesh names after the file, is unnamed ("").
     """
     graph = loaded.graph
     children = graph.transforms.children
@@ -127,14 +128,16 @@ def scene_from_trimesh(loaded: "trimesh.Scene", units: Units, file: str | None,
             mesh = meshes[geometry_name]
         matrix = np.asarray(matrix, dtype=np.float64)
         label, stem = str(name), str(parent_name)
-        if after_file or label in unnamed:
-            # A .pln keeping a made-up name would pay 13-20 bytes (3-9 % of a small convex file) for
-            # the name the file itself has, or an index.
-            label = ""
         if (primitives and geometry_name is not None and parent is not None and label.startswith(stem)
                 and _PRIMITIVE_FRAME.fullmatch(label[len(stem):])):
             numbered[parent] = numbered.get(parent, -1) + 1
             label = f"{stem}_{numbered[parent]}"
+        elif after_file:
+            # A .pln keeping a made-up name would pay 13-20 bytes (3-9 % of a small convex file) for
+            # the name the file itself has, or an index.
+            label = ""
+        elif renamed and label in renamed:
+            label = renamed[label]
         nodes.append(Node(name=label, parent=parent,
                           transform=None if np.array_equal(matrix, np.eye(4)) else matrix,
                           mesh=mesh))

@@ -31,3 +31,29 @@ def ply_bytes(vertices: np.ndarray, strip: np.ndarray) -> bytes:
               "element tristrips 1\nproperty list int int vertex_indices\nend_header\n").encode("ascii")
     return (header + vertices.astype(">f4").tobytes() + np.array([len(strip)], ">i4").tobytes()
             + strip.astype(">i4").tobytes())
+
+
+def stripify(faces: np.ndarray) -> np.ndarray:
+    """``faces`` as triangle strips, -1 after each, built greedily as strip builders walk a mesh: a strip
+    grows across the edge its last two corners share with an unused triangle of the winding its place
+    in the strip gives (even places ``(s[i], s[i+1], s[i+2])``, odd ``(s[i+1], s[i], s[i+2])``)."""
+    faces = np.asarray(faces, dtype=np.int64)
+    across = {}
+    for t, (a, b, c) in enumerate(faces.tolist()):
+        across.update({(a, b): (t, c), (b, c): (t, a), (c, a): (t, b)})
+    used = np.zeros(len(faces), dtype=bool)
+    out: list[int] = []
+    for t in range(len(faces)):
+        if used[t]:
+            continue
+        used[t] = True
+        strip = faces[t].tolist()
+        while True:
+            edge = (strip[-1], strip[-2]) if len(strip) % 2 == 1 else (strip[-2], strip[-1])
+            nxt = across.get(edge)
+            if nxt is None or used[nxt[0]]:
+                break
+            used[nxt[0]] = True
+            strip.append(nxt[1])
+        out += strip + [-1]
+    return np.array(out, dtype=np.int64)
