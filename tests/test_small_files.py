@@ -1,5 +1,5 @@
 """Small files and scenes (issue 52): what a version 6 writer leaves out or stores shorter where it is not
-information: h ranges of few r32 bytes (spec §5)."""
+information: h ranges of few r32 bytes, and the bbox and counts of files of shells under 4 KiB raw (spec §5)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from planefmt import codec
-from planefmt.container import headers, records
+from planefmt.container import headers, records, schema
+from planefmt.container.writer import SMALL_SEGMENT_BYTES, SMALL_SHELLS_BYTES
 from planefmt.container.chunks import chunks_of
 from planefmt.model import Mesh, Node, Scene, Units
 from planefmt_converters import registry
@@ -81,3 +82,37 @@ def test_corpus_files_keep_their_bound_with_short_h_ranges(name: str) -> None:
         assert q.h_min <= q.h_max and _r32_bytes((q.h_min, q.h_max)) <= 10
     decoded = codec.decode_scene(io.BytesIO(buf.getvalue()))
     assert [n.name for n in decoded.nodes] == [n.name for n in scene.nodes]
+
+
+def _raw_size(data: bytes) -> int:
+    """Raw bytes of the records of a file of one segment, in PHDR."""
+    payload = next(iter(chunks_of(data))).payload
+    size, pos = schema.Varint32.parse(bytes(payload[2:7])), 2
+    pos += len(schema.Varint32.build(size)) + size  # header fields
+    return schema.Varint32.parse(bytes(payload[pos + 1:pos + 6]))
+
+
+def _written(name: str) -> tuple[bytes, object]:
+    scene, _ = registry.read(str(CORPUS / name))
+    buf = io.BytesIO()
+    header = codec.encode_scene(scene, buf, tolerance=3e-5)
+    return buf.getvalue(), header
+
+
+def test_a_file_of_shells_under_4096_raw_bytes_leaves_out_its_bbox_and_counts() -> None:
+    data, header = _written("open/test_nm.obj")
+    assert [c.type for c in chunks_of(data)] == [b"PHDR", b"PEND"]
+    assert SMALL_SEGMENT_BYTES <= _raw_size(data) < SMALL_SHELLS_BYTES
+    stored = _header(data)
+    assert stored.bbox is None and stored.plane_count is None and stored.object_count is None
+    assert header.error_bound <= header.tolerance or header.lossy
+    mesh = codec.decode_mesh(io.BytesIO(data))
+    assert len(mesh.faces) > 0
+
+
+def test_a_file_of_polytopes_over_256_raw_bytes_keeps_its_bbox_which_caps_their_merge_distance() -> None:
+    # spec §9.4: L, the cap of the merge distance, is half the tolerance times the stored bbox's diagonal.
+    data, _ = _written("convex/cylinder.stl")
+    assert _raw_size(data) >= SMALL_SEGMENT_BYTES
+    stored = _header(data)
+    assert stored.bbox is not None and stored.plane_count is not None
