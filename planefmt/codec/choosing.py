@@ -78,30 +78,57 @@ class _Choice:
 F32_RANGE: ContextVar[bool] = ContextVar("f32_range", default=False)
 
 
+#: Version 6: the h range of each candidate coding is the one of fewest header bytes (spec §5, r32) that
+#: moves no plane by more than the float64 rounding of planes fitted to float32 corners (this fraction of the
+#: largest |h|, and at most ``H_RANGE_NOISE_TOLERANCE`` of the tolerance) beyond what the range's float32
+#: hull does (headers.short_range); for shells, whose corners are right by construction whatever the planes,
+#: also by up to ``H_RANGE_STEP`` of an h step. Verified codings are not widened beforehand: their widths
+#: are the narrowest that verify, often at the tolerance's edge (two_objects_inverse_materials.gltf at
+#: 3.9e-5: 13 bits verified with its hull, 14 needed with a range 1/64 of a step wider, 351 -> 359 bytes);
+#: ``_choose`` tries a shorter range after it has chosen.
+H_RANGE_STEP = 2.0 ** -6
+H_RANGE_NOISE = 2.0 ** -40
+H_RANGE_NOISE_TOLERANCE = 2.0 ** -10
+#: Version 6: planes up to which a chosen coding is verified once more with an h range that moves them by
+#: up to half the error left (``_choose``): a few header bytes, which count only in small files.
+H_RANGE_RETRY_PLANES = 256
+
+
 def _candidates(coding: Coding | None, bits: int | tuple[int, int, int] | None, table: np.ndarray,
-                radius: float) -> list[tuple[Coding, Quantization | None]]:
-    """Codings to try, cheapest first; forced ones alone."""
+                radius: float, allowance: float = 0.0, widen: float = 0.0) -> list[tuple[Coding, Quantization | None]]:
+    """Codings to try, cheapest first; forced ones alone. ``allowance``: the error the file may have, in
+    model units (bounds the planes' moves onto a version 6 h range's ends); ``widen``: the fraction of an h
+    step by which a version 6 h range may move planes further for fewer header bytes."""
     h_min, h_max = float(table[:, 2].min()), float(table[:, 2].max())
-    if F32_RANGE.get():
-        h_min, h_max = headers.f32_range(h_min, h_max)
+    short = F32_RANGE.get()
+    hull = headers.f32_range(h_min, h_max) if short else (h_min, h_max)
+    span = hull[1] - hull[0]
+    noise = min(H_RANGE_NOISE * max(abs(h_min), abs(h_max)), H_RANGE_NOISE_TOLERANCE * allowance)
+
+    def ranged(b_nu: int, b_phi: int, b_h: int) -> Quantization:
+        if not short:
+            return Quantization(b_nu, b_phi, b_h, h_min, h_max)
+        levels = (1 << b_h) - 1
+        room = noise + widen * span / (2 * levels)
+        return Quantization(b_nu, b_phi, b_h, *headers.short_range(h_min, h_max, levels, room))
+
     if bits is not None:
         widths = (bits,) * 3 if isinstance(bits, int) else tuple(bits)
         if len(widths) != 3 or not all(isinstance(b, (int, np.integer)) for b in widths):
             raise PlnError(f"bits must be an int or three ints, not {bits!r}", code="UNSUPPORTED_CODING")
-        q = Quantization(*(int(b) for b in widths), h_min, h_max)
+        q = ranged(*(int(b) for b in widths))
         quantize.check_quantization(q)
         return [(Coding.QUANTIZED, q)]
     if coding is not None and not Coding(coding).quantized:
         return [(Coding(coding), None)]
     out: list[tuple[Coding, Quantization | None]] = []
-    span = h_max - h_min
     for b in range(MIN_BITS, MAX_BITS + 1):
         # nu and phi get equal widths (equal steps on the equator). h's half step is kept at half
         # the displacement an angle half step causes at the far end of the model: the angles
         # cost two widths, h one, so this split minimises bits for a given error.
         target = 0.5 * Quantization(b, b, 1, 0.0, 0.0).steps()[0] * max(radius, 1e-300)
         bits_h = 1 if span <= 0 else min(MAX_BITS, max(1, math.ceil(math.log2(span / target + 1))))
-        out.append((Coding.QUANTIZED, Quantization(b, b, bits_h, h_min, h_max)))
+        out.append((Coding.QUANTIZED, ranged(b, b, bits_h)))
     if coding is None:
         out += [(Coding.FLOAT32, None), (Coding.FLOAT64, None)]
     return out
@@ -207,7 +234,20 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
                        bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,
                        error_bound=error_bound, lossy=simplified or error_bound > tolerance)
 
-    candidates = _candidates(coding, bits, table, radius)
+    def shorter(best: _Choice) -> _Choice:
+        """``best`` with an h range of fewer header bytes (spec §5) where one that moves the planes by at most
+        half the error it leaves verifies too: small files (Cube.gltf, whose planes' h are 1 +- 1.2e-7 from its
+        float32 corners, 82 -> 76 bytes)."""
+        q = best.quantization
+        room = 0.5 * (limit(best.meshes)[0] - best.error_bound * best.diagonal) / max(max(scale), 1e-300)
+        if not F32_RANGE.get() or room <= 0 or len(table) > H_RANGE_RETRY_PLANES:
+            return best
+        h = headers.short_range(float(table[:, 2].min()), float(table[:, 2].max()), (1 << q.bits_h) - 1, room)
+        if headers.r32_size(h) >= headers.r32_size((q.h_min, q.h_max)):
+            return best
+        return attempt(Coding.QUANTIZED, replace(q, h_min=h[0], h_max=h[1])) or best
+
+    candidates = _candidates(coding, bits, table, radius, tolerance * diag_src)
     if forced:
         return attempt(*candidates[0])
     # Half the room for the prediction: the certified bound the verification needs comes quickly
@@ -260,7 +300,7 @@ def _choose(objects: Sequence[_Object], tolerance: float, coding: Coding | None,
             if found is None:
                 break
             best, i = found, i - 1
-        return best
+        return shorter(best)
     # A width whose bound merely ran out of pieces, its lower bound far under the target, gets one
     # more try with a larger budget before the float codings (1002_tray_bottom.STL at 1e-4).
     # Not when lossless: there the float64 fallback is as small as it gets near the finest widths,
@@ -518,7 +558,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     if not candidates:
         table = np.concatenate([o.triplets for o in objects])
         radius = max(float(np.linalg.norm(o.vertices, axis=1).max()) for o in objects)
-        every = _candidates(coding, bits, table, radius)
+        every = _candidates(coding, bits, table, radius, tolerance * diag_src, H_RANGE_STEP)
         candidates = every if forced else \
             [(cod, q) for cod, q in every if cod == Coding.QUANTIZED and q.bits_nu in SHELL_WIDTHS]
     band = tolerance if tolerance > LOSSLESS_TOLERANCE else 0.0

@@ -20,7 +20,7 @@ import numpy as np
 from .. import progress
 from ..container import quantize, records, shellfields, shellwalk
 from ..container.chunks import Limits
-from ..container.writer import BLOCK_PLANES, Writer
+from ..container.writer import BLOCK_PLANES, SMALL_SEGMENT_BYTES, SMALL_SHELLS_BYTES, Writer
 from ..errors import GeometryError, PlnError, PlnWarning
 from ..geometry.planes import transform_points
 from ..groups.shells import reordered, reordered_tree
@@ -354,7 +354,10 @@ def _write(scene: Scene, target: str | os.PathLike | BinaryIO, meshes: list[int]
                     up_axis=scene.up_axis if version[0] >= 5 else None)
     # An index gives a small file no random access worth its bytes: compact files leave it to the writer.
     index = True if not compact else None
-    with _writer(target, header, compress, index, verify, brotli) as w:
+    # Shells decode the same without a bbox; polytopes' merge distance is capped by it (spec §9.4).
+    small = SMALL_SHELLS_BYTES if all(g.kind in SHELL_KINDS for o in objects for g in o.groups) \
+        else SMALL_SEGMENT_BYTES
+    with _writer(target, header, compress, index, verify, brotli, small) as w:
         if scene.up_axis is not None and version[0] < 5:
             w.add_metadata(UP_AXIS, scene.up_axis)
         for i, node in enumerate(scene.nodes):
@@ -497,7 +500,8 @@ def _version(objects: list[_Object], major: int) -> tuple[int, int]:
 
 
 def _writer(target: str | os.PathLike | BinaryIO, header: Header, compress: bool, index: bool | None = True,
-            verify: bool = True, brotli: bool = True) -> Writer:
+            verify: bool = True, brotli: bool = True, small_segment: int = SMALL_SEGMENT_BYTES) -> Writer:
     # Candidates measured for their sizes are deflated only (``brotli`` off): Brotli's densest quality
     # would triple King_geom.usd's encode (1.8 s to 5.9 s) for a ranking deflate mostly gives as well.
-    return Writer(target, header, compress=compress, index=index, verify=verify, brotli=brotli)
+    return Writer(target, header, compress=compress, index=index, verify=verify, brotli=brotli,
+                  small_segment=small_segment)

@@ -66,6 +66,51 @@ def f32_range(h_min: float, h_max: float) -> tuple[float, float]:
     return low, high
 
 
+def _r32_bytes(bits: np.ndarray) -> np.ndarray:
+    """Bytes of each float32 bit pattern as an r32 (spec §2.2): its reversed bits as a varint."""
+    lowest = np.where(bits == 0, np.int64(1) << 32, bits & -bits)  # 0 takes one byte, as if bit 32 were set
+    low = np.log2(lowest.astype(np.float64)).astype(np.int64)
+    return np.maximum(1, -(-(32 - low) // 7))
+
+
+def r32_size(values: tuple[float, ...]) -> int:
+    """Bytes of float32 ``values`` as r32s (spec §2.2)."""
+    return int(_r32_bytes(np.array(values, dtype="<f4").view("<u4").astype(np.int64)).sum())
+
+
+def _truncations(value: float, up: bool) -> np.ndarray:
+    """Float32 patterns on the side ``up`` of ``value`` whose low 0 to 31 bits are clear (or carried out):
+    the values of each r32 length nearest to it on that side."""
+    bits = np.int64(np.array([_f32_toward(np.array([value]), math.inf if up else -math.inf, "h")[0]],
+                             dtype="<f4").view("<u4")[0])
+    mask = (np.int64(1) << np.arange(32, dtype=np.int64)) - 1
+    sign = bits >> 31
+    out = np.where(bits & mask, (bits | mask) + 1, bits) if up != bool(sign) else (bits & ~mask)
+    # A carry into the sign, or an exponent of all ones, is no value on that side.
+    return np.unique(out[((out >> 31) == sign) & ((out & 0x7F800000) != 0x7F800000)])
+
+
+def short_range(h_min: float, h_max: float, levels: int, room: float) -> tuple[float, float]:
+    """An h range of two float32 values for planes whose h lie in [h_min, h_max], quantized to ``levels``
+    steps (spec §5 and §7.3, version 6), of the fewest r32 bytes among those that move no plane more than
+    ``room`` beyond what :func:`f32_range`'s range does: a plane up to ``room`` outside it quantizes onto
+    its end, and a wider range has wider steps. Ties: the one that moves planes least."""
+    tight = f32_range(h_min, h_max)
+    lows = _truncations(h_min + room, up=False)
+    highs = _truncations(h_max - room, up=True)
+    lo = lows.astype("<u4").view("<f4").astype(np.float64)[:, None]
+    hi = highs.astype("<u4").view("<f4").astype(np.float64)[None, :]
+    width = hi - lo
+    moved = np.maximum(np.maximum(lo - h_min, h_max - hi), 0.0) \
+        + np.maximum(width - (tight[1] - tight[0]), 0.0) / (2.0 * max(levels, 1))
+    ok = (width >= 0) & (moved <= room)
+    if not ok.any():
+        return tight
+    cost = np.where(ok, _r32_bytes(lows)[:, None] + _r32_bytes(highs)[None, :], 99)
+    i, j = np.unravel_index(np.lexsort((moved.ravel(), cost.ravel()))[0], cost.shape)
+    return float(lo[i, 0]), float(hi[0, j])
+
+
 def encode_header6(h: Header) -> bytes:
     """A version 6 header (spec §5) without a segment: the writer appends its first one."""
     q = h.quantization

@@ -38,8 +38,14 @@ BLOCK_PLANES = 1 << 16
 #: Bytes before the index from which ``index=None`` writes one (a few milliseconds of streaming read).
 INDEX_MIN_BYTES = 1 << 16
 #: Version 6: a file whose records are one segment of fewer raw bytes than this leaves out its bbox and
-#: counts (spec §5 "Small files"): 12 to 35 bytes that a reader gets by decoding.
+#: counts (spec §5 "Small files"): 12 to 35 bytes that a reader gets by decoding. A writer may pass a larger
+#: ``small_segment`` for a file whose decoding does not depend on the bbox (spec §9.4: no group of kinds 0
+#: to 5, whose merge distance the bbox caps): the encoder passes :data:`SMALL_SHELLS_BYTES`.
 SMALL_SEGMENT_BYTES = 256
+#: The same for files of shells and copies of shells alone: at 4,096 the bench corpus's glTF and USD scenes'
+#: median .pln / Draco-14 came to 1.016 and 0.974 from 1.032 and 1.008 (``bench/small_bytes.py``'s bytes,
+#: less the bbox and counts of every file of one segment under it; 1,024 gave the same medians).
+SMALL_SHELLS_BYTES = 4096
 
 
 class Writer:
@@ -61,17 +67,19 @@ class Writer:
     earlier group's is written as a copy of it. Version 6 (spec §4.5): records are buffered into body
     segments of at most 1 MiB raw, the first written in PHDR once it is full or the file is closed (so
     nothing is written before), each other one in a BODY chunk; a quantized h range is rounded outward to
-    float32 (spec §5), and a file of one segment under :data:`SMALL_SEGMENT_BYTES` raw bytes leaves out its
-    bbox and counts. Use as a context manager: leaving the block by an exception discards a path target's
+    float32 (spec §5), and a file of one segment under ``small_segment`` raw bytes leaves out its bbox and
+    counts. Use as a context manager: leaving the block by an exception discards a path target's
     temporary file.
     """
 
     def __init__(self, target: str | os.PathLike | BinaryIO, header: Header, *, compress: bool = False,
-                 index: bool | None = True, verify: bool = True, brotli: bool = True, copies: bool = True) -> None:
+                 index: bool | None = True, verify: bool = True, brotli: bool = True, copies: bool = True,
+                 small_segment: int = SMALL_SEGMENT_BYTES) -> None:
         if int(header.coding) not in records.CODINGS.get(header.version[0], ()):
             raise PlnError(f"coding {int(header.coding)} cannot be written in a version {header.version[0]} file",
                            code="UNSUPPORTED_CODING")
         self._compress = compress
+        self._small_segment = small_segment
         self._brotli = brotli
         self._index = index
         self._verify = verify
@@ -176,7 +184,7 @@ class Writer:
         segment = segments.segment_bytes(raw, self._compress) if raw else b""
         if not self._headed:
             header = self._header
-            if last and len(raw) < SMALL_SEGMENT_BYTES:
+            if last and len(raw) < self._small_segment:
                 header = dataclasses.replace(header, bbox=None, plane_count=None, object_count=None, group_count=None)
             self._emit_raw(schema.SIGNATURE)
             chunk = self._pos
