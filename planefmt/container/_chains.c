@@ -205,23 +205,31 @@ typedef struct {
     int64_t a, b, value;
 } Slot;
 
-/* Simple tabulation hashing of a directed edge (a, b): 16 tables of 256 random words, one per byte
- * of a and of b, filled from a key the caller draws per decode (spec §9.13).  A fixed hash lets a file
- * put every edge into a few slots, and linear probing then costs a probe per edge already there (a
- * kind 9 walk of 100,000 such edges took 24 s); with keys the file cannot know, linear probing takes
- * expected constant time per operation (Patrascu and Thorup, "The power of simple tabulation
- * hashing", 2011), whatever the corners. */
+/* Simple tabulation hashing of a directed edge (a, b): a table of 256 random words per byte of a and of
+ * b, filled from a key the caller draws per decode (spec §9.13).  A fixed hash lets a file put every
+ * edge into a few slots, and linear probing then costs a probe per edge already there (a kind 9 walk
+ * of 100,000 such edges took 24 s); with keys the file cannot know, linear probing takes expected
+ * constant time per operation (Patrascu and Thorup, "The power of simple tabulation hashing", 2011),
+ * whatever the corners.  Only the bytes a corner below the caller's limit can have are hashed: the
+ * others are zero in every key, so their tables would only xor a constant into every hash (a walk of
+ * 65,536 corners or fewer looks up 4 words an edge, not 16). */
 typedef struct {
+    int bytes;
     uint64_t t[16][256];
 } EdgeHash;
 
 static EdgeHash *
-edge_hash_new(uint64_t key)
+edge_hash_new(uint64_t key, int64_t limit)
 {
     EdgeHash *e = malloc(sizeof(EdgeHash));
     if (!e)
         return NULL;
-    for (int i = 0; i < 16; i++)
+    e->bytes = 1;
+    while (e->bytes < 8 && (uint64_t)(limit > 0 ? limit - 1 : 0) >> (8 * e->bytes))
+        e->bytes++;
+    for (int i = 0; i < 16; i++) {
+        if (i % 8 >= e->bytes)
+            continue;
         for (int j = 0; j < 256; j++) {
             /* splitmix64 */
             uint64_t z = (key += 0x9E3779B97F4A7C15ULL);
@@ -229,15 +237,16 @@ edge_hash_new(uint64_t key)
             z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
             e->t[i][j] = z ^ (z >> 31);
         }
+    }
     return e;
 }
 
-/* Where directed edge (a, b) starts probing in a table of mask + 1 slots. */
+/* Where directed edge (a, b), both in 0 .. limit - 1, starts probing in a table of mask + 1 slots. */
 static int64_t
 edge_hash(const EdgeHash *e, int64_t a, int64_t b, int64_t mask)
 {
     uint64_t h = 0, x = (uint64_t)a, y = (uint64_t)b;
-    for (int i = 0; i < 8; i++, x >>= 8, y >>= 8)
+    for (int i = 0; i < e->bytes; i++, x >>= 8, y >>= 8)
         h ^= e->t[i][x & 0xFF] ^ e->t[8 + i][y & 0xFF];
     return (int64_t)(h & (uint64_t)mask);
 }
@@ -359,7 +368,7 @@ parallelograms(PyObject *self, PyObject *args)
         size *= 2;
     Slot *slots = malloc(sizeof(Slot) * (size_t)size);
     int64_t *counts = calloc((size_t)(v > 0 ? v : 1), sizeof(int64_t));
-    EdgeHash *hash = edge_hash_new(key);
+    EdgeHash *hash = edge_hash_new(key, v);
     if (!slots || !counts || !hash) {
         free(slots);
         free(counts);
@@ -421,15 +430,21 @@ done:
 }
 
 /* A shell walk's open edges (spec/pln.md §9.13): directed edges of the decoded surface that no
- * second triangle has closed yet.  Each entry sits on a stack of its directed edge (a hash map
- * from edge to the newest entry) and on two doubly linked lists, of the entries starting and of
- * those ending at a corner, newest first: entering, closing, and the left and right queries take
- * constant time (the map's expected, its hash keyed per decode), so a walk is linear in its
- * triangles whatever a file holds. */
+ * second triangle has closed yet.  Each entry sits on a stack of its directed edge and on two doubly
+ * linked lists, of the entries starting and of those ending at a corner, newest first: entering,
+ * closing, and the left and right queries take constant time (the map's expected, its hash keyed per
+ * decode), so a walk is linear in its triangles whatever a file holds.  The map holds one slot per
+ * undirected edge with the newest entry of each direction: entering (a, b) closes an entry of (b, a)
+ * or else stacks one on (a, b), both in the slot one probe finds. */
+typedef struct {
+    int64_t lo, hi;    /* the edge's corners, lo < hi; lo < 0 for an empty slot */
+    int64_t newest[2]; /* the newest entry of (lo, hi) and of (hi, lo), -1 for none */
+} PairSlot;
+
 typedef struct {
     int64_t corners, used, mask;
     int64_t *start, *end, *below, *in_next, *in_prev, *out_next, *out_prev, *in_head, *out_head;
-    Slot *slots; /* each edge's newest entry (value: its record, -1 for none) */
+    PairSlot *slots;
     EdgeHash *hash;
 } Open;
 
@@ -452,9 +467,9 @@ open_init(Open *o, int64_t triangles, int64_t corners, uint64_t key)
     o->corners = corners;
     o->mask = size - 1;
     o->start = malloc(sizeof(int64_t) * 7 * (size_t)(records > 0 ? records : 1));
-    o->slots = malloc(sizeof(Slot) * (size_t)size);
-    o->in_head = malloc(sizeof(int64_t) * 2 * (size_t)corners);
-    o->hash = edge_hash_new(key);
+    o->slots = malloc(sizeof(PairSlot) * (size_t)size);
+    o->in_head = malloc(sizeof(int64_t) * 2 * (size_t)(corners > 0 ? corners : 1));
+    o->hash = edge_hash_new(key, corners);
     if (!o->start || !o->slots || !o->in_head || !o->hash) {
         open_free(o);
         return -1;
@@ -467,29 +482,29 @@ open_init(Open *o, int64_t triangles, int64_t corners, uint64_t key)
     o->out_prev = o->out_next + records;
     o->out_head = o->in_head + corners;
     for (int64_t k = 0; k < size; k++)
-        o->slots[k].a = -1;
+        o->slots[k].lo = -1;
     for (int64_t k = 0; k < 2 * corners; k++)
         o->in_head[k] = -1;
     return 0;
 }
 
-/* The slot of directed edge (a, b) in the map: its own, or the empty one where it would go. */
-static int64_t
-open_slot(const Open *o, int64_t a, int64_t b)
-{
-    int64_t k = edge_hash(o->hash, a, b, o->mask);
-    while (o->slots[k].a >= 0 && (o->slots[k].a != a || o->slots[k].b != b))
-        k = (k + 1) & o->mask;
-    return k;
-}
-
 static void
 open_edge(Open *o, int64_t a, int64_t b)
 {
-    int64_t k = open_slot(o, b, a);
-    if (o->slots[k].a >= 0 && o->slots[k].value >= 0) {
-        int64_t r = o->slots[k].value;
-        o->slots[k].value = o->below[r];
+    int64_t lo = a < b ? a : b, hi = a < b ? b : a;
+    int d = a > b; /* the direction of (a, b) in its slot; 1 - d that of (b, a) */
+    int64_t k = edge_hash(o->hash, lo, hi, o->mask);
+    while (o->slots[k].lo >= 0 && (o->slots[k].lo != lo || o->slots[k].hi != hi))
+        k = (k + 1) & o->mask;
+    PairSlot *s = o->slots + k;
+    if (s->lo < 0) {
+        s->lo = lo;
+        s->hi = hi;
+        s->newest[0] = s->newest[1] = -1;
+    } else if (s->newest[1 - d] >= 0) {
+        /* (b, a) is open: (a, b) closes its newest entry */
+        int64_t r = s->newest[1 - d];
+        s->newest[1 - d] = o->below[r];
         if (o->out_prev[r] >= 0) o->out_next[o->out_prev[r]] = o->out_next[r]; else o->out_head[b] = o->out_next[r];
         if (o->out_next[r] >= 0) o->out_prev[o->out_next[r]] = o->out_prev[r];
         if (o->in_prev[r] >= 0) o->in_next[o->in_prev[r]] = o->in_next[r]; else o->in_head[a] = o->in_next[r];
@@ -507,14 +522,8 @@ open_edge(Open *o, int64_t a, int64_t b)
     o->in_next[r] = o->in_head[b];
     if (o->in_head[b] >= 0) o->in_prev[o->in_head[b]] = r;
     o->in_head[b] = r;
-    k = open_slot(o, a, b);
-    if (o->slots[k].a < 0) {
-        o->slots[k].a = a;
-        o->slots[k].b = b;
-        o->slots[k].value = -1;
-    }
-    o->below[r] = o->slots[k].value;
-    o->slots[k].value = r;
+    o->below[r] = s->newest[d];
+    s->newest[d] = r;
 }
 
 /* Left: the start of the newest open edge ending at i1, the second newest where that start is x. */
