@@ -82,11 +82,13 @@ class Reader:
                 raise FormatError(f"first chunk is {first.name}, not PHDR", code="MISSING_HEADER",
                                   chunk=first.name, offset=first.offset)
             self._count(first)
-            self.header, found = self._located(lambda raw: records.decode_header(raw.payload), first)
+            # Version 6's header also says where its first body segment starts: parsed once for both.
+            head = self._located(lambda raw: records.decode_header_at(raw.payload), first)
+            self.header, found = head[:2]
             self._after_header = first.end
             self._first = first
             if self.header.version[0] >= 6:
-                self._segment_start = self._located(lambda raw: records.decode_header6(raw.payload)[2], first)
+                self._segment_start = head[2]
             # Version 5 frames every chunk after PHDR with a varint length (spec §4.1).
             self._stream.compact = self._compact = self.header.version[0] >= 5
             self.findings.extend(found)

@@ -92,6 +92,18 @@ def header_size(major: int) -> int:
 
 def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
     """The header and non-fatal findings (code, message)."""
+    return decode_header_at(payload)[:2]
+
+
+def decode_header_at(payload: bytes) -> tuple[Header, list[tuple[str, str]], int | None]:
+    """:func:`decode_header`, and where in the PHDR payload the first body segment of a version 6 file
+    starts (None before version 6)."""
+    if len(payload) >= 2 and payload[0] >= 6 and payload[0] in VERSIONS:
+        return decode_header6(payload)
+    return (*_decode_header(payload), None)
+
+
+def _decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
     if len(payload) < 2:
         raise FormatError("PHDR is too short to hold a version", code="BAD_PAYLOAD")
     major, minor = payload[0], payload[1]
