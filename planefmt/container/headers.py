@@ -216,3 +216,23 @@ def decode_header6(payload: bytes) -> tuple[Header, list[tuple[str, str]], int]:
         plane_count=c.plane_count if c else None, object_count=c.object_count if c else None,
         group_count=c.group_count if c else None, extra=bytes(f.extra), up_axis=schema.UP_AXIS_CODES[up])
     return header, findings, segment_offset
+
+
+def quick_object6(payload: bytes, quick: tuple[list[int], int]) -> cs.Container | None:
+    """schema.Object6 from its head as :func:`quick_head` read it: name, transform (codes and values) and
+    extra bytes sliced by hand; None where construct's parse would fail."""
+    (_, flags, name_length), pos = quick
+    end = pos + name_length
+    name = bytes(payload[pos:end])
+    transform = None
+    if flags & schema.OBJECT_HAS_TRANSFORM:
+        codes = bytes(payload[end:end + schema.TRANSFORM_CODE_BYTES])
+        if len(codes) < schema.TRANSFORM_CODE_BYTES:
+            return None
+        end += schema.TRANSFORM_CODE_BYTES
+        size = sum(schema.TRANSFORM_VALUE_SIZES[c] for c in schema.transform_codes(codes))
+        transform = cs.Container(codes=codes, values=bytes(payload[end:end + size]))
+        end += size
+    if end > len(payload):
+        return None
+    return cs.Container(name=name, transform=transform, extra=bytes(payload[end:]))

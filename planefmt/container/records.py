@@ -15,7 +15,7 @@ import numpy as np
 
 from . import quantize, schema, varint
 from .headers import (BYTE, VARINT32, VARINT64, _f32_toward, _f32_up, _parse, decode_header6, encode_header6,
-                      quick_head)
+                      quick_head, quick_object6)
 from .budget import Budget, Charge
 from .chunks import Limits
 from .compression import SHELL_TREE_LEVEL, pack, unpack
@@ -98,21 +98,14 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
 
 
 def decode_header_at(payload: bytes) -> tuple[Header, list[tuple[str, str]], int | None]:
-    """:func:`decode_header`, and where in the PHDR payload the first body segment of a version 6 file
-    starts (None before version 6)."""
-    if len(payload) >= 2 and payload[0] >= 6 and payload[0] in VERSIONS:
-        return decode_header6(payload)
-    return (*_decode_header(payload), None)
-
-
-def _decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
+    """:func:`decode_header`, and where the first body segment of a version 6 file starts (else None)."""
     if len(payload) < 2:
         raise FormatError("PHDR is too short to hold a version", code="BAD_PAYLOAD")
     major, minor = payload[0], payload[1]
     if major not in VERSIONS:
         raise VersionError(f"major version {major} is not supported (this reader reads 1.x to 6.x)")
     if major >= 6:
-        return decode_header6(payload)[:2]
+        return decode_header6(payload)
     if len(payload) < header_size(major):
         raise FormatError(f"PHDR is {len(payload)} bytes, version {major} needs {header_size(major)}",
                           code="BAD_PAYLOAD")
@@ -165,7 +158,7 @@ def _decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
         plane_count=counts.plane_count if known else None, object_count=counts.object_count if known else None,
         group_count=counts.group_count if known else None, extra=bytes(r.extra), up_axis=up_axis,
     )
-    return header, findings
+    return header, findings, None
 
 
 def leading_index(payload: bytes, major: int, width: int) -> int:
@@ -289,26 +282,6 @@ def _transform_from4(t) -> np.ndarray:
     return np.array(entries, dtype=np.float64).reshape(4, 4)
 
 
-def _quick_object6(payload: bytes, quick: tuple[list[int], int]) -> cs.Container | None:
-    """schema.Object6 from its head as :func:`quick_head` read it: name, transform (codes and values) and
-    extra bytes sliced by hand; None where construct's parse would fail."""
-    (_, flags, name_length), pos = quick
-    end = pos + name_length
-    name = bytes(payload[pos:end])
-    transform = None
-    if flags & schema.OBJECT_HAS_TRANSFORM:
-        codes = bytes(payload[end:end + schema.TRANSFORM_CODE_BYTES])
-        if len(codes) < schema.TRANSFORM_CODE_BYTES:
-            return None
-        end += schema.TRANSFORM_CODE_BYTES
-        size = sum(schema.TRANSFORM_VALUE_SIZES[c] for c in schema.transform_codes(codes))
-        transform = cs.Container(codes=codes, values=bytes(payload[end:end + size]))
-        end += size
-    if end > len(payload):
-        return None
-    return cs.Container(name=name, transform=transform, extra=bytes(payload[end:]))
-
-
 def decode_object(payload: bytes, expected_index: int, major: int = 1) -> ObjectRecord:
     if major >= 6:
         # An object record has no index: it is its position (spec §8).
@@ -320,7 +293,7 @@ def decode_object(payload: bytes, expected_index: int, major: int = 1) -> Object
             head = cs.Container(parent=parent, flags=flags, name_length=name_length)
         if head.name_length > schema.OBJECT3_MAX_NAME:
             raise FormatError(f"object name of {head.name_length} bytes, at most 65535", code="BAD_OBJECT")
-        r = _quick_object6(payload, quick) if quick is not None else None
+        r = quick_object6(payload, quick) if quick is not None else None
         if r is None:
             r = _parse(schema.Object6, payload, "object record")
         index, parent = expected_index, None if head.parent == 0 else head.parent - 1
