@@ -6,11 +6,11 @@ the ratio of Draco's time to pln's per mesh and their geometric mean.
 ``--old ROOT`` times a second planefmt (e.g. a frozen copy of main: a folder holding its ``planefmt``
 and ``converters`` packages, built) on the same bytes in a worker process, mesh by mesh beside this
 one, and checks that both decode the same arrays bit for bit (a digest of vertices, faces and face
-colours). Each time is the least of up to ``REPEATS`` runs within ``REPEAT_BUDGET`` seconds, as in
-bench/compare.py. The .pln files are encoded once with this checkout's encoder at the default tolerance
+colours). Each time is the least of up to ``--repeats`` runs (5, as bench/compare.py) within
+``REPEAT_BUDGET`` seconds. The .pln files are encoded once with this checkout's encoder at the default tolerance
 (``pln convert``'s) and kept in ``--cache``; clear it when the encoder changes.
 
-Usage: ``python bench/decode_speed.py [--corpus DIR] [--old ROOT] [--only SUBSTRING ...]``
+Usage: ``python bench/decode_speed.py [--corpus DIR] [--old ROOT] [--repeats N] [--only SUBSTRING ...]``
 """
 
 from __future__ import annotations
@@ -38,14 +38,14 @@ REPEATS = 5
 REPEAT_BUDGET = 2.0
 
 
-def timed(call):
-    """``(least seconds, result)`` over up to :data:`REPEATS` runs of ``call()`` within :data:`REPEAT_BUDGET`."""
+def timed(call, repeats: int = REPEATS):
+    """``(least seconds, result)`` over up to ``repeats`` runs of ``call()`` within :data:`REPEAT_BUDGET`."""
     times = []
     while True:
         t = time.perf_counter()
         result = call()
         times.append(time.perf_counter() - t)
-        if len(times) >= REPEATS or sum(times) >= REPEAT_BUDGET:
+        if len(times) >= repeats or sum(times) >= REPEAT_BUDGET:
             return min(times), result
 
 
@@ -66,16 +66,17 @@ def digest(mesh) -> str:
     return h.hexdigest()
 
 
-def measure(path: str) -> dict:
+def measure(path: str, repeats: int = REPEATS) -> dict:
     data = Path(path).read_bytes()
-    seconds, mesh = timed(lambda: pln_decode(data))
+    seconds, mesh = timed(lambda: pln_decode(data), repeats)
     return {"seconds": seconds, "digest": digest(mesh), "triangles": len(mesh.faces)}
 
 
 def worker() -> None:
     """Answer one JSON line per .pln path read from stdin."""
     for line in sys.stdin:
-        print(json.dumps(measure(line.strip())), flush=True)
+        path, repeats = line.split("\t")
+        print(json.dumps(measure(path, int(repeats))), flush=True)
 
 
 def meshes(corpus: Path, only: list[str]) -> list[Path]:
@@ -110,6 +111,8 @@ def main() -> None:
     ap.add_argument("--cache", type=Path, default=Path("/tmp/pln-decode-speed"))
     ap.add_argument("--old", type=Path, help="root of another planefmt to time beside this one")
     ap.add_argument("--only", nargs="*", default=[], help="meshes whose path holds one of these")
+    ap.add_argument("--repeats", type=int, default=REPEATS, help=f"runs per timing at most (default {REPEATS}, "
+                    "bench/compare.py's; more say less about a loaded machine)")
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.worker:
@@ -143,13 +146,13 @@ def main() -> None:
             m = DracoPy.decode(draco)
             return np.asarray(m.points, dtype=np.float64), np.asarray(m.faces, dtype=np.int64)
 
-        draco_s, _ = timed(draco_decode)
-        new = measure(str(path))
+        draco_s, _ = timed(draco_decode, args.repeats)
+        new = measure(str(path), args.repeats)
         ratios.append(draco_s / new["seconds"])
         line = (f"{str(source.relative_to(corpus)):<44} {len(f):>7} {1e3 * draco_s:9.2f} {1e3 * new['seconds']:9.2f} "
                 f"{ratios[-1]:6.3f}")
         if old:
-            old.stdin.write(str(path) + "\n")
+            old.stdin.write(f"{path}\t{args.repeats}\n")
             old.stdin.flush()
             before = json.loads(old.stdout.readline())
             old_ratios.append(draco_s / before["seconds"])
