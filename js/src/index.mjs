@@ -181,13 +181,15 @@ function mergedMesh(objects) {
           positions[3 * v0 + i + r] = M[4 * r] * p[i] + M[4 * r + 1] * p[i + 1] + M[4 * r + 2] * p[i + 2] + M[4 * r + 3];
         }
       }
-      for (let t = 0; t < g.indices.length; t += 3) {
-        const a = g.indices[t] + v0;
-        const b = g.indices[t + 1] + v0;
-        const c = g.indices[t + 2] + v0;
-        indices.set(det < 0 ? [a, c, b] : [a, b, c], 3 * t0 + t);
-        groupOfTriangle[t0 + t / 3] = g.index;
+      const flip = det < 0;
+      const src = g.indices;
+      const at = 3 * t0;
+      for (let t = 0; t < src.length; t += 3) {
+        indices[at + t] = src[t] + v0;
+        indices[at + t + 1] = src[flip ? t + 2 : t + 1] + v0;
+        indices[at + t + 2] = src[flip ? t + 1 : t + 2] + v0;
       }
+      groupOfTriangle.fill(g.index, t0, t0 + src.length / 3);
       v0 += p.length / 3;
       t0 += g.indices.length / 3;
     }

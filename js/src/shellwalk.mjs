@@ -14,8 +14,8 @@
  * The open edges (§9.13) are kept as the spec suggests, so that each triangle takes constant time
  * whatever the file holds: a map from each directed edge to the stack of its entries, and per corner
  * two doubly linked lists of the entries starting and ending there, newest first. All of it lives in
- * typed arrays; the map is an open-addressing hash table of entry numbers (linear probing, deletion by
- * backward shift, a hash keyed per walk) rather than a JavaScript Map, whose keys would have to pack two corner numbers into
+ * typed arrays; the map is an open-addressing hash table of undirected edges, each slot with the newest
+ * entry of both directions (linear probing, a hash keyed per walk) rather than a JavaScript Map, whose keys would have to pack two corner numbers into
  * one exact number (a·V + b passes 2^53 for V above 9.5e7) and which V8 caps at 2^24 entries, fewer
  * than the open edges a valid file of disjoint triangles can hold.
  */
@@ -57,11 +57,22 @@ export class OpenEdges {
     this.outHead = new Int32Array(corners).fill(-1);
     this.inHead = new Int32Array(corners).fill(-1);
     this.entries = 0;
-    /** the hash table: per slot the newest entry of an edge (the top of its stack), -1 empty */
-    this.slots = new Int32Array(64).fill(-1);
-    this.mask = 63;
+    // The hash table: one slot per undirected edge {lo, hi} (lo -1: empty), holding the newest entry
+    // of (lo, hi) at 2i and of (hi, lo) at 2i + 1, -1 for none: entering (a, b) closes an entry of
+    // (b, a) or stacks one on (a, b), both found by one probe. Slots stay once made.
+    // Sized for a closed surface's edges (half the entries) at half load: growing by doubling from a
+    // small table rehashed it a dozen times, a seventh of a walk's decode (CAD/box.STL).
+    let size = 64;
+    while (size < capacity && size < 0x40000000) size *= 2;
+    this.lo = new Int32Array(size).fill(-1);
+    this.hi = new Int32Array(size);
+    this.top = new Int32Array(2 * size).fill(-1);
+    this.mask = size - 1;
     this.keys = 0;
-    this.tables = globalThis.crypto.getRandomValues(new Int32Array(2048));
+    // the bytes a corner below `corners` can have: the others are zero in every key, and their tables
+    // would only xor a constant into every hash
+    this.bytes = corners > 0x1000000 ? 4 : corners > 0x10000 ? 3 : corners > 0x100 ? 2 : 1;
+    this.tables = globalThis.crypto.getRandomValues(new Int32Array(512 * this.bytes));
   }
 
   /**
@@ -72,9 +83,9 @@ export class OpenEdges {
    */
   hash(a, b) {
     const t = this.tables;
-    return (t[a & 255] ^ t[256 + ((a >>> 8) & 255)] ^ t[512 + ((a >>> 16) & 255)] ^ t[768 + (a >>> 24)]
-      ^ t[1024 + (b & 255)] ^ t[1280 + ((b >>> 8) & 255)] ^ t[1536 + ((b >>> 16) & 255)] ^ t[1792 + (b >>> 24)])
-      & this.mask;
+    let h = t[a & 255] ^ t[256 + (b & 255)];
+    for (let k = 1; k < this.bytes; k++) h ^= t[512 * k + ((a >>> (8 * k)) & 255)] ^ t[512 * k + 256 + ((b >>> (8 * k)) & 255)];
+    return h & this.mask;
   }
 
   /**
@@ -83,42 +94,32 @@ export class OpenEdges {
    * @param {number} a @param {number} b
    */
   edge(a, b) {
-    const { slots, start, end, mask } = this;
-    for (let i = this.hash(b, a); ; i = (i + 1) & mask) {
-      const e = slots[i];
-      if (e < 0) break;
-      if (start[e] === b && end[e] === a) {
-        const under = this.below[e];
-        if (under >= 0) slots[i] = under;
-        else this.removeSlot(i);
+    const lo = a < b ? a : b;
+    const hi = a < b ? b : a;
+    const d = a < b ? 0 : 1; // the direction of (a, b) in its slot, 1 - d that of (b, a)
+    let i = this.slot(lo, hi);
+    if (this.lo[i] >= 0) {
+      const e = this.top[2 * i + 1 - d];
+      if (e >= 0) {
+        this.top[2 * i + 1 - d] = this.below[e];
         this.unlink(e);
         return;
       }
+    } else {
+      if (2 * (this.keys + 1) > this.lo.length) {
+        this.grow();
+        i = this.slot(lo, hi);
+      }
+      this.lo[i] = lo;
+      this.hi[i] = hi;
+      this.top[2 * i] = this.top[2 * i + 1] = -1;
+      this.keys++;
     }
     const e = this.entries++;
-    start[e] = a;
-    end[e] = b;
-    // the slot of (a, b): its stack's, or the empty slot that ends its probe run
-    let i = this.hash(a, b);
-    for (; ; i = (i + 1) & mask) {
-      const top = slots[i];
-      if (top < 0 || (start[top] === a && end[top] === b)) break;
-    }
-    if (slots[i] >= 0) {
-      this.below[e] = slots[i];
-      slots[i] = e;
-    } else if (2 * (this.keys + 1) <= slots.length) {
-      this.below[e] = -1;
-      slots[i] = e;
-      this.keys++;
-    } else {
-      this.below[e] = -1;
-      this.grow();
-      let s = this.hash(a, b);
-      while (this.slots[s] >= 0) s = (s + 1) & this.mask;
-      this.slots[s] = e;
-      this.keys++;
-    }
+    this.start[e] = a;
+    this.end[e] = b;
+    this.below[e] = this.top[2 * i + d];
+    this.top[2 * i + d] = e;
     const { outHead, inHead } = this;
     this.outPrev[e] = -1;
     this.outNext[e] = outHead[a];
@@ -128,6 +129,14 @@ export class OpenEdges {
     this.inNext[e] = inHead[b];
     if (inHead[b] >= 0) this.inPrev[inHead[b]] = e;
     inHead[b] = e;
+  }
+
+  /** The slot of {lo, hi}: its own, or the empty one where it would go. @param {number} lo @param {number} hi */
+  slot(lo, hi) {
+    const { mask } = this;
+    let i = this.hash(lo, hi);
+    while (this.lo[i] >= 0 && (this.lo[i] !== lo || this.hi[i] !== hi)) i = (i + 1) & mask;
+    return i;
   }
 
   /** Takes entry e out of its corners' lists. @param {number} e */
@@ -145,33 +154,19 @@ export class OpenEdges {
     if (q >= 0) inPrev[q] = p;
   }
 
-  /** Empties slot i, shifting back the entries of its probe run. @param {number} i */
-  removeSlot(i) {
-    const { slots, start, end, mask } = this;
-    for (let j = i; ;) {
-      j = (j + 1) & mask;
-      const e = slots[j];
-      if (e < 0) break;
-      const k = this.hash(start[e], end[e]);
-      // an entry whose home lies cyclically in (i, j] stays where it is
-      if (i <= j ? i < k && k <= j : i < k || k <= j) continue;
-      slots[i] = e;
-      i = j;
-    }
-    slots[i] = -1;
-    this.keys--;
-  }
-
   grow() {
-    const old = this.slots;
-    this.slots = new Int32Array(2 * old.length).fill(-1);
-    this.mask = this.slots.length - 1;
-    for (let i = 0; i < old.length; i++) {
-      const e = old[i];
-      if (e < 0) continue;
-      let s = this.hash(this.start[e], this.end[e]);
-      while (this.slots[s] >= 0) s = (s + 1) & this.mask;
-      this.slots[s] = e;
+    const { lo, hi, top } = this;
+    this.lo = new Int32Array(2 * lo.length).fill(-1);
+    this.hi = new Int32Array(2 * lo.length);
+    this.top = new Int32Array(4 * lo.length).fill(-1);
+    this.mask = this.lo.length - 1;
+    for (let i = 0; i < lo.length; i++) {
+      if (lo[i] < 0) continue;
+      const s = this.slot(lo[i], hi[i]);
+      this.lo[s] = lo[i];
+      this.hi[s] = hi[i];
+      this.top[2 * s] = top[2 * i];
+      this.top[2 * s + 1] = top[2 * i + 1];
     }
   }
 

@@ -154,8 +154,11 @@ def decode_shell_group(planes: np.ndarray, group: GroupLike, label: object, erro
         raise GeometryError(f"part group {label}: {exc.reason}", code=exc.code) from None
     face = np.asarray(shell.facets, dtype=np.int64)[:, 0]
     named = np.flatnonzero(~np.asarray(shell.explicit, dtype=bool))
+    # The references no triangle lies on, ascending (np.setdiff1d's answer, without its sort).
+    unused = np.ones(len(planes), dtype=bool)
+    unused[face[(face >= 0) & (face < len(planes))]] = False
     return DecodedGroup(v, t, np.repeat(named, 3), np.asarray(shell.vertex_planes, dtype=np.int64).reshape(-1),
-                        np.setdiff1d(np.arange(len(planes)), face), face)
+                        np.flatnonzero(unused), face)
 
 
 #: Decoder of each part-group kind: ``decode(planes, group, label, error)`` with ``planes`` the

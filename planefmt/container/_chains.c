@@ -205,23 +205,31 @@ typedef struct {
     int64_t a, b, value;
 } Slot;
 
-/* Simple tabulation hashing of a directed edge (a, b): 16 tables of 256 random words, one per byte
- * of a and of b, filled from a key the caller draws per decode (spec §9.13).  A fixed hash lets a file
- * put every edge into a few slots, and linear probing then costs a probe per edge already there (a
- * kind 9 walk of 100,000 such edges took 24 s); with keys the file cannot know, linear probing takes
- * expected constant time per operation (Patrascu and Thorup, "The power of simple tabulation
- * hashing", 2011), whatever the corners. */
+/* Simple tabulation hashing of a directed edge (a, b): a table of 256 random words per byte of a and of
+ * b, filled from a key the caller draws per decode (spec §9.13).  A fixed hash lets a file put every
+ * edge into a few slots, and linear probing then costs a probe per edge already there (a kind 9 walk
+ * of 100,000 such edges took 24 s); with keys the file cannot know, linear probing takes expected
+ * constant time per operation (Patrascu and Thorup, "The power of simple tabulation hashing", 2011),
+ * whatever the corners.  Only the bytes a corner below the caller's limit can have are hashed: the
+ * others are zero in every key, so their tables would only xor a constant into every hash (a walk of
+ * 65,536 corners or fewer looks up 4 words an edge, not 16). */
 typedef struct {
+    int bytes;
     uint64_t t[16][256];
 } EdgeHash;
 
 static EdgeHash *
-edge_hash_new(uint64_t key)
+edge_hash_new(uint64_t key, int64_t limit)
 {
     EdgeHash *e = malloc(sizeof(EdgeHash));
     if (!e)
         return NULL;
-    for (int i = 0; i < 16; i++)
+    e->bytes = 1;
+    while (e->bytes < 8 && (uint64_t)(limit > 0 ? limit - 1 : 0) >> (8 * e->bytes))
+        e->bytes++;
+    for (int i = 0; i < 16; i++) {
+        if (i % 8 >= e->bytes)
+            continue;
         for (int j = 0; j < 256; j++) {
             /* splitmix64 */
             uint64_t z = (key += 0x9E3779B97F4A7C15ULL);
@@ -229,15 +237,16 @@ edge_hash_new(uint64_t key)
             z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
             e->t[i][j] = z ^ (z >> 31);
         }
+    }
     return e;
 }
 
-/* Where directed edge (a, b) starts probing in a table of mask + 1 slots. */
+/* Where directed edge (a, b), both in 0 .. limit - 1, starts probing in a table of mask + 1 slots. */
 static int64_t
 edge_hash(const EdgeHash *e, int64_t a, int64_t b, int64_t mask)
 {
     uint64_t h = 0, x = (uint64_t)a, y = (uint64_t)b;
-    for (int i = 0; i < 8; i++, x >>= 8, y >>= 8)
+    for (int i = 0; i < e->bytes; i++, x >>= 8, y >>= 8)
         h ^= e->t[i][x & 0xFF] ^ e->t[8 + i][y & 0xFF];
     return (int64_t)(h & (uint64_t)mask);
 }
@@ -359,7 +368,7 @@ parallelograms(PyObject *self, PyObject *args)
         size *= 2;
     Slot *slots = malloc(sizeof(Slot) * (size_t)size);
     int64_t *counts = calloc((size_t)(v > 0 ? v : 1), sizeof(int64_t));
-    EdgeHash *hash = edge_hash_new(key);
+    EdgeHash *hash = edge_hash_new(key, v);
     if (!slots || !counts || !hash) {
         free(slots);
         free(counts);
@@ -421,15 +430,21 @@ done:
 }
 
 /* A shell walk's open edges (spec/pln.md §9.13): directed edges of the decoded surface that no
- * second triangle has closed yet.  Each entry sits on a stack of its directed edge (a hash map
- * from edge to the newest entry) and on two doubly linked lists, of the entries starting and of
- * those ending at a corner, newest first: entering, closing, and the left and right queries take
- * constant time (the map's expected, its hash keyed per decode), so a walk is linear in its
- * triangles whatever a file holds. */
+ * second triangle has closed yet.  Each entry sits on a stack of its directed edge and on two doubly
+ * linked lists, of the entries starting and of those ending at a corner, newest first: entering,
+ * closing, and the left and right queries take constant time (the map's expected, its hash keyed per
+ * decode), so a walk is linear in its triangles whatever a file holds.  The map holds one slot per
+ * undirected edge with the newest entry of each direction: entering (a, b) closes an entry of (b, a)
+ * or else stacks one on (a, b), both in the slot one probe finds. */
+typedef struct {
+    int64_t lo, hi;    /* the edge's corners, lo < hi; lo < 0 for an empty slot */
+    int64_t newest[2]; /* the newest entry of (lo, hi) and of (hi, lo), -1 for none */
+} PairSlot;
+
 typedef struct {
     int64_t corners, used, mask;
     int64_t *start, *end, *below, *in_next, *in_prev, *out_next, *out_prev, *in_head, *out_head;
-    Slot *slots; /* each edge's newest entry (value: its record, -1 for none) */
+    PairSlot *slots;
     EdgeHash *hash;
 } Open;
 
@@ -452,9 +467,9 @@ open_init(Open *o, int64_t triangles, int64_t corners, uint64_t key)
     o->corners = corners;
     o->mask = size - 1;
     o->start = malloc(sizeof(int64_t) * 7 * (size_t)(records > 0 ? records : 1));
-    o->slots = malloc(sizeof(Slot) * (size_t)size);
-    o->in_head = malloc(sizeof(int64_t) * 2 * (size_t)corners);
-    o->hash = edge_hash_new(key);
+    o->slots = malloc(sizeof(PairSlot) * (size_t)size);
+    o->in_head = malloc(sizeof(int64_t) * 2 * (size_t)(corners > 0 ? corners : 1));
+    o->hash = edge_hash_new(key, corners);
     if (!o->start || !o->slots || !o->in_head || !o->hash) {
         open_free(o);
         return -1;
@@ -467,29 +482,29 @@ open_init(Open *o, int64_t triangles, int64_t corners, uint64_t key)
     o->out_prev = o->out_next + records;
     o->out_head = o->in_head + corners;
     for (int64_t k = 0; k < size; k++)
-        o->slots[k].a = -1;
+        o->slots[k].lo = -1;
     for (int64_t k = 0; k < 2 * corners; k++)
         o->in_head[k] = -1;
     return 0;
 }
 
-/* The slot of directed edge (a, b) in the map: its own, or the empty one where it would go. */
-static int64_t
-open_slot(const Open *o, int64_t a, int64_t b)
-{
-    int64_t k = edge_hash(o->hash, a, b, o->mask);
-    while (o->slots[k].a >= 0 && (o->slots[k].a != a || o->slots[k].b != b))
-        k = (k + 1) & o->mask;
-    return k;
-}
-
 static void
 open_edge(Open *o, int64_t a, int64_t b)
 {
-    int64_t k = open_slot(o, b, a);
-    if (o->slots[k].a >= 0 && o->slots[k].value >= 0) {
-        int64_t r = o->slots[k].value;
-        o->slots[k].value = o->below[r];
+    int64_t lo = a < b ? a : b, hi = a < b ? b : a;
+    int d = a > b; /* the direction of (a, b) in its slot; 1 - d that of (b, a) */
+    int64_t k = edge_hash(o->hash, lo, hi, o->mask);
+    while (o->slots[k].lo >= 0 && (o->slots[k].lo != lo || o->slots[k].hi != hi))
+        k = (k + 1) & o->mask;
+    PairSlot *s = o->slots + k;
+    if (s->lo < 0) {
+        s->lo = lo;
+        s->hi = hi;
+        s->newest[0] = s->newest[1] = -1;
+    } else if (s->newest[1 - d] >= 0) {
+        /* (b, a) is open: (a, b) closes its newest entry */
+        int64_t r = s->newest[1 - d];
+        s->newest[1 - d] = o->below[r];
         if (o->out_prev[r] >= 0) o->out_next[o->out_prev[r]] = o->out_next[r]; else o->out_head[b] = o->out_next[r];
         if (o->out_next[r] >= 0) o->out_prev[o->out_next[r]] = o->out_prev[r];
         if (o->in_prev[r] >= 0) o->in_next[o->in_prev[r]] = o->in_next[r]; else o->in_head[a] = o->in_next[r];
@@ -507,14 +522,8 @@ open_edge(Open *o, int64_t a, int64_t b)
     o->in_next[r] = o->in_head[b];
     if (o->in_head[b] >= 0) o->in_prev[o->in_head[b]] = r;
     o->in_head[b] = r;
-    k = open_slot(o, a, b);
-    if (o->slots[k].a < 0) {
-        o->slots[k].a = a;
-        o->slots[k].b = b;
-        o->slots[k].value = -1;
-    }
-    o->below[r] = o->slots[k].value;
-    o->slots[k].value = r;
+    o->below[r] = s->newest[d];
+    s->newest[d] = r;
 }
 
 /* Left: the start of the newest open edge ending at i1, the second newest where that start is x. */
@@ -586,26 +595,40 @@ enum { WALK_OK, WALK_SYMBOL, WALK_ESCAPES, WALK_CORNER, WALK_OPEN, WALK_TWICE, W
 static PyObject *
 walk(PyObject *self, PyObject *args)
 {
-    /* symbols (T, uint64), escapes (X, uint64), corners V, triangles out (3T int64), links out (T int64):
-     * decodes the walk in place and returns (reason, triangle), reason 0 for none. */
-    PyObject *objs[4];
+    /* symbols (T, uint64), escapes (X, uint64), corners V, triangles out (3T int64), links out (T int64),
+     * key, and optionally fresh out (3T bytes): decodes the walk in place and returns (reason, triangle),
+     * reason 0 for none.  fresh gets one byte per entry of the corner code stream (a root's three
+     * corners, an attached triangle's third; spec §9.11), 1 where it names a corner anew: what a reader
+     * otherwise finds again from the triangles in a dozen passes (shellfields.code_stream). */
+    PyObject *objs[4], *fresh_obj = NULL;
     long long corners;
     unsigned long long key;
-    Py_buffer views[4];
-    int held = 0, reason = WALK_OK;
+    Py_buffer views[4], fresh_view;
+    int held = 0, reason = WALK_OK, has_fresh = 0;
     int64_t at = -1;
-    if (!PyArg_ParseTuple(args, "OOLOOK", &objs[0], &objs[1], &corners, &objs[2], &objs[3], &key))
+    if (!PyArg_ParseTuple(args, "OOLOOK|O", &objs[0], &objs[1], &corners, &objs[2], &objs[3], &key, &fresh_obj))
         return NULL;
     for (; held < 4; held++)
         if (uint64_view(objs[held], &views[held], held >= 2, "walk") < 0)
             goto done;
     int64_t t = views[0].len / 8, x = views[1].len / 8;
+    if (fresh_obj != NULL && fresh_obj != Py_None) {
+        if (PyObject_GetBuffer(fresh_obj, &fresh_view, PyBUF_C_CONTIGUOUS | PyBUF_WRITABLE) < 0)
+            goto done;
+        has_fresh = 1;
+        if (fresh_view.len < 3 * t) {
+            PyErr_SetString(PyExc_ValueError, "walk: fresh needs three bytes a triangle");
+            goto done;
+        }
+    }
     if (views[2].len / 8 != 3 * t || views[3].len / 8 != t || corners < 0) {
         PyErr_SetString(PyExc_ValueError, "walk: the arrays do not match the triangles");
         goto done;
     }
     const uint64_t *sym = views[0].buf, *esc = views[1].buf;
     int64_t *tri = views[2].buf, *links = views[3].buf;
+    uint8_t *fresh = has_fresh ? fresh_view.buf : NULL;
+    int64_t s_at = 0;
     Open o;
     int64_t *stack = malloc(sizeof(int64_t) * (size_t)(3 * t + 1));
     if (!stack || open_init(&o, t, corners, key) < 0) {
@@ -629,6 +652,7 @@ walk(PyObject *self, PyObject *args)
                 if (code == 0) c[k] = n++;
                 else if (code > (uint64_t)n) { reason = WALK_CORNER; break; }
                 else c[k] = n - (int64_t)code;
+                if (fresh) fresh[s_at++] = code == 0;
             }
             if (reason) break;
             links[j] = 0;
@@ -656,6 +680,7 @@ walk(PyObject *self, PyObject *args)
                 c[2] = code == 1 ? open_left(&o, c[1], opp) : open_right(&o, c[0], opp);
                 if (c[2] < 0) { reason = WALK_OPEN; break; }
             }
+            if (fresh) fresh[s_at++] = code == 0;
             links[j] = 3 * (j - p - 1) + e + 1;
             list = ATTACHED[sym[j] / 4];
             first = 1;
@@ -677,9 +702,88 @@ walk(PyObject *self, PyObject *args)
 done:
     for (int i = 0; i < held; i++)
         PyBuffer_Release(&views[i]);
+    if (has_fresh)
+        PyBuffer_Release(&fresh_view);
     if (PyErr_Occurred())
         return NULL;
     return Py_BuildValue("(iL)", reason, (long long)at);
+}
+
+static PyObject *
+tree_terms(PyObject *self, PyObject *args)
+{
+    /* A shell tree's corner predictors (spec/pln.md §9.11, §9.12, §9.17), as shellfields._tree_predictors
+     * makes them in numpy: links (T int64), triangles (3T int64), explicit (V bytes), fresh (the corner
+     * code stream's entries, bytes: 1 where one names a corner anew, V of them), parallelogram, later,
+     * and terms out (3V int64): each corner's (p, a, b), -1 where absent.  The caller has checked the
+     * tree (parents before their children, V fresh entries); an index outside the arrays is ValueError. */
+    PyObject *objs[5];
+    static const char *names[5] = {"links", "triangles", "explicit", "fresh", "terms"};
+    Py_buffer views[5];
+    int held = 0, parallelogram, later, bad = 0;
+    if (!PyArg_ParseTuple(args, "OOOOppO", &objs[0], &objs[1], &objs[2], &objs[3], &parallelogram, &later,
+                          &objs[4]))
+        return NULL;
+    for (; held < 5; held++) {
+        int flags = PyBUF_C_CONTIGUOUS | (held == 4 ? PyBUF_WRITABLE : 0);
+        if ((held == 2 || held == 3) ? PyObject_GetBuffer(objs[held], &views[held], flags) < 0
+                                     : int64_view(objs[held], &views[held], held == 4, names[held]) < 0)
+            goto done;
+    }
+    int64_t t = views[0].len / 8, v = views[2].len, stream = views[3].len;
+    if (views[1].len / 8 != 3 * t || views[4].len / 8 != 3 * v) {
+        PyErr_SetString(PyExc_ValueError, "tree_terms: the arrays do not match");
+        goto done;
+    }
+    const int64_t *links = views[0].buf, *tri = views[1].buf;
+    const uint8_t *explicit = views[2].buf, *fresh = views[3].buf;
+    int64_t *out = views[4].buf;
+    Py_BEGIN_ALLOW_THREADS
+    int64_t k = 0, s_at = 0, previous = -1;
+    for (int64_t j = 0; j < t && !bad; j++) {
+        int64_t per = links[j] == 0 ? 3 : 1;
+        for (int64_t q = 0; q < per && !bad; q++, s_at++) {
+            if (s_at >= stream) { bad = 1; break; }
+            if (!fresh[s_at])
+                continue;
+            if (k >= v) { bad = 1; break; }
+            int64_t gate = tri[3 * j], second = tri[3 * j + 1];
+            if (later && second > gate) {
+                int64_t swap = gate;
+                gate = second;
+                second = swap;
+            }
+            if (gate < 0 || gate >= v || second < 0 || second >= v) { bad = 1; break; }
+            int attached = links[j] != 0;
+            int64_t *row = out + 3 * k;
+            row[0] = attached && explicit[gate] ? gate : previous;
+            row[1] = row[2] = -1;
+            if (parallelogram && attached) {
+                int64_t link = links[j], parent = j - (link - 1) / 3 - 1, edge = (link - 1) % 3;
+                if (link < 0 || parent < 0) { bad = 1; break; }
+                int64_t opposite = tri[3 * parent + (edge + 2) % 3];
+                if (opposite < 0 || opposite >= v) { bad = 1; break; }
+                if (explicit[gate] && explicit[second] && explicit[opposite]) {
+                    row[1] = second;
+                    row[2] = opposite;
+                }
+            }
+            if (explicit[k])
+                previous = k;
+            k++;
+        }
+    }
+    if (k != v)
+        bad = 1;
+    Py_END_ALLOW_THREADS
+    if (bad)
+        PyErr_SetString(PyExc_ValueError, "tree_terms: the tree does not match its corners");
+done:
+    for (int i = 0; i < held; i++)
+        PyBuffer_Release(&views[i]);
+    if (PyErr_Occurred())
+        return NULL;
+    Py_RETURN_NONE;
 }
 
 static PyObject *
@@ -946,8 +1050,9 @@ static PyMethodDef methods[] = {
      "parallelograms(triangles, explicit, start, terms, key): a kind 10 walk's parallelograms (spec §9.14) into "
      "start (V + 1) and terms (rows a, b, c; at least 12V entries); returns the number of rows."},
     {"walk", walk, METH_VARARGS,
-     "walk(symbols, escapes, corners, triangles, links, key): decode a shell walk (spec §9.13) into triangles "
-     "(3T int64) and links (T int64) in place; returns (reason, triangle), reason 0 where the walk is valid."},
+     "walk(symbols, escapes, corners, triangles, links, key[, fresh]): decode a shell walk (spec §9.13) into "
+     "triangles (3T int64) and links (T int64) in place, and into fresh (3T bytes) which corner code stream "
+     "entries name a corner anew; returns (reason, triangle), reason 0 where the walk is valid."},
     {"spanning", spanning, METH_VARARGS,
      "spanning(twin, faces, walk, rotation, links, defer): the encoder's depth-first walk over shared edges, "
      "a neighbour on the same face first (with defer, one on another face, not -1, left until the walk has "
@@ -958,6 +1063,9 @@ static PyMethodDef methods[] = {
     {"unvarints", unvarints, METH_VARARGS,
      "unvarints(data, out): the first len(out) LEB128 varints of data into out (64-bit); returns the bytes "
      "they took, or -1 where they are not that many valid varints (spec §2.2)."},
+    {"tree_terms", tree_terms, METH_VARARGS,
+     "tree_terms(links, triangles, explicit, fresh, parallelogram, later, terms): a shell tree's corner "
+     "predictors (p, a, b) into terms (3V int64), as shellfields._tree_predictors makes them."},
     {"walk_codes", walk_codes, METH_VARARGS,
      "walk_codes(triangles, links, corners, codes, key): each attached triangle's corner code of spec §9.13."},
     {NULL, NULL, 0, NULL},

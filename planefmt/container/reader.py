@@ -9,6 +9,7 @@ seekable files the trailing index gives random access to part groups.
 
 from __future__ import annotations
 
+import collections
 import copy
 import dataclasses
 import os
@@ -24,6 +25,11 @@ from .budget import Budget, declared
 from .chunks import ChunkStream, Limits, RawChunk, chunk_bytes, is_ancillary
 from ..errors import FormatError, PlnError
 from ..model import UP_AXIS, GroupKind, ObjectRecord, PartGroup, Record, UnknownChunk
+
+
+#: Payload bytes of the groups a reader keeps as decoded for later copies (Reader._remember): a scene's
+#: copies of small parts (gltf_scene/pins.glb: five of two groups) decoded each source twice.
+RECENT_BYTES = 256 * 1024
 
 
 class Reader:
@@ -66,6 +72,9 @@ class Reader:
         self._payloads: dict[int, bytes] = {}
         self._offsets: dict[int, int] = {}
         self._sources: dict[int, PartGroup] = {}
+        # The groups read last, as decoded, while their payloads are small (_remember).
+        self._recent: collections.OrderedDict[int, tuple[PartGroup, int]] = collections.OrderedDict()
+        self._recent_bytes = 0
         self._group_count = 0
         self._done = False
         self._started = False
@@ -82,11 +91,13 @@ class Reader:
                 raise FormatError(f"first chunk is {first.name}, not PHDR", code="MISSING_HEADER",
                                   chunk=first.name, offset=first.offset)
             self._count(first)
-            self.header, found = self._located(lambda raw: records.decode_header(raw.payload), first)
+            # Version 6's header also says where its first body segment starts: parsed once for both.
+            head = self._located(lambda raw: records.decode_header_at(raw.payload), first)
+            self.header, found = head[:2]
             self._after_header = first.end
             self._first = first
             if self.header.version[0] >= 6:
-                self._segment_start = self._located(lambda raw: records.decode_header6(raw.payload)[2], first)
+                self._segment_start = head[2]
             # Version 5 frames every chunk after PHDR with a varint length (spec §4.1).
             self._stream.compact = self._compact = self.header.version[0] >= 5
             self.findings.extend(found)
@@ -274,6 +285,8 @@ class Reader:
                     self._offsets[group.index] = where
                 else:
                     self._payloads[group.index] = bytes(payload)
+                if group.kind != GroupKind.COPY:
+                    self._remember(group, len(payload))
             # a kind-11 group of a file whose version has no copies (a newer minor of major 3: fuzz
             # input py-foreign-44153) is skipped, with no source to read
             if group.kind == GroupKind.COPY and group.source is not None:
@@ -312,11 +325,24 @@ class Reader:
             return UnknownChunk(type=t, payload=bytes(raw.payload), offset=raw.offset)
         raise FormatError(f"unknown critical chunk {raw.name}", code="UNKNOWN_CRITICAL_CHUNK")
 
+    def _remember(self, group: PartGroup, size: int) -> None:
+        """Keep a small group just read for the copies that may follow (spec §9.15), which otherwise decode
+        its payload again: the latest ones of at most :data:`RECENT_BYTES` of payload in all."""
+        if size > RECENT_BYTES:
+            return
+        self._recent[group.index] = (group, size)
+        self._recent_bytes += size
+        while self._recent_bytes > RECENT_BYTES:
+            _, (_, dropped) = self._recent.popitem(last=False)
+            self._recent_bytes -= dropped
+
     def _copied(self, copy: PartGroup) -> PartGroup:
         """A copy (spec §9.15) as its source group: the source's kind and surface, the copy's index and
         object, ``source`` set; the source read again from its stored payload, or through the index."""
         s = copy.source
         source = self._sources.get(s)
+        if source is None and s in self._recent:
+            source = self._sources[s] = dataclasses.replace(self._recent[s][0], planes=None)
         if source is None:
             payload = self._payloads.get(s)
             if payload is None and s in self._offsets:

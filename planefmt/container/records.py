@@ -8,12 +8,14 @@ offset. Encoders take model records and return payload bytes.
 from __future__ import annotations
 
 import math
+import struct
 
 import construct as cs
 import numpy as np
 
 from . import quantize, schema, varint
-from .headers import _f32_toward, _f32_up, _parse, decode_header6, encode_header6
+from .headers import (BYTE, VARINT32, VARINT64, _f32_toward, _f32_up, _parse, decode_header6, encode_header6,
+                      quick_head, quick_object6)
 from .budget import Budget, Charge
 from .chunks import Limits
 from .compression import SHELL_TREE_LEVEL, pack, unpack
@@ -92,13 +94,18 @@ def header_size(major: int) -> int:
 
 def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
     """The header and non-fatal findings (code, message)."""
+    return decode_header_at(payload)[:2]
+
+
+def decode_header_at(payload: bytes) -> tuple[Header, list[tuple[str, str]], int | None]:
+    """:func:`decode_header`, and where the first body segment of a version 6 file starts (else None)."""
     if len(payload) < 2:
         raise FormatError("PHDR is too short to hold a version", code="BAD_PAYLOAD")
     major, minor = payload[0], payload[1]
     if major not in VERSIONS:
         raise VersionError(f"major version {major} is not supported (this reader reads 1.x to 6.x)")
     if major >= 6:
-        return decode_header6(payload)[:2]
+        return decode_header6(payload)
     if len(payload) < header_size(major):
         raise FormatError(f"PHDR is {len(payload)} bytes, version {major} needs {header_size(major)}",
                           code="BAD_PAYLOAD")
@@ -151,7 +158,7 @@ def decode_header(payload: bytes) -> tuple[Header, list[tuple[str, str]]]:
         plane_count=counts.plane_count if known else None, object_count=counts.object_count if known else None,
         group_count=counts.group_count if known else None, extra=bytes(r.extra), up_axis=up_axis,
     )
-    return header, findings
+    return header, findings, None
 
 
 def leading_index(payload: bytes, major: int, width: int) -> int:
@@ -268,25 +275,27 @@ def _transform4(m: np.ndarray) -> dict:
 
 def _transform_from4(t) -> np.ndarray:
     codes = schema.transform_codes(t.codes)
-    values = memoryview(bytes(t["values"]))
-    entries, pos = [], 0
-    for c in codes:
-        if c < 2:
-            entries.append(float(c))
-        else:
-            size = schema.TRANSFORM_VALUE_SIZES[c]
-            entries.append(float(np.frombuffer(values[pos:pos + size], dtype="<f4" if c == 2 else "<f8")[0]))
-            pos += size
-    return np.vstack([np.array(entries, dtype=np.float64).reshape(3, 4), [0.0, 0.0, 0.0, 1.0]])
+    # One unpack of every stored value (codes 2 and 3: f32, f64), not an array per entry.
+    values = struct.unpack("<" + "".join("f" if c == 2 else "d" for c in codes if c >= 2), bytes(t["values"]))
+    stored = iter(values)
+    entries = [float(c) if c < 2 else next(stored) for c in codes] + [0.0, 0.0, 0.0, 1.0]
+    return np.array(entries, dtype=np.float64).reshape(4, 4)
 
 
 def decode_object(payload: bytes, expected_index: int, major: int = 1) -> ObjectRecord:
     if major >= 6:
         # An object record has no index: it is its position (spec §8).
-        head = _parse(schema.Object6Head, bytes(payload[:2 * schema.VARINT_MAX_BYTES + 1]), "object record")
+        quick = quick_head(payload, (VARINT32, BYTE, VARINT64), 2 * schema.VARINT_MAX_BYTES + 1)
+        if quick is None:
+            head = _parse(schema.Object6Head, bytes(payload[:2 * schema.VARINT_MAX_BYTES + 1]), "object record")
+        else:
+            (parent, flags, name_length), _ = quick
+            head = cs.Container(parent=parent, flags=flags, name_length=name_length)
         if head.name_length > schema.OBJECT3_MAX_NAME:
             raise FormatError(f"object name of {head.name_length} bytes, at most 65535", code="BAD_OBJECT")
-        r = _parse(schema.Object6, payload, "object record")
+        r = quick_object6(payload, quick) if quick is not None else None
+        if r is None:
+            r = _parse(schema.Object6, payload, "object record")
         index, parent = expected_index, None if head.parent == 0 else head.parent - 1
     elif major >= 3:
         # The head first: a name length over the cap is BAD_OBJECT before the name is looked for.
@@ -405,9 +414,13 @@ def decode_group(payload: bytes, *, expected_index: int, objects: int, planes: i
     """A part group of a version ``major``.``minor`` file, checked against the objects and planes
     defined so far; a kind that declares its output's counts charges them to ``budget`` (spec §12.4)."""
     if major >= 6:
-        r = _parse(schema.GroupHead6, bytes(payload[:schema.LENGTH_VARINT_BYTES + 1]), "group record")
-        head = cs.Container(index=expected_index, object=r.object, kind=r.kind)
-        stored = memoryview(payload)[r.body_offset:]
+        quick = quick_head(payload, (VARINT32, BYTE), schema.LENGTH_VARINT_BYTES + 1)
+        if quick is None:
+            r = _parse(schema.GroupHead6, bytes(payload[:schema.LENGTH_VARINT_BYTES + 1]), "group record")
+            quick = [r.object, r.kind], r.body_offset
+        (obj, kind), offset = quick
+        head = cs.Container(index=expected_index, object=obj, kind=kind)
+        stored = memoryview(payload)[offset:]
     elif major >= 3:
         # Only the head goes through construct (three varint32s and two bytes): the stored body stays a
         # view of the payload, which a large compressed body (spec §6) would otherwise hold twice more.
@@ -689,7 +702,12 @@ def decode_colours(payload: bytes, group_refs: dict[int, int], major: int = 1) -
 
 def _decode_colours6(payload: bytes, group_refs: dict[int, int]) -> Colours:
     """A colours record (spec §10.1, version 6): varint32 group and count, then one colour or count."""
-    head = _parse(schema.ColoursHead6, bytes(payload[:2 * schema.LENGTH_VARINT_BYTES]), "colours record")
+    quick = quick_head(payload, (VARINT32, VARINT32), 2 * schema.LENGTH_VARINT_BYTES)
+    if quick is None:
+        head = _parse(schema.ColoursHead6, bytes(payload[:2 * schema.LENGTH_VARINT_BYTES]), "colours record")
+    else:
+        (group, count), offset = quick
+        head = cs.Container(group=group, count=count, rgba_offset=offset)
     rgba = bytes(payload[head.rgba_offset:])
     uniform = len(rgba) == 4
     if not uniform and len(rgba) < 4 * head.count:

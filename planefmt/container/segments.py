@@ -16,6 +16,7 @@ import construct as cs
 from . import schema
 from .chunks import Limits
 from .compression import pack, unpack
+from .headers import BYTE, VARINT32, quick_head
 from ..errors import FormatError
 
 
@@ -36,6 +37,10 @@ class RecordView:
 def segment_raw(payload: bytes | memoryview, limits: Limits) -> bytes | bytearray | memoryview:
     """The raw bytes of a body segment (spec §4.5 checks 1 and 2: its head, then §6's checks)."""
     view = memoryview(payload)
+    quick = quick_head(view, (BYTE, VARINT32), 1 + schema.LENGTH_VARINT_BYTES)
+    if quick is not None:
+        (compression, raw_size), offset = quick
+        return unpack(compression, view[offset:], raw_size, limits, 6)
     try:
         head = schema.Segment.parse(bytes(view[:1 + schema.LENGTH_VARINT_BYTES]))
     except (cs.ConstructError, ValueError) as exc:
@@ -50,17 +55,22 @@ def records(raw: bytes | bytearray | memoryview) -> Iterator[RecordView]:
     view = memoryview(raw)
     pos = 0
     while pos < len(view):
-        try:
-            head = schema.RecordHead.parse(bytes(view[pos:pos + 1 + schema.LENGTH_VARINT_BYTES]))
-        except (cs.ConstructError, ValueError) as exc:
-            raise FormatError(f"the segment ends inside the head of a record at raw byte {pos}, or its length is "
-                              f"a bad varint32 ({type(exc).__name__})", code="BAD_PAYLOAD") from None
-        start = pos + head.payload_offset
-        if head.length > len(view) - start:
-            raise FormatError(f"record of tag {head.tag} at raw byte {pos} declares {head.length} bytes, "
+        quick = quick_head(view[pos:], (BYTE, VARINT32), 1 + schema.LENGTH_VARINT_BYTES)
+        if quick is None:
+            try:
+                head = schema.RecordHead.parse(bytes(view[pos:pos + 1 + schema.LENGTH_VARINT_BYTES]))
+            except (cs.ConstructError, ValueError) as exc:
+                raise FormatError(f"the segment ends inside the head of a record at raw byte {pos}, or its length "
+                                  f"is a bad varint32 ({type(exc).__name__})", code="BAD_PAYLOAD") from None
+            tag, length, offset = head.tag, head.length, head.payload_offset
+        else:
+            (tag, length), offset = quick
+        start = pos + offset
+        if length > len(view) - start:
+            raise FormatError(f"record of tag {tag} at raw byte {pos} declares {length} bytes, "
                               f"{len(view) - start} are left in the segment", code="BAD_PAYLOAD")
-        yield RecordView(head.tag, pos, view[start:start + head.length])
-        pos = start + head.length
+        yield RecordView(tag, pos, view[start:start + length])
+        pos = start + length
 
 
 def record_bytes(tag: int, payload: bytes) -> bytes:

@@ -230,15 +230,18 @@ def _walk_python(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.n
     return tri, links, reason, t
 
 
-def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray, np.ndarray]:
+def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The triangles (T, 3) and links (T,) of a walk's ``symbols`` and ``escapes`` over ``v`` corners,
-    checked (``BAD_GROUP_STRUCTURE``)."""
+    checked (``BAD_GROUP_STRUCTURE``), and :func:`code_stream`'s ``new``: which entries of the corner
+    code stream name a corner anew (the C walk knows as it goes)."""
     t = len(symbols)
     if _walk_c is not None:
         tri = np.zeros(3 * t, dtype=np.int64)
         links = np.zeros(t, dtype=np.int64)
+        fresh = np.zeros(3 * t, dtype=bool)
         reason, at = _walk_c(np.ascontiguousarray(symbols, dtype=np.uint64),
-                             np.ascontiguousarray(escapes, dtype=np.uint64), v, tri, links, secrets.randbits(64))
+                             np.ascontiguousarray(escapes, dtype=np.uint64), v, tri, links, secrets.randbits(64),
+                             fresh)
         tri = tri.reshape(-1, 3)
     else:
         tri, links, reason, at = _walk_python(symbols, escapes, v)
@@ -247,7 +250,9 @@ def _walk(symbols: np.ndarray, escapes: np.ndarray, v: int) -> tuple[np.ndarray,
                          code="MEMORY_LIMIT")
     if reason:
         raise FormatError(f"shell walk: triangle {at}: {_REASONS[reason]}", code="BAD_GROUP_STRUCTURE")
-    return tri, links
+    if _walk_c is None:
+        return tri, links, code_stream(tri, links == 0)[1]
+    return tri, links, fresh[:t + 2 * int(np.count_nonzero(links == 0))]
 
 
 def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, kind: GroupKind = GroupKind.SHELL_WALK,
@@ -270,8 +275,7 @@ def decode_shell_walk(raw: np.ndarray, bounding: np.ndarray, kind: GroupKind = G
     faces, used = varint.decode(raw[pos:], t, "shell walk faces")
     pos += used
     explicit, pos = varint.bit_field(raw, pos, v, "shell walk: the body", "corner flags")
-    tri, links = _walk(symbols, escapes, v)
-    _, new, _ = code_stream(tri, links == 0)
+    tri, links, new = _walk(symbols, escapes, v)
     return tree_rest(raw, pos, bounding, tri, links, faces, explicit, new, None,
                      kind == GroupKind.SHELL_WALK_MULTI, major, kind == GroupKind.SHELL_WALK_REFLECT,
                      kind == GroupKind.SHELL_WALK_LATER)
