@@ -434,19 +434,30 @@ def shell_kind_data(kind: GroupKind, shell: Shell, decide: bool = True, major: i
     return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM, major)
 
 
-#: The last few bodies made, by the shell they were made of (kept alive here, so an id is not
-#: reused while its entry stands) and by kind and whether Brotli decided the mode, with the kind
-#: :func:`shell_walk_choice` chose: an encode sizes, writes and verifies one shell several times.
-_BODIES: collections.OrderedDict[int, tuple[Shell, dict]] = collections.OrderedDict()
+#: The last few bodies made, by the digest of the shell they were made of and by kind and whether
+#: Brotli decided the mode, with the kind :func:`shell_walk_choice` chose: an encode sizes, writes and
+#: verifies one shell several times, and the writer's copy of a shell (its references renumbered in
+#: the same order, or none) is another object with the same arrays (DamagedHelmet.glb at 1e-4: 4 of
+#: 16 walks were made again so).
+_BODIES: collections.OrderedDict[bytes, dict] = collections.OrderedDict()
+
+
+def _digest(shell: Shell) -> bytes:
+    h = hashlib.blake2b(digest_size=16)
+    for a in (shell.explicit, shell.vertex_planes, shell.grid, shell.facets, shell.links, shell.origin):
+        a = np.ascontiguousarray(np.asarray(a if a is not None else ()))
+        h.update(repr((a.dtype.str, a.shape)).encode())
+        h.update(a.tobytes())
+    h.update(np.float64(shell.step).tobytes())
+    return h.digest()
 
 
 def _held(shell: Shell) -> dict:
-    held = _BODIES.get(id(shell))
-    if held is not None and held[0] is shell:
-        _BODIES.move_to_end(id(shell))
-        return held[1]
-    bodies: dict = {}
-    _BODIES[id(shell)] = (shell, bodies)
+    key = _digest(shell)
+    if key in _BODIES:
+        _BODIES.move_to_end(key)
+        return _BODIES[key]
+    bodies = _BODIES[key] = {}
     while len(_BODIES) > 8:
         _BODIES.popitem(last=False)
     return bodies
