@@ -311,7 +311,7 @@ SHELL_WIDTHS = tuple(range(8, 33, 4))
 #: the planeless shells: not_convex.obj at 1e-6, 0.95; 20mm-xyz-cube.stl at 1e-4, 0.99), and after a
 #: width at 1.25 or more none came under 1.01 (20mm-xyz-cube.stl at 1e-6: 1.51, then 1.01 and 1.04);
 #: CAD parts, whose planes lost at 1.1 to 4.3, then try one width, not four or five (encodes 40 % shorter).
-#: Judged on the trials' estimated sizes (``SHELL_ESTIMATE_NEAR``).
+#: Judged on the trials' estimated sizes (``SHELL_ESTIMATE_APART``).
 SHELL_WIDTH_STOP = 1.25
 
 #: Candidates whose deflated files are within this ratio of the smallest (the best ``SHELL_RANK_TOP``)
@@ -319,11 +319,11 @@ SHELL_WIDTH_STOP = 1.25
 SHELL_RANK_CLOSE = 1.03
 SHELL_RANK_TOP = 2
 
-#: Trials are sized by an estimate (segments at encoding.ESTIMATE_QUALITY); those within this ratio of the
-#: smallest estimate are sized again as the file writes them, and ranked by ``SHELL_RANK_CLOSE`` on those
-#: sizes. The estimate's ratios between candidates were within 2 % of the written sizes' (nine bench-corpus
-#: meshes at 1e-6, 1e-4 and Draco-14's error), so no candidate within ``SHELL_RANK_CLOSE`` is left out.
-SHELL_ESTIMATE_NEAR = 1.08
+#: Trials are sized by an estimate (segments at encoding.ESTIMATE_QUALITY), whose ratios between candidates
+#: were within 2 % of the written sizes' (nine bench-corpus meshes at 1e-6, 1e-4 and Draco-14's error); the
+#: candidates ranked by ``SHELL_RANK_CLOSE`` are ranked on those. Of the closest few, one whose estimate is
+#: more than this ratio under the others' is taken as it is; nearer ones are written to decide.
+SHELL_ESTIMATE_APART = 1.03
 
 #: Times the corner budget is quartered when a decoding misses a lossless volume or area.
 _SHELL_TIGHTENINGS = 6
@@ -624,14 +624,9 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
     if best is None:
         raise GeometryError(f"no coding keeps the source's structure with corners within the tolerance "
                             f"{tolerance:g}: {why}", code="TOLERANCE_NOT_MET")
-    # The candidates near the best estimate are sized as written; the closest of those are ranked as before.
-    near = [t for t in tried if t[0] <= SHELL_ESTIMATE_NEAR * best[0]]
-    if len(near) > 1:
-        near = [(size(objs, choice), objs, choice) for _, objs, choice in near]
-    least = min(t[0] for t in near)
-    close = sorted((t for t in near if t[0] <= SHELL_RANK_CLOSE * least), key=lambda t: t[0])[:SHELL_RANK_TOP]
+    close = sorted((t for t in tried if t[0] <= SHELL_RANK_CLOSE * best[0]), key=lambda t: t[0])[:SHELL_RANK_TOP]
     walked = [([_walk_kinds(o) for o in objs], choice) for _, objs, choice in close]
-    chosen = walked[0] if len(walked) == 1 else min(walked, key=lambda w: size(*w, brotli=True))
+    chosen = _smaller(walked, size)
     if convex and not forced and any(len({g.kind == GroupKind.CONVEX for g in o.groups}) == 2 for o in objects):
         # Convex groups beside shells fix the file's coding at the width their verification chose; their
         # bodies as shells may be coded with a coarser one, or none: the smaller file is kept (car.glb at
@@ -640,8 +635,20 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
             shells = _choose_shells([_as_shells(o) for o in objects], tolerance, coding, bits, size)
         except GeometryError:
             return chosen
-        chosen = min((chosen, shells), key=lambda w: size(*w, brotli=True))
+        chosen = _smaller([chosen, shells], size)
     return chosen
+
+
+def _smaller(options: list[tuple[list[_Object], _Choice]],
+             size: Callable[..., int]) -> tuple[list[_Object], _Choice]:
+    """Of candidate files, the smaller as written: by their estimated sizes where those are more than
+    :data:`SHELL_ESTIMATE_APART` apart, else by their sizes as written."""
+    if len(options) == 1:
+        return options[0]
+    estimates = [size(*w, brotli=True, estimate=True) for w in options]
+    if max(estimates) > SHELL_ESTIMATE_APART * min(estimates):
+        return options[int(np.argmin(estimates))]
+    return min(options, key=lambda w: size(*w, brotli=True))
 
 
 def _walk_kinds(obj: _Object) -> _Object:
