@@ -350,10 +350,16 @@ def _smallest(options: list[dict[str, bytes]], decide: bool = True) -> dict[str,
 _SIZES: collections.OrderedDict[bytes, int] = collections.OrderedDict()
 
 
+#: The position of the kind among the options and the coordinate fields of the last few walks' explicit
+#: corners, by the digest of what they are made of (:func:`_fields`).
+_COORDINATES: collections.OrderedDict[bytes, tuple[int, dict[str, bytes]]] = collections.OrderedDict()
+
+
 def forget() -> None:
     """Drop the bodies and sizes kept from earlier encodes."""
     _SIZES.clear()
     _BODIES.clear()
+    _COORDINATES.clear()
 
 
 def _brotli_size(part: bytes) -> int:
@@ -410,8 +416,21 @@ def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
     if not explicit.any():
         # Nothing to predict: the kinds' bodies are alike, and the first needs the lower version.
         return kinds[0], out
-    kind, coordinates = _coordinates(shell, tri, links, new, codings(kinds, mode), decide)
-    return kind, {**out, **coordinates}
+    options = codings(kinds, mode)
+    # The coordinates depend on the corners and the walk only: the writer's copy of a shell, its references
+    # renumbered or freed, has the same ones (chair_model.obj at 1e-4: every walk's were made twice so).
+    h = hashlib.blake2b(repr(([(int(k), m) for k, m in options], decide, float(shell.step))).encode(), digest_size=16)
+    for a in (explicit, np.asarray(shell.grid, dtype=np.int64), tri, links, np.asarray(shell.origin, dtype=np.float64)):
+        h.update(np.ascontiguousarray(a).tobytes())
+        h.update(b"|")
+    key = h.digest()
+    if key not in _COORDINATES:
+        kind, coordinates = _coordinates(shell, tri, links, new, options, decide)
+        _COORDINATES[key] = [int(k) for k, _ in options].index(int(kind)), coordinates
+        while len(_COORDINATES) > 16:
+            _COORDINATES.popitem(last=False)
+    at, coordinates = _COORDINATES[key]
+    return options[at][0], {**out, **coordinates}
 
 
 def shell_walk_fields(shell: Shell, mode: int | None = None, kind: GroupKind = GroupKind.SHELL_WALK) -> dict[str, bytes]:
