@@ -351,12 +351,19 @@ SHELL_WIDTHS = tuple(range(8, 33, 4))
 #: the planeless shells: not_convex.obj at 1e-6, 0.95; 20mm-xyz-cube.stl at 1e-4, 0.99), and after a
 #: width at 1.25 or more none came under 1.01 (20mm-xyz-cube.stl at 1e-6: 1.51, then 1.01 and 1.04);
 #: CAD parts, whose planes lost at 1.1 to 4.3, then try one width, not four or five (encodes 40 % shorter).
+#: Judged on the trials' estimated sizes (``SHELL_ESTIMATE_APART``).
 SHELL_WIDTH_STOP = 1.25
 
 #: Candidates whose deflated files are within this ratio of the smallest (the best ``SHELL_RANK_TOP``)
 #: are written again with Brotli, the file's coder, which decides between them.
 SHELL_RANK_CLOSE = 1.03
 SHELL_RANK_TOP = 2
+
+#: Trials are sized by an estimate (segments at encoding.ESTIMATE_QUALITY), whose ratios between candidates
+#: were within 2 % of the written sizes' (nine bench-corpus meshes at 1e-6, 1e-4 and Draco-14's error); the
+#: candidates ranked by ``SHELL_RANK_CLOSE`` are ranked on those. Of the closest few, one whose estimate is
+#: more than this ratio under the others' is taken as it is; nearer ones are written to decide.
+SHELL_ESTIMATE_APART = 1.03
 
 #: Times the corner budget is quartered when a decoding misses a lossless volume or area.
 _SHELL_TIGHTENINGS = 6
@@ -639,7 +646,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
         choice = _Choice(coding=cod, quantization=q, meshes=meshes,
                          bbox=np.stack([world.min(axis=0), world.max(axis=0)]), diagonal=diagonal,
                          error_bound=bound, lossy=any(o.simplified for o in objects) or bound > tolerance)
-        n = size(list(built), choice)
+        n = size(list(built), choice, estimate=True)
         tried.append((n, list(built), choice))
         if best is None or n < best[0]:
             best = (n, list(built), choice)
@@ -659,7 +666,7 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
                             f"{tolerance:g}: {why}", code="TOLERANCE_NOT_MET")
     close = sorted((t for t in tried if t[0] <= SHELL_RANK_CLOSE * best[0]), key=lambda t: t[0])[:SHELL_RANK_TOP]
     walked = [([_walk_kinds(o) for o in objs], choice) for _, objs, choice in close]
-    chosen = walked[0] if len(walked) == 1 else min(walked, key=lambda w: size(*w, brotli=True))
+    chosen = _smaller(walked, size)
     if convex and not forced and any(len({g.kind == GroupKind.CONVEX for g in o.groups}) == 2 for o in objects):
         # Convex groups beside shells fix the file's coding at the width their verification chose; their
         # bodies as shells may be coded with a coarser one, or none: the smaller file is kept (car.glb at
@@ -668,8 +675,20 @@ def _choose_shells(objects: list[_Object], tolerance: float, coding: Coding | No
             shells = _choose_shells([_as_shells(o) for o in objects], tolerance, coding, bits, size)
         except GeometryError:
             return chosen
-        chosen = min((chosen, shells), key=lambda w: size(*w, brotli=True))
+        chosen = _smaller([chosen, shells], size)
     return chosen
+
+
+def _smaller(options: list[tuple[list[_Object], _Choice]],
+             size: Callable[..., int]) -> tuple[list[_Object], _Choice]:
+    """Of candidate files, the smaller as written: by their estimated sizes where those are more than
+    :data:`SHELL_ESTIMATE_APART` apart, else by their sizes as written."""
+    if len(options) == 1:
+        return options[0]
+    estimates = [size(*w, brotli=True, estimate=True) for w in options]
+    if max(estimates) > SHELL_ESTIMATE_APART * min(estimates):
+        return options[int(np.argmin(estimates))]
+    return min(options, key=lambda w: size(*w, brotli=True))
 
 
 def _walk_kinds(obj: _Object) -> _Object:

@@ -231,10 +231,13 @@ def _area(vertices: np.ndarray, faces: np.ndarray) -> float:
 
 
 def _rim(vertices: np.ndarray, faces: np.ndarray) -> float:
-    edges = np.sort(faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    unique, count = np.unique(edges, axis=0, return_counts=True)
+    edges = np.sort(np.asarray(faces, dtype=np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    # Each edge as one int64, in the order of its rows (sorting pairs of indices as rows is several times
+    # slower), so that the lengths are summed in the same order.
+    n = int(edges.max(initial=0)) + 1
+    unique, count = np.unique(edges[:, 0] * n + edges[:, 1], return_counts=True)
     rim = unique[count == 1]
-    return float(np.linalg.norm(vertices[rim[:, 0]] - vertices[rim[:, 1]], axis=1).sum())
+    return float(np.linalg.norm(vertices[rim // n] - vertices[rim % n], axis=1).sum())
 
 
 #: Relative volume (closed sources) or area (open ones) a lossless decoding must keep.
@@ -333,10 +336,17 @@ def _welded(mesh: Mesh) -> tuple[np.ndarray, int]:
     vertices that merged into another."""
     faces = np.asarray(mesh.faces, dtype=np.int64)
     used = np.unique(faces)
-    positions, index = np.unique(np.asarray(mesh.vertices)[used], axis=0, return_inverse=True)
+    # Positions numbered in the order np.unique(axis=0) gives them, by a sort of three keys (sorting
+    # the rows as records is several times slower).
+    points = np.asarray(mesh.vertices)[used]
+    order = np.lexsort(points.T[::-1])
+    ranked = points[order]
+    new = np.r_[True, (ranked[1:] != ranked[:-1]).any(axis=1)]
+    index = np.empty(len(points), dtype=np.int64)
+    index[order] = np.cumsum(new) - 1
     lookup = np.zeros(len(mesh.vertices), dtype=np.int64)
-    lookup[used] = index.reshape(-1)
-    return lookup[faces], len(used) - len(positions)
+    lookup[used] = index
+    return lookup[faces], len(used) - int(new.sum())
 
 
 def _bodies(poly: Polygons) -> np.ndarray:

@@ -78,10 +78,10 @@ def record_bytes(tag: int, payload: bytes) -> bytes:
     return bytes([tag]) + schema.Varint32.build(len(payload)) + payload
 
 
-def segment_bytes(raw: bytes, compress: bool = True, brotli: bool = True) -> bytes:
+def segment_bytes(raw: bytes, compress: bool = True, brotli: bool = True, quality: int | None = None) -> bytes:
     """A body segment of ``raw``: whichever of methods 0, 1 and 2 is smallest (spec §4.5); without ``brotli``,
-    of methods 0 and 1 (an encoder's size trial)."""
-    method, stored = pack(raw, compress, brotli_allowed=brotli)
+    of methods 0 and 1. ``quality``: Brotli's, if not the writer's (an encoder's estimate of a size)."""
+    method, stored = pack(raw, compress, brotli_allowed=brotli, quality=quality)
     return bytes([method]) + schema.Varint32.build(len(raw)) + stored
 
 

@@ -354,10 +354,16 @@ def _smallest(options: list[dict[str, bytes]], decide: bool = True) -> dict[str,
 _SIZES: collections.OrderedDict[bytes, int] = collections.OrderedDict()
 
 
+#: The position of the kind among the options and the coordinate fields of the last few walks' explicit
+#: corners, by the digest of what they are made of (:func:`_fields`).
+_COORDINATES: collections.OrderedDict[bytes, tuple[int, dict[str, bytes]]] = collections.OrderedDict()
+
+
 def forget() -> None:
     """Drop the bodies and sizes kept from earlier encodes."""
     _SIZES.clear()
     _BODIES.clear()
+    _COORDINATES.clear()
 
 
 def _brotli_size(part: bytes) -> int:
@@ -414,8 +420,21 @@ def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
     if not explicit.any():
         # Nothing to predict: the kinds' bodies are alike, and the first needs the lower version.
         return kinds[0], out
-    kind, coordinates = _coordinates(shell, tri, links, new, codings(kinds, mode), decide)
-    return kind, {**out, **coordinates}
+    options = codings(kinds, mode)
+    # The coordinates depend on the corners and the walk only: the writer's copy of a shell, its references
+    # renumbered or freed, has the same ones (chair_model.obj at 1e-4: every walk's were made twice so).
+    h = hashlib.blake2b(repr(([(int(k), m) for k, m in options], decide, float(shell.step))).encode(), digest_size=16)
+    for a in (explicit, np.asarray(shell.grid, dtype=np.int64), tri, links, np.asarray(shell.origin, dtype=np.float64)):
+        h.update(np.ascontiguousarray(a).tobytes())
+        h.update(b"|")
+    key = h.digest()
+    if key not in _COORDINATES:
+        kind, coordinates = _coordinates(shell, tri, links, new, options, decide)
+        _COORDINATES[key] = [int(k) for k, _ in options].index(int(kind)), coordinates
+        while len(_COORDINATES) > 16:
+            _COORDINATES.popitem(last=False)
+    at, coordinates = _COORDINATES[key]
+    return options[at][0], {**out, **coordinates}
 
 
 def shell_walk_fields(shell: Shell, mode: int | None = None, kind: GroupKind = GroupKind.SHELL_WALK) -> dict[str, bytes]:
@@ -438,19 +457,30 @@ def shell_kind_data(kind: GroupKind, shell: Shell, decide: bool = True, major: i
     return _shell_tree_body(shell, kind == GroupKind.SHELL_TREE_PARALLELOGRAM, major)
 
 
-#: The last few bodies made, by the shell they were made of (kept alive here, so an id is not
-#: reused while its entry stands) and by kind and whether Brotli decided the mode, with the kind
-#: :func:`shell_walk_choice` chose: an encode sizes, writes and verifies one shell several times.
-_BODIES: collections.OrderedDict[int, tuple[Shell, dict]] = collections.OrderedDict()
+#: The last few bodies made, by the digest of the shell they were made of and by kind and whether
+#: Brotli decided the mode, with the kind :func:`shell_walk_choice` chose: an encode sizes, writes and
+#: verifies one shell several times, and the writer's copy of a shell (its references renumbered in
+#: the same order, or none) is another object with the same arrays (DamagedHelmet.glb at 1e-4: 4 of
+#: 16 walks were made again so).
+_BODIES: collections.OrderedDict[bytes, dict] = collections.OrderedDict()
+
+
+def _digest(shell: Shell) -> bytes:
+    h = hashlib.blake2b(digest_size=16)
+    for a in (shell.explicit, shell.vertex_planes, shell.grid, shell.facets, shell.links, shell.origin):
+        a = np.ascontiguousarray(np.asarray(a if a is not None else ()))
+        h.update(repr((a.dtype.str, a.shape)).encode())
+        h.update(a.tobytes())
+    h.update(np.float64(shell.step).tobytes())
+    return h.digest()
 
 
 def _held(shell: Shell) -> dict:
-    held = _BODIES.get(id(shell))
-    if held is not None and held[0] is shell:
-        _BODIES.move_to_end(id(shell))
-        return held[1]
-    bodies: dict = {}
-    _BODIES[id(shell)] = (shell, bodies)
+    key = _digest(shell)
+    if key in _BODIES:
+        _BODIES.move_to_end(key)
+        return _BODIES[key]
+    bodies = _BODIES[key] = {}
     while len(_BODIES) > 8:
         _BODIES.popitem(last=False)
     return bodies

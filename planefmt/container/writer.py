@@ -62,7 +62,8 @@ class Writer:
     to measure the size of a candidate it may not write. ``brotli``: with ``compress``, in a version 4
     or 5 file, each payload Brotli-compressed where that is smaller than deflate (spec §6); the encoder's size
     trials turn it off (Brotli's densest quality takes about 1 s a megabyte); a version 6 segment is
-    Brotli-compressed where that is smallest whatever it says. ``copies``: in a file whose
+    Brotli-compressed where that is smallest whatever it says, at ``segment_quality`` if given (an encoder's
+    estimate of a candidate's size: not the file's bytes). ``copies``: in a file whose
     version has copies (4.2, spec §9.15), a group whose kind, references, role bits and kind data are an
     earlier group's is written as a copy of it. Version 6 (spec §4.5): records are buffered into body
     segments of at most 1 MiB raw, the first written in PHDR once it is full or the file is closed (so
@@ -74,13 +75,14 @@ class Writer:
 
     def __init__(self, target: str | os.PathLike | BinaryIO, header: Header, *, compress: bool = False,
                  index: bool | None = True, verify: bool = True, brotli: bool = True, copies: bool = True,
-                 small_segment: int = SMALL_SEGMENT_BYTES) -> None:
+                 small_segment: int = SMALL_SEGMENT_BYTES, segment_quality: int | None = None) -> None:
         if int(header.coding) not in records.CODINGS.get(header.version[0], ()):
             raise PlnError(f"coding {int(header.coding)} cannot be written in a version {header.version[0]} file",
                            code="UNSUPPORTED_CODING")
         self._compress = compress
         self._small_segment = small_segment
         self._brotli = brotli
+        self._segment_quality = segment_quality
         self._index = index
         self._verify = verify
         # Each group's (kind, body digest) -> its index, where copies may be written.
@@ -181,7 +183,7 @@ class Writer:
         # Brotli is tried on a segment even in the encoder's size trials (``brotli`` off): one segment compressed
         # whole ranks candidates far from their deflated sizes (measured at 3e-5: the bench corpus's
         # basicTextured_flatten.usda, 37,322 bytes so, 55,236 with the trials' segments deflated).
-        segment = segments.segment_bytes(raw, self._compress) if raw else b""
+        segment = segments.segment_bytes(raw, self._compress, quality=self._segment_quality) if raw else b""
         if not self._headed:
             header = self._header
             if last and len(raw) < self._small_segment:

@@ -20,8 +20,14 @@ def signed_volume(vertices: np.ndarray, faces: np.ndarray) -> float:
 
 def euler_characteristic(faces: np.ndarray) -> int:
     """``V - E + F`` of a triangle mesh (vertices counted as used)."""
-    e = np.sort(np.column_stack([faces.reshape(-1), faces[:, [1, 2, 0]].reshape(-1)]), axis=1)
-    return len(np.unique(faces)) - len(np.unique(e, axis=0)) + len(faces)
+    faces = np.asarray(faces, dtype=np.int64)
+    if not len(faces):
+        return 0
+    a, b = faces.reshape(-1), faces[:, [1, 2, 0]].reshape(-1)
+    # Each undirected edge as one int64 (vertex indices are far under 2**31): unique rows of pairs are
+    # sorted as 16-byte values, several times slower (8 of 136 s of encoding nine bench-corpus meshes).
+    edges = np.minimum(a, b) * (int(faces.max()) + 1) + np.maximum(a, b)
+    return len(np.unique(faces)) - len(np.unique(edges)) + len(faces)
 
 
 def is_closed_manifold(faces: np.ndarray, vertex_count: int) -> bool:

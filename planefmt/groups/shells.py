@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -236,6 +237,20 @@ def _rows(grid: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(grid).view(np.dtype((np.void, 24))).reshape(-1)
 
 
+def _row_keys(grid: np.ndarray, margin: int) -> Callable[[np.ndarray], np.ndarray]:
+    """A function giving each row of an (n, 3) int64 array one value, distinct rows distinct values, for
+    rows within ``margin`` of ``grid``'s range on every axis: one int64 where the range's cells fit in
+    one (sorting them is about 8 times as fast as sorting 24-byte rows), else :func:`_rows`."""
+    if not len(grid):
+        return _rows
+    low = grid.min(axis=0) - margin
+    dims = [int(d) for d in grid.max(axis=0) - low + margin + 1]
+    if dims[0] * dims[1] * dims[2] >= 1 << 62:
+        return _rows
+    scale = np.array([dims[1] * dims[2], dims[2], 1], dtype=np.int64)
+    return lambda rows: (np.asarray(rows, dtype=np.int64) - low) @ scale
+
+
 #: Rounds of :func:`_apart`: each settles the corners that wanted distinct free points.
 _APART_ROUNDS = 8
 
@@ -254,22 +269,26 @@ def _apart(points: np.ndarray, grid: np.ndarray, origin: np.ndarray, step: float
     no free point is near enough, the corners stay joined and the caller's check still sees them.
     """
     grid = grid.copy()
+    # Each round moves a corner by one step at most, and looks one step further.
+    keys = _row_keys(grid, _APART_ROUNDS + 1)
     for rounds in range(_APART_ROUNDS + 1):
-        taken, inverse, count = np.unique(_rows(grid), return_inverse=True, return_counts=True)
+        taken, inverse, count = np.unique(keys(grid), return_inverse=True, return_counts=True)
         if (count == 1).all():
             return grid, True
         if rounds == _APART_ROUNDS:
             break
         inverse = inverse.reshape(-1)
-        # Of the corners on one point, the nearest keeps it.
-        gap = np.linalg.norm(origin + step * grid - points, axis=1)
-        order = np.lexsort((gap, inverse))
-        keeps = np.zeros(len(grid), dtype=bool)
-        keeps[order[np.r_[True, inverse[order][1:] != inverse[order][:-1]]]] = True
-        movers = np.flatnonzero(~keeps)
+        # Of the corners on one point, the nearest keeps it (a corner alone on its point keeps it: only
+        # the few that share one are sorted).
+        shared = np.flatnonzero(count[inverse] > 1)
+        gap = np.linalg.norm(origin + step * grid[shared] - points[shared], axis=1)
+        order = np.lexsort((gap, inverse[shared]))
+        keeps = np.zeros(len(shared), dtype=bool)
+        keeps[order[np.r_[True, inverse[shared][order][1:] != inverse[shared][order][:-1]]]] = True
+        movers = shared[~keeps]
         cand = grid[movers, None, :] + _NEIGHBOURS[None, :, :]
         near = np.linalg.norm(origin + step * cand - points[movers, None, :], axis=2) <= budget
-        flat = _rows(cand.reshape(-1, 3))
+        flat = keys(cand.reshape(-1, 3))
         at = np.minimum(np.searchsorted(taken, flat), len(taken) - 1)
         free = (taken[at] != flat).reshape(near.shape)
         ok = near & free
@@ -279,7 +298,7 @@ def _apart(points: np.ndarray, grid: np.ndarray, origin: np.ndarray, step: float
         pick = np.argmax(ok, axis=1)
         movers, chosen = movers[has], cand[np.flatnonzero(has), pick[has]]
         # Two movers that chose one point: the first takes it, the other tries again next round.
-        _, once = np.unique(_rows(chosen), return_index=True)
+        _, once = np.unique(keys(chosen), return_index=True)
         grid[movers[once]] = chosen[once]
     return grid, False
 
