@@ -633,6 +633,12 @@ def summarize(rows: list[dict]) -> None:
         sel = [r for r in ok if c in ("all", r["category"])]
         print(f"| {c} | {len(sel)} | " + " | ".join(
             f"{statistics.median(r['bits'][k] / r['E'] for r in sel):.2f}" for k in COLUMNS) + " |")
+    print("\nmedian per mesh of each coding's bits per corner minus grid's (the same lattice's, no tables):")
+    print("| category | meshes | " + " | ".join(COLUMNS) + " |")
+    for c in cats:
+        sel = [r for r in ok if c in ("all", r["category"])]
+        print(f"| {c} | {len(sel)} | " + " | ".join(
+            f"{statistics.median((r['bits'][k] - r['bits']['grid']) / r['E'] for r in sel):+.2f}" for k in COLUMNS) + " |")
     print("\nmedian projected .pln / Draco-14 (file - today's coordinate bytes + the coding's, per shell the smaller):")
     print("| category | meshes | file today | " + " | ".join(COLUMNS[1:]) + " | best realizable |")
     allrows = [r for r in rows if "file" in r]
