@@ -69,7 +69,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
 from at_draco import _meshes  # noqa: E402
-from compare import CORPUS, MEASURE_RESOLUTION, load  # noqa: E402
+from compare import MEASURE_RESOLUTION, load  # noqa: E402
 
 #: Buckets of a residual's magnitude: its bit length, 0 to 53 (spec §9.13: within 2^52).
 BUCKETS = 54
@@ -160,11 +160,6 @@ def prev_contexts(res: np.ndarray) -> np.ndarray:
     out[:, 1] = mag[:, 0]
     out[:, 2] = np.maximum(mag[:, 0], mag[:, 1])
     return out
-
-
-def axis_ctx(ctx: np.ndarray, levels: int) -> np.ndarray:
-    """``ctx`` (E, 3) with the axis folded in."""
-    return ctx * 3 + np.arange(3)[None, :] if ctx.ndim == 2 else ctx[:, None] * 3 + np.arange(3)[None, :]
 
 
 # --------------------------------------------------------------------------------------------------
