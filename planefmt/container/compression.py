@@ -3,7 +3,6 @@ exactly its declared raw size, held once and checked against the reader's limits
 
 from __future__ import annotations
 
-import collections
 import hashlib
 import zlib
 
@@ -11,6 +10,7 @@ import brotli
 
 from . import schema
 from .chunks import Limits
+from .recent import Recent
 from ..errors import FormatError, LimitError
 
 #: Deflate level of shell tree bodies (spec 3.3 §8.10): level 9's longer match search gains 1% on their
@@ -23,8 +23,7 @@ SHELL_TREE_LEVEL = 6
 #: several times (a candidate sized in the trials, sized again among the closest, then written), and
 #: Brotli's densest quality is most of an encode's time (kuka_kr10r1420_link_4.stl at 1e-6: 3 of its 11
 #: segment compressions were repeats of earlier ones).
-_PACKED: collections.OrderedDict[tuple, tuple[int, bytes]] = collections.OrderedDict()
-_PACKED_COUNT = 32
+_PACKED: Recent[tuple[int, bytes]] = Recent(32)
 
 
 #: Smallest payload whose size is estimated (a quality given to :func:`pack`): under it, the written size
@@ -49,14 +48,8 @@ def pack(data: bytes, compress: bool, level: int = 9, brotli_allowed: bool = Fal
         quality = None
     if not (compress and brotli_allowed):
         return _pack(data, compress, level, brotli_allowed, quality)
-    key = (hashlib.blake2b(data, digest_size=16).digest(), len(data), level, quality)
-    if key in _PACKED:
-        _PACKED.move_to_end(key)
-        return _PACKED[key]
-    packed = _PACKED[key] = _pack(data, compress, level, brotli_allowed, quality)
-    while len(_PACKED) > _PACKED_COUNT:
-        _PACKED.popitem(last=False)
-    return packed
+    return _PACKED.get((hashlib.blake2b(data, digest_size=16).digest(), len(data), level, quality),
+                       lambda: _pack(data, compress, level, brotli_allowed, quality))
 
 
 def _pack(data: bytes, compress: bool, level: int, brotli_allowed: bool, quality: int | None) -> tuple[int, bytes]:

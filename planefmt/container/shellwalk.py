@@ -11,7 +11,6 @@ slowly.
 
 from __future__ import annotations
 
-import collections
 import hashlib
 import itertools
 import secrets
@@ -24,6 +23,7 @@ from ..errors import FormatError, LimitError
 from ..model import GroupKind, Shell
 from . import schema, varint
 from .budget import Charge
+from .recent import Recent
 from .shellfields import (_predict, _shell_body, grid_bytes, _shell_tree_body, _tree_parents, _tree_predictors, code_stream,
                           parallelograms, predict_averaged, predict_reflected, same_tree, surface_fields, tree_rest)
 
@@ -351,12 +351,12 @@ def _smallest(options: list[dict[str, bytes]], decide: bool = True) -> dict[str,
 
 #: Brotli sizes of the parts ranked lately, by digest: an encode ranks the walks of several candidate
 #: shells (one per plane coding tried), whose explicit corners are often the same bytes.
-_SIZES: collections.OrderedDict[bytes, int] = collections.OrderedDict()
+_SIZES: Recent[int] = Recent(64)
 
 
 #: The position of the kind among the options and the coordinate fields of the last few walks' explicit
 #: corners, by the digest of what they are made of (:func:`_fields`).
-_COORDINATES: collections.OrderedDict[bytes, tuple[int, dict[str, bytes]]] = collections.OrderedDict()
+_COORDINATES: Recent[tuple[int, dict[str, bytes]]] = Recent(16)
 
 
 def forget() -> None:
@@ -367,14 +367,8 @@ def forget() -> None:
 
 
 def _brotli_size(part: bytes) -> int:
-    key = hashlib.blake2b(part, digest_size=16).digest()
-    if key in _SIZES:
-        _SIZES.move_to_end(key)
-        return _SIZES[key]
-    size = _SIZES[key] = len(brotli.compress(part, quality=10 if len(part) <= RANK_DENSEST_BYTES else 9))
-    while len(_SIZES) > 64:
-        _SIZES.popitem(last=False)
-    return size
+    return _SIZES.get(hashlib.blake2b(part, digest_size=16).digest(), lambda: len(
+        brotli.compress(part, quality=10 if len(part) <= RANK_DENSEST_BYTES else 9)))
 
 
 #: The shell walk kinds: kind 9 (spec §9.13), kind 10 (§9.14), kind 12 (§9.16) and kind 13 (§9.17), which
@@ -427,13 +421,12 @@ def _fields(shell: Shell, kinds: tuple[GroupKind, ...], mode: int | None = None,
     for a in (explicit, np.asarray(shell.grid, dtype=np.int64), tri, links, np.asarray(shell.origin, dtype=np.float64)):
         h.update(np.ascontiguousarray(a).tobytes())
         h.update(b"|")
-    key = h.digest()
-    if key not in _COORDINATES:
+
+    def made() -> tuple[int, dict[str, bytes]]:
         kind, coordinates = _coordinates(shell, tri, links, new, options, decide)
-        _COORDINATES[key] = [int(k) for k, _ in options].index(int(kind)), coordinates
-        while len(_COORDINATES) > 16:
-            _COORDINATES.popitem(last=False)
-    at, coordinates = _COORDINATES[key]
+        return [int(k) for k, _ in options].index(int(kind)), coordinates
+
+    at, coordinates = _COORDINATES.get(h.digest(), made)
     return options[at][0], {**out, **coordinates}
 
 
@@ -462,7 +455,7 @@ def shell_kind_data(kind: GroupKind, shell: Shell, decide: bool = True, major: i
 #: verifies one shell several times, and the writer's copy of a shell (its references renumbered in
 #: the same order, or none) is another object with the same arrays (DamagedHelmet.glb at 1e-4: 4 of
 #: 16 walks were made again so).
-_BODIES: collections.OrderedDict[bytes, dict] = collections.OrderedDict()
+_BODIES: Recent[dict] = Recent(8)
 
 
 def _digest(shell: Shell) -> bytes:
@@ -476,14 +469,7 @@ def _digest(shell: Shell) -> bytes:
 
 
 def _held(shell: Shell) -> dict:
-    key = _digest(shell)
-    if key in _BODIES:
-        _BODIES.move_to_end(key)
-        return _BODIES[key]
-    bodies = _BODIES[key] = {}
-    while len(_BODIES) > 8:
-        _BODIES.popitem(last=False)
-    return bodies
+    return _BODIES.get(_digest(shell), dict)
 
 
 def shell_walk_choice(shell: Shell, kinds: tuple[GroupKind, ...] = WALK_KINDS) -> tuple[GroupKind, bytes]:
